@@ -1,0 +1,17 @@
+//! Decompression algorithms as plug-ins. A [`DecoAlgorithm`] turns a [`DivePlan`] into a
+//! [`Schedule`]; the registry maps the `kind` written in `algorithms/*.toml` to a constructor.
+//! Adding an algorithm is one new file and one registry line.
+
+pub mod conventions;
+pub mod schedule;
+
+pub use conventions::Conventions;
+pub use schedule::{DecoGas, DivePlan, Leg, LegKind, Schedule, Stop};
+
+/// A decompression algorithm: dive plan in, schedule out.
+pub trait DecoAlgorithm: Send + Sync {
+    /// A short label for tables and legends, e.g. `ZH-L16C GF 30/85`.
+    fn label(&self) -> String;
+    /// Plan the dive. Errors are bad plans (depth ≤ 0, hypoxic gas, deco gas beyond its MOD ...).
+    fn plan(&self, plan: &DivePlan) -> Result<Schedule, crate::error::InputError>;
+}

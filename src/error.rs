@@ -1,0 +1,105 @@
+//! Errors for bad input. Every message names where the problem is (file, line, field)
+//! and, where there is one, the fix. The binary maps [`Error::Input`] to exit code 2.
+
+use std::path::{Path, PathBuf};
+
+/// The library's error type.
+#[derive(Debug, thiserror::Error)]
+pub enum Error {
+    /// Bad input from a person or a file: exit code 2.
+    #[error("{0}")]
+    Input(#[from] InputError),
+    /// The solver found itself unhealthy (NaN, lost gas, unstable settings).
+    #[error("solver: {0}")]
+    Solver(String),
+    /// An I/O failure while writing outputs.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file or folder involved.
+        path: PathBuf,
+        /// The underlying error.
+        source: std::io::Error,
+    },
+}
+
+/// A bad-input error with its location.
+#[derive(Debug, Clone, PartialEq)]
+pub struct InputError {
+    /// The file (or `<command line>`).
+    pub file: Option<PathBuf>,
+    /// 1-based line, where known.
+    pub line: Option<usize>,
+    /// The field or column, where known.
+    pub field: Option<String>,
+    /// What is wrong and how to fix it.
+    pub message: String,
+}
+
+impl InputError {
+    /// An error with only a message.
+    pub fn new(message: impl Into<String>) -> Self {
+        InputError {
+            file: None,
+            line: None,
+            field: None,
+            message: message.into(),
+        }
+    }
+    /// Attach the file.
+    pub fn in_file(mut self, file: impl AsRef<Path>) -> Self {
+        self.file = Some(file.as_ref().to_path_buf());
+        self
+    }
+    /// Attach the 1-based line.
+    pub fn at_line(mut self, line: usize) -> Self {
+        self.line = Some(line);
+        self
+    }
+    /// Attach the field name.
+    pub fn field(mut self, field: impl Into<String>) -> Self {
+        self.field = Some(field.into());
+        self
+    }
+}
+
+impl std::fmt::Display for InputError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match (&self.file, self.line) {
+            (Some(p), Some(l)) => write!(f, "{}:{}: ", p.display(), l)?,
+            (Some(p), None) => write!(f, "{}: ", p.display())?,
+            (None, Some(l)) => write!(f, "line {l}: ")?,
+            (None, None) => {}
+        }
+        if let Some(field) = &self.field {
+            write!(f, "field '{field}': ")?;
+        }
+        write!(f, "{}", self.message)
+    }
+}
+
+impl std::error::Error for InputError {}
+
+/// Convert a `toml` parse error into an [`InputError`] with file, line and field.
+pub fn toml_error(path: &Path, text: &str, err: &toml::de::Error) -> InputError {
+    let line = err
+        .span()
+        .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+    let mut e = InputError::new(err.message().trim().to_string()).in_file(path);
+    if let Some(l) = line {
+        e = e.at_line(l);
+    }
+    e
+}
+
+/// 1-based line of the first occurrence of `key =` in TOML text, for errors found after parsing.
+pub fn line_of_key(text: &str, key: &str) -> Option<usize> {
+    text.lines()
+        .position(|l| {
+            let t = l.trim_start();
+            t.starts_with(key) && t[key.len()..].trim_start().starts_with('=')
+        })
+        .map(|i| i + 1)
+}
+
+/// Result alias.
+pub type Result<T, E = Error> = std::result::Result<T, E>;

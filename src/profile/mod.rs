@@ -1,0 +1,213 @@
+//! Pressure histories: the ambient pressure at the phantom and the gas at its open
+//! faces over time. A dive schedule, a laboratory TOML profile, a CSV of waypoints and
+//! the paper's legacy two-column files all become a [`PressureHistory`].
+
+use crate::gas::{Gas, GasMix};
+
+/// A piecewise-linear ambient-pressure history with the breathing (or chamber) gas
+/// in force on each segment. Times in s, pressures absolute Pa.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PressureHistory {
+    /// Breakpoint times, s, strictly increasing, starting at 0.
+    pub times_s: Vec<f64>,
+    /// Absolute ambient pressure at each breakpoint, Pa (> 0).
+    pub ambient_pa: Vec<f64>,
+    /// Gas in force on segment i (from `times_s[i]` to `times_s[i+1]`); length = breakpoints − 1
+    /// (a single-point history has one entry).
+    pub gas: Vec<GasMix>,
+    /// Water-vapour pressure subtracted from ambient before splitting it into inert-gas
+    /// partial pressures at the open faces, Pa (0 for chamber gas in the laboratory; the
+    /// alveolar value, e.g. 6 270 Pa, for a breathed dive gas).
+    pub vapour_pa: f64,
+    /// Human-readable name (profile file stem or schedule label).
+    pub label: String,
+}
+
+impl PressureHistory {
+    /// Build and check a history: times strictly increasing from 0, pressures positive and finite.
+    pub fn new(
+        label: impl Into<String>,
+        times_s: Vec<f64>,
+        ambient_pa: Vec<f64>,
+        gas: Vec<GasMix>,
+        vapour_pa: f64,
+    ) -> Result<Self, String> {
+        if times_s.is_empty() || times_s.len() != ambient_pa.len() {
+            return Err(
+                "a profile needs at least one point, with a pressure for every time".into(),
+            );
+        }
+        if times_s[0] != 0.0 {
+            return Err(format!(
+                "a profile must start at time 0 (first time is {} s)",
+                times_s[0]
+            ));
+        }
+        for (i, w) in times_s.windows(2).enumerate() {
+            if !(w[1] > w[0]) || !w[1].is_finite() {
+                return Err(format!(
+                    "times must increase strictly: point {} is at {} s after {} s",
+                    i + 2,
+                    w[1],
+                    w[0]
+                ));
+            }
+        }
+        if let Some((i, p)) = ambient_pa
+            .iter()
+            .enumerate()
+            .find(|(_, p)| !(**p > 0.0) || !p.is_finite())
+        {
+            return Err(format!(
+                "pressure at point {} is {p} Pa; absolute pressure must be positive",
+                i + 1
+            ));
+        }
+        let want = (times_s.len() - 1).max(1);
+        if gas.len() != want {
+            return Err(format!("{} gas entries for {} segments", gas.len(), want));
+        }
+        if !(0.0..1e5).contains(&vapour_pa) {
+            return Err(format!(
+                "water-vapour pressure {vapour_pa} Pa is out of range 0..1e5"
+            ));
+        }
+        Ok(PressureHistory {
+            times_s,
+            ambient_pa,
+            gas,
+            vapour_pa,
+            label: label.into(),
+        })
+    }
+
+    /// A history with one gas on every segment.
+    pub fn with_gas(
+        label: impl Into<String>,
+        times_s: Vec<f64>,
+        ambient_pa: Vec<f64>,
+        gas: GasMix,
+        vapour_pa: f64,
+    ) -> Result<Self, String> {
+        let n = (times_s.len().max(2)) - 1;
+        Self::new(label, times_s, ambient_pa, vec![gas; n], vapour_pa)
+    }
+
+    /// End time, s.
+    pub fn duration_s(&self) -> f64 {
+        *self.times_s.last().unwrap()
+    }
+
+    /// Index of the segment containing `t` (clamped to the first/last segment).
+    pub fn segment(&self, t: f64) -> usize {
+        if self.times_s.len() < 2 {
+            return 0;
+        }
+        let k = self.times_s.partition_point(|&x| x <= t);
+        k.saturating_sub(1).min(self.times_s.len() - 2)
+    }
+
+    /// Ambient pressure at `t`, Pa (linear between breakpoints, held beyond the ends).
+    pub fn ambient(&self, t: f64) -> f64 {
+        if self.times_s.len() < 2 || t <= 0.0 {
+            return self.ambient_pa[0];
+        }
+        if t >= self.duration_s() {
+            return *self.ambient_pa.last().unwrap();
+        }
+        let i = self.segment(t);
+        let (t0, t1) = (self.times_s[i], self.times_s[i + 1]);
+        let (p0, p1) = (self.ambient_pa[i], self.ambient_pa[i + 1]);
+        p0 + (p1 - p0) * (t - t0) / (t1 - t0)
+    }
+
+    /// dP/dt on the segment containing `t`, Pa/s (0 beyond the ends).
+    pub fn rate(&self, t: f64) -> f64 {
+        if self.times_s.len() < 2 || t < 0.0 || t >= self.duration_s() {
+            return 0.0;
+        }
+        let i = self.segment(t);
+        (self.ambient_pa[i + 1] - self.ambient_pa[i]) / (self.times_s[i + 1] - self.times_s[i])
+    }
+
+    /// Gas in force at `t`.
+    pub fn gas_at(&self, t: f64) -> GasMix {
+        self.gas[self.segment(t).min(self.gas.len() - 1)]
+    }
+
+    /// Partial pressure of `gas` that the open faces are in equilibrium with at `t`, Pa:
+    /// fraction × (ambient − water vapour).
+    pub fn inspired_partial_pressure(&self, gas: Gas, t: f64) -> f64 {
+        self.gas_at(t).fraction(gas) * (self.ambient(t) - self.vapour_pa).max(0.0)
+    }
+
+    /// First breakpoint strictly after `t` (or the end time).
+    pub fn next_breakpoint(&self, t: f64) -> f64 {
+        let k = self.times_s.partition_point(|&x| x <= t + 1e-12);
+        if k < self.times_s.len() {
+            self.times_s[k]
+        } else {
+            self.duration_s()
+        }
+    }
+
+    /// Every gas that appears on any segment, in [`Gas::ALL`] order.
+    pub fn gases(&self) -> Vec<Gas> {
+        Gas::ALL
+            .into_iter()
+            .filter(|g| self.gas.iter().any(|m| m.fraction(*g) > 0.0))
+            .collect()
+    }
+
+    /// Append another history after this one (repetitive dives, surface intervals);
+    /// `other` must start at the pressure this one ends at.
+    pub fn then(mut self, other: &PressureHistory) -> Result<Self, String> {
+        let end = self.duration_s();
+        if (other.ambient_pa[0] - *self.ambient_pa.last().unwrap()).abs() > 1.0 {
+            return Err(
+                "the appended profile must start at the pressure the first one ends at".into(),
+            );
+        }
+        if self.times_s.len() == 1 {
+            self.gas.clear();
+        }
+        for i in 1..other.times_s.len() {
+            self.times_s.push(end + other.times_s[i]);
+            self.ambient_pa.push(other.ambient_pa[i]);
+            self.gas.push(other.gas[i - 1]);
+        }
+        if self.gas.is_empty() {
+            self.gas.push(other.gas[0]);
+        }
+        Ok(self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    #[test]
+    fn interpolates_and_rejects_non_monotone() {
+        let h = PressureHistory::with_gas(
+            "t",
+            vec![0.0, 10.0, 20.0],
+            vec![1e5, 2e5, 2e5],
+            GasMix::AIR,
+            0.0,
+        )
+        .unwrap();
+        assert!((h.ambient(5.0) - 1.5e5).abs() < 1e-9);
+        assert!((h.rate(5.0) - 1e4).abs() < 1e-9);
+        assert_eq!(h.rate(15.0), 0.0);
+        assert_eq!(h.next_breakpoint(0.0), 10.0);
+        assert_eq!(h.next_breakpoint(10.0), 20.0);
+        assert!(PressureHistory::with_gas(
+            "t",
+            vec![0.0, 10.0, 5.0],
+            vec![1e5; 3],
+            GasMix::AIR,
+            0.0
+        )
+        .is_err());
+    }
+}

@@ -1,0 +1,3 @@
+//! All integration tests compile into this one binary; one module per concern.
+#[path = "integration/common.rs"]
+mod common;
