@@ -15,3 +15,8 @@ pub trait DecoAlgorithm: Send + Sync {
     /// Plan the dive. Errors are bad plans (depth ≤ 0, hypoxic gas, deco gas beyond its MOD ...).
     fn plan(&self, plan: &DivePlan) -> Result<Schedule, crate::error::InputError>;
 }
+
+/// Builds an algorithm from the `[params]` table of an algorithm TOML and the resolved
+/// conventions. The error string names the offending field; the loader adds file and line.
+pub type Builder =
+    fn(label: &str, params: toml::Value, conventions: Conventions) -> Result<Box<dyn DecoAlgorithm>, String>;
