@@ -8,5 +8,6 @@
 pub mod algorithm;
 pub mod error;
 pub mod gas;
+pub mod phantom;
 pub mod profile;
 pub mod units;

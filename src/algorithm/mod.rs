@@ -18,5 +18,8 @@ pub trait DecoAlgorithm: Send + Sync {
 
 /// Builds an algorithm from the `[params]` table of an algorithm TOML and the resolved
 /// conventions. The error string names the offending field; the loader adds file and line.
-pub type Builder =
-    fn(label: &str, params: toml::Value, conventions: Conventions) -> Result<Box<dyn DecoAlgorithm>, String>;
+pub type Builder = fn(
+    label: &str,
+    params: toml::Value,
+    conventions: Conventions,
+) -> Result<Box<dyn DecoAlgorithm>, String>;

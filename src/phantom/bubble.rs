@@ -1,0 +1,183 @@
+//! A bubble's state is the amount of each gas it holds (mol). Its radius follows from the
+//! ideal-gas law with the Young–Laplace balance, eq. (2.4):
+//! (P_amb + 2γ/R + Ω(R))·(4/3)πR³ = n_total·R_u·T,
+//! solved by a bracketed, safeguarded secant root find. (Eq. 2.5 is the derivative of this
+//! balance; the printed 2.5 and 2.10 carry sign/term misprints and are not used.)
+
+use super::elasticity::{ElasticState, ElasticityLaw};
+use std::f64::consts::PI;
+
+/// What happened to a bubble.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BubbleFate {
+    /// Still in the phantom.
+    Active,
+    /// All its gas dissolved at this time (s).
+    Dissolved(f64),
+    /// Merged into bubble `into` at this time (s).
+    Merged {
+        /// Id of the surviving bubble.
+        into: usize,
+        /// Time, s.
+        time: f64,
+    },
+}
+
+/// One bubble.
+#[derive(Debug, Clone)]
+pub struct Bubble {
+    /// Stable id (0-based, in creation order).
+    pub id: usize,
+    /// Centre, m.
+    pub position: [f64; 3],
+    /// Initial radius R_0, m (reference radius of the elasticity and surface laws).
+    pub initial_radius: f64,
+    /// Ambient pressure when created, Pa (P_0 of eq. 2.8).
+    pub initial_ambient: f64,
+    /// Amount of each gas, mol, in the simulation's gas order.
+    pub moles: Vec<f64>,
+    /// Current radius, m.
+    pub radius: f64,
+    /// Fate.
+    pub fate: BubbleFate,
+}
+
+impl Bubble {
+    /// Total gas, mol.
+    pub fn total_moles(&self) -> f64 {
+        self.moles.iter().sum()
+    }
+    /// Volume, m³.
+    pub fn volume(&self) -> f64 {
+        4.0 / 3.0 * PI * self.radius.powi(3)
+    }
+    /// Surface area, m².
+    pub fn area(&self) -> f64 {
+        4.0 * PI * self.radius.powi(2)
+    }
+    /// Whether the bubble is still in the phantom.
+    pub fn active(&self) -> bool {
+        self.fate == BubbleFate::Active
+    }
+}
+
+/// Everything the Laplace balance needs besides the radius.
+#[derive(Debug, Clone, Copy)]
+pub struct Balance<'a> {
+    /// Ambient pressure, Pa.
+    pub ambient: f64,
+    /// Surface tension γ, N/m.
+    pub surface_tension: f64,
+    /// Tissue elasticity law.
+    pub law: &'a dyn ElasticityLaw,
+    /// R_0, m.
+    pub initial_radius: f64,
+    /// P_0, Pa.
+    pub initial_ambient: f64,
+}
+
+impl Balance<'_> {
+    /// Pressure inside a bubble of radius `r`: P_amb + 2γ/R + Ω(R), Pa (eq. 2.4).
+    pub fn internal_pressure(&self, r: f64) -> f64 {
+        let s = ElasticState {
+            radius: r,
+            initial_radius: self.initial_radius,
+            ambient: self.ambient,
+            initial_ambient: self.initial_ambient,
+        };
+        self.ambient + 2.0 * self.surface_tension / r + self.law.omega(&s)
+    }
+
+    /// Gas amount × R_u·T (J) that a bubble of radius `r` holds: P_B(R)·(4/3)πR³.
+    pub fn pv(&self, r: f64) -> f64 {
+        self.internal_pressure(r) * 4.0 / 3.0 * PI * r.powi(3)
+    }
+
+    /// The radius at which P_B·V = `nrt` (J), searched upward from 1e-9 m to 10 m starting
+    /// near `guess`. `None` if there is no root (no physical equilibrium radius) in that range.
+    /// When the balance is not monotone, the smallest root above 1e-9 m is returned.
+    pub fn radius_for(&self, nrt: f64, guess: f64) -> Option<f64> {
+        if !(nrt > 0.0) || !nrt.is_finite() {
+            return None;
+        }
+        let f = |r: f64| self.pv(r) - nrt;
+        const LO: f64 = 1e-9;
+        const HI: f64 = 10.0;
+        // Bracket: try a narrow bracket around the guess first (fast path in the time loop).
+        let mut bracket = None;
+        if guess.is_finite() && guess > LO && guess < HI {
+            let (a, b) = (guess * 0.8, (guess * 1.25).min(HI));
+            if f(a) < 0.0 && f(b) >= 0.0 && self.pv(a) > 0.0 {
+                bracket = Some((a, b));
+            }
+        }
+        if bracket.is_none() {
+            // scan upward geometrically from LO for the first sign change from − to +
+            let mut a = LO;
+            let mut fa = f(a);
+            let mut r = LO;
+            while r < HI {
+                let b = (r * 1.25).min(HI);
+                let fb = f(b);
+                if fa < 0.0 && fb >= 0.0 {
+                    bracket = Some((a, b));
+                    break;
+                }
+                a = b;
+                fa = fb;
+                r = b;
+            }
+        }
+        let (mut a, mut b) = bracket?;
+        let (mut fa, mut fb) = (f(a), f(b));
+        // Illinois-safeguarded regula falsi to relative 1e-14.
+        let mut side = 0i8;
+        for _ in 0..200 {
+            let mut c = b - fb * (b - a) / (fb - fa);
+            if !(c > a && c < b) {
+                c = 0.5 * (a + b);
+            }
+            let fc = f(c);
+            if fc == 0.0 || (b - a) < 1e-14 * c {
+                return Some(c);
+            }
+            if (fc < 0.0) == (fa < 0.0) {
+                a = c;
+                fa = fc;
+                if side == -1 {
+                    fb *= 0.5;
+                }
+                side = -1;
+            } else {
+                b = c;
+                fb = fc;
+                if side == 1 {
+                    fa *= 0.5;
+                }
+                side = 1;
+            }
+        }
+        Some(0.5 * (a + b))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::elasticity::*;
+    use super::*;
+
+    #[test]
+    fn pure_boyle_without_tension() {
+        let law = NoElasticity;
+        let b = Balance {
+            ambient: 1e5,
+            surface_tension: 0.0,
+            law: &law,
+            initial_radius: 1e-4,
+            initial_ambient: 1e5,
+        };
+        let nrt = 1e5 * 4.0 / 3.0 * PI * 1e-12; // R = 1e-4 m at 1e5 Pa
+        let r = b.radius_for(nrt, 5e-5).unwrap();
+        assert!((r / 1e-4 - 1.0).abs() < 1e-12);
+    }
+}

@@ -1,0 +1,182 @@
+//! Tissue elasticity Ω(R): the pressure the deformed gel exerts on a bubble (the paper's
+//! section 2.1.2). One small trait, one implementation per form, a registry keyed by the
+//! `law` name used in TOML. Adding a law is one implementation plus one registry line.
+
+use serde::Deserialize;
+
+/// What an elasticity law may depend on.
+#[derive(Debug, Clone, Copy)]
+pub struct ElasticState {
+    /// Current bubble radius R_B, m.
+    pub radius: f64,
+    /// The bubble's initial (reference) radius R_0, m.
+    pub initial_radius: f64,
+    /// Current ambient pressure P_amb, Pa.
+    pub ambient: f64,
+    /// Ambient pressure when the bubble was created, P_0, Pa.
+    pub initial_ambient: f64,
+}
+
+/// A tissue-elasticity law Ω(R) (Pa).
+pub trait ElasticityLaw: Send + Sync + std::fmt::Debug {
+    /// The name used in TOML and in tables.
+    fn name(&self) -> &'static str;
+    /// Ω(R_B), Pa.
+    fn omega(&self, s: &ElasticState) -> f64;
+}
+
+/// Ω = 0: no tissue response.
+#[derive(Debug, Clone, Copy)]
+pub struct NoElasticity;
+impl ElasticityLaw for NoElasticity {
+    fn name(&self) -> &'static str {
+        "none"
+    }
+    fn omega(&self, _: &ElasticState) -> f64 {
+        0.0
+    }
+}
+
+/// Bulk Modulus form, eq. (2.6), absolute: Ω = (4/3)πR³·M with M = K/V_aff.
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct BulkModulus {
+    /// M = K/V_aff, Pa/m³ (the paper's Fig. 2a: 5e-2 Pa/µm³ = 5e16 Pa/m³).
+    pub bulk_modulus_per_volume: f64,
+}
+impl ElasticityLaw for BulkModulus {
+    fn name(&self) -> &'static str {
+        "bulk-modulus"
+    }
+    fn omega(&self, s: &ElasticState) -> f64 {
+        4.0 / 3.0 * std::f64::consts::PI * s.radius.powi(3) * self.bulk_modulus_per_volume
+    }
+}
+
+/// Continuity of Displacement form, eq. (2.7): Ω = −4μ/3 (valid for 0 < μ ≪ K).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ContinuityOfDisplacement {
+    /// Small shear modulus μ, Pa.
+    pub shear_modulus: f64,
+}
+impl ElasticityLaw for ContinuityOfDisplacement {
+    fn name(&self) -> &'static str {
+        "continuity-of-displacement"
+    }
+    fn omega(&self, _: &ElasticState) -> f64 {
+        -4.0 * self.shear_modulus / 3.0
+    }
+}
+
+/// Reference Configuration form, eq. (2.8):
+/// Ω = 4μ[(1 − P_0/3K)·R_B/R_0 − (1 − P_amb/3K)].
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ReferenceConfiguration {
+    /// Small shear modulus μ, Pa.
+    pub shear_modulus: f64,
+    /// Bulk modulus K, Pa (the paper's Fig. 2a: 2.2 GPa).
+    pub bulk_modulus: f64,
+}
+impl ElasticityLaw for ReferenceConfiguration {
+    fn name(&self) -> &'static str {
+        "reference-configuration"
+    }
+    fn omega(&self, s: &ElasticState) -> f64 {
+        let k3 = 3.0 * self.bulk_modulus;
+        4.0 * self.shear_modulus
+            * ((1.0 - s.initial_ambient / k3) * s.radius / s.initial_radius
+                - (1.0 - s.ambient / k3))
+    }
+}
+
+/// Hyperelastic form, eq. (2.9): Ω = (μ/2)[5 − 4(R_B/R_0)⁻¹ − (R_B/R_0)⁻⁴].
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Hyperelastic {
+    /// Small shear modulus μ, Pa.
+    pub shear_modulus: f64,
+}
+impl ElasticityLaw for Hyperelastic {
+    fn name(&self) -> &'static str {
+        "hyperelastic"
+    }
+    fn omega(&self, s: &ElasticState) -> f64 {
+        let x = s.initial_radius / s.radius;
+        0.5 * self.shear_modulus * (5.0 - 4.0 * x - x.powi(4))
+    }
+}
+
+type Build = fn(toml::Value) -> Result<Box<dyn ElasticityLaw>, String>;
+
+fn parse<T: for<'de> Deserialize<'de> + ElasticityLaw + 'static>(
+    v: toml::Value,
+) -> Result<Box<dyn ElasticityLaw>, String> {
+    T::deserialize(v)
+        .map(|x| Box::new(x) as Box<dyn ElasticityLaw>)
+        .map_err(|e| e.message().to_string())
+}
+
+/// The registry: TOML name → constructor from the law's parameter table.
+pub const REGISTRY: &[(&str, Build)] = &[
+    ("none", |_| Ok(Box::new(NoElasticity))),
+    ("bulk-modulus", parse::<BulkModulus>),
+    (
+        "continuity-of-displacement",
+        parse::<ContinuityOfDisplacement>,
+    ),
+    ("reference-configuration", parse::<ReferenceConfiguration>),
+    ("hyperelastic", parse::<Hyperelastic>),
+];
+
+/// Names of all registered laws, in registry order.
+pub fn law_names() -> Vec<&'static str> {
+    REGISTRY.iter().map(|(n, _)| *n).collect()
+}
+
+/// Build a law by name from its parameter table (fields other than `law`).
+pub fn build(name: &str, params: toml::Value) -> Result<Box<dyn ElasticityLaw>, String> {
+    let (_, b) = REGISTRY.iter().find(|(n, _)| *n == name).ok_or_else(|| {
+        format!(
+            "unknown elasticity law '{name}'; known: {}",
+            law_names().join(", ")
+        )
+    })?;
+    b(params)
+}
+
+/// Parameters from which every law can be built (the `elasticity` subcommand and comparisons).
+#[derive(Debug, Clone, Copy)]
+pub struct AllLawParams {
+    /// μ, Pa.
+    pub shear_modulus: f64,
+    /// M, Pa/m³.
+    pub bulk_modulus_per_volume: f64,
+    /// K, Pa.
+    pub bulk_modulus: f64,
+}
+
+impl AllLawParams {
+    /// Build the named law from these parameters.
+    pub fn build(&self, name: &str) -> Result<Box<dyn ElasticityLaw>, String> {
+        let mut t = toml::Table::new();
+        match name {
+            "bulk-modulus" => {
+                t.insert(
+                    "bulk_modulus_per_volume".into(),
+                    self.bulk_modulus_per_volume.into(),
+                );
+            }
+            "continuity-of-displacement" | "hyperelastic" => {
+                t.insert("shear_modulus".into(), self.shear_modulus.into());
+            }
+            "reference-configuration" => {
+                t.insert("shear_modulus".into(), self.shear_modulus.into());
+                t.insert("bulk_modulus".into(), self.bulk_modulus.into());
+            }
+            _ => {}
+        }
+        build(name, toml::Value::Table(t))
+    }
+}

@@ -1,0 +1,434 @@
+//! The 3-D cell-centred grid of the phantom: shape, mask, and the face codes the
+//! diffusion solver uses. Cell (i, j, k) has its centre at ((i+½)h, (j+½)h, (k+½)h);
+//! the flat index is `i + nx·(j + ny·k)`; z points up (k = 0 is the bottom).
+
+use serde::{Deserialize, Serialize};
+
+/// A face of the phantom.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, PartialOrd, Ord)]
+#[serde(rename_all = "kebab-case")]
+pub enum Face {
+    /// Box face at x = 0.
+    #[serde(rename = "x-")]
+    XMinus,
+    /// Box face at x = L_x.
+    #[serde(rename = "x+")]
+    XPlus,
+    /// Box face at y = 0.
+    #[serde(rename = "y-")]
+    YMinus,
+    /// Box face at y = L_y.
+    #[serde(rename = "y+")]
+    YPlus,
+    /// z = 0 (box or cylinder).
+    Bottom,
+    /// z = L_z (box or cylinder).
+    Top,
+    /// The curved wall of a cylinder.
+    Side,
+}
+
+impl Face {
+    /// The name used in TOML and summaries.
+    pub fn name(self) -> &'static str {
+        match self {
+            Face::XMinus => "x-",
+            Face::XPlus => "x+",
+            Face::YMinus => "y-",
+            Face::YPlus => "y+",
+            Face::Bottom => "bottom",
+            Face::Top => "top",
+            Face::Side => "side",
+        }
+    }
+}
+
+/// The phantom's shape.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Shape {
+    /// A box [0, L_x] × [0, L_y] × [0, L_z], m.
+    Box {
+        /// Edge lengths, m.
+        size: [f64; 3],
+    },
+    /// An upright cylinder (axis along z) of the given diameter and depth, m.
+    Cylinder {
+        /// Diameter, m.
+        diameter: f64,
+        /// Depth (height), m.
+        depth: f64,
+    },
+}
+
+impl Shape {
+    /// The faces this shape has.
+    pub fn faces(&self) -> &'static [Face] {
+        match self {
+            Shape::Box { .. } => &[
+                Face::XMinus,
+                Face::XPlus,
+                Face::YMinus,
+                Face::YPlus,
+                Face::Bottom,
+                Face::Top,
+            ],
+            Shape::Cylinder { .. } => &[Face::Side, Face::Bottom, Face::Top],
+        }
+    }
+}
+
+/// Face code of one side of a cell: no flux (sealed face or outside).
+pub const SIDE_SEALED: u8 = 0;
+/// Face code: the neighbour is an inside cell.
+pub const SIDE_INTERIOR: u8 = 1;
+/// Face code: an open face held at Henry equilibrium with the chamber gas.
+pub const SIDE_OPEN: u8 = 2;
+/// Bit set in a direction code when the cell is inside the phantom.
+pub const INSIDE_BIT: u8 = 16;
+
+/// The discretised phantom.
+#[derive(Debug, Clone)]
+pub struct Grid {
+    /// Cells along x, y, z.
+    pub n: [usize; 3],
+    /// Grid step h, m.
+    pub h: f64,
+    /// The shape.
+    pub shape: Shape,
+    /// Open faces.
+    pub open: Vec<Face>,
+    /// Per direction (x, y, z), per cell: `minus | plus << 2 | INSIDE_BIT` codes.
+    pub codes: [Vec<u8>; 3],
+    /// Per direction, the inside cells with open sides in that direction and how many (1 or 2).
+    pub open_cells: [Vec<(u32, u8)>; 3],
+    /// Number of inside cells.
+    pub n_inside: usize,
+}
+
+impl Grid {
+    /// Build the grid: the cell count along each axis is the size over h rounded to the
+    /// nearest integer (at least 3), so the modelled size is `n·h`.
+    pub fn new(shape: Shape, h: f64, open: &[Face]) -> Result<Grid, String> {
+        if !(h > 0.0) {
+            return Err(format!("grid step must be positive (got {h} m)"));
+        }
+        let size = match shape {
+            Shape::Box { size } => size,
+            Shape::Cylinder { diameter, depth } => [diameter, diameter, depth],
+        };
+        let mut n = [0usize; 3];
+        for a in 0..3 {
+            if !(size[a] > 0.0) {
+                return Err(format!("phantom size must be positive (got {} m)", size[a]));
+            }
+            let c = (size[a] / h).round();
+            if c < 3.0 {
+                return Err(format!(
+                    "phantom size {} m is less than 3 grid steps of {h} m; use a smaller grid step",
+                    size[a]
+                ));
+            }
+            n[a] = c as usize;
+        }
+        let total = n[0] * n[1] * n[2];
+        if total > 400_000_000 {
+            return Err(format!("{total} cells is too many; use a larger grid step"));
+        }
+        for f in open {
+            if !shape.faces().contains(f) {
+                return Err(format!("face '{}' does not exist on this shape", f.name()));
+            }
+        }
+        let inside_at = |i: isize, j: isize, k: isize| -> bool {
+            if i < 0
+                || j < 0
+                || k < 0
+                || i >= n[0] as isize
+                || j >= n[1] as isize
+                || k >= n[2] as isize
+            {
+                return false;
+            }
+            match shape {
+                Shape::Box { .. } => true,
+                Shape::Cylinder { .. } => {
+                    let c = n[0] as f64 / 2.0;
+                    let x = i as f64 + 0.5 - c;
+                    let y = j as f64 + 0.5 - c;
+                    x * x + y * y <= c * c
+                }
+            }
+        };
+        let is_open = |f: Face| open.contains(&f);
+        let mut codes = [vec![0u8; total], vec![0u8; total], vec![0u8; total]];
+        let mut open_cells: [Vec<(u32, u8)>; 3] = [Vec::new(), Vec::new(), Vec::new()];
+        let mut n_inside = 0;
+        for k in 0..n[2] {
+            for j in 0..n[1] {
+                for i in 0..n[0] {
+                    let (ii, jj, kk) = (i as isize, j as isize, k as isize);
+                    if !inside_at(ii, jj, kk) {
+                        continue;
+                    }
+                    n_inside += 1;
+                    let idx = i + n[0] * (j + n[1] * k);
+                    for (d, code) in codes.iter_mut().enumerate() {
+                        let mut sides = [SIDE_SEALED; 2];
+                        for (s, sign) in [-1isize, 1].into_iter().enumerate() {
+                            let (ni, nj, nk) = match d {
+                                0 => (ii + sign, jj, kk),
+                                1 => (ii, jj + sign, kk),
+                                _ => (ii, jj, kk + sign),
+                            };
+                            sides[s] = if inside_at(ni, nj, nk) {
+                                SIDE_INTERIOR
+                            } else {
+                                let face = match (shape, d, sign) {
+                                    (_, 2, -1) => Face::Bottom,
+                                    (_, 2, _) => Face::Top,
+                                    (Shape::Cylinder { .. }, _, _) => Face::Side,
+                                    (_, 0, -1) => Face::XMinus,
+                                    (_, 0, _) => Face::XPlus,
+                                    (_, _, -1) => Face::YMinus,
+                                    _ => Face::YPlus,
+                                };
+                                if is_open(face) {
+                                    SIDE_OPEN
+                                } else {
+                                    SIDE_SEALED
+                                }
+                            };
+                        }
+                        code[idx] = sides[0] | (sides[1] << 2) | INSIDE_BIT;
+                        let opens = sides.iter().filter(|s| **s == SIDE_OPEN).count() as u8;
+                        if opens > 0 {
+                            open_cells[d].push((idx as u32, opens));
+                        }
+                    }
+                }
+            }
+        }
+        Ok(Grid {
+            n,
+            h,
+            shape,
+            open: open.to_vec(),
+            codes,
+            open_cells,
+            n_inside,
+        })
+    }
+
+    /// Total number of cells (inside and outside).
+    pub fn len(&self) -> usize {
+        self.n[0] * self.n[1] * self.n[2]
+    }
+
+    /// True if the grid has no cells (never, after `new`).
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Modelled extent along each axis, m.
+    pub fn extent(&self) -> [f64; 3] {
+        [
+            self.n[0] as f64 * self.h,
+            self.n[1] as f64 * self.h,
+            self.n[2] as f64 * self.h,
+        ]
+    }
+
+    /// Cell volume h³, m³.
+    pub fn cell_volume(&self) -> f64 {
+        self.h.powi(3)
+    }
+
+    /// Whether cell `idx` is inside the phantom.
+    #[inline]
+    pub fn inside(&self, idx: usize) -> bool {
+        self.codes[0][idx] & INSIDE_BIT != 0
+    }
+
+    /// Flat index of (i, j, k).
+    #[inline]
+    pub fn index(&self, i: usize, j: usize, k: usize) -> usize {
+        i + self.n[0] * (j + self.n[1] * k)
+    }
+
+    /// Whether a point lies inside the modelled phantom.
+    pub fn contains(&self, p: [f64; 3]) -> bool {
+        self.distance_to_faces(p).iter().all(|(_, d)| *d > 0.0)
+    }
+
+    /// Distance from a point to every face of the modelled phantom, m (negative outside).
+    pub fn distance_to_faces(&self, p: [f64; 3]) -> Vec<(Face, f64)> {
+        let e = self.extent();
+        match self.shape {
+            Shape::Box { .. } => vec![
+                (Face::XMinus, p[0]),
+                (Face::XPlus, e[0] - p[0]),
+                (Face::YMinus, p[1]),
+                (Face::YPlus, e[1] - p[1]),
+                (Face::Bottom, p[2]),
+                (Face::Top, e[2] - p[2]),
+            ],
+            Shape::Cylinder { .. } => {
+                let c = e[0] / 2.0;
+                let r = ((p[0] - c).powi(2) + (p[1] - c).powi(2)).sqrt();
+                vec![
+                    (Face::Side, c - r),
+                    (Face::Bottom, p[2]),
+                    (Face::Top, e[2] - p[2]),
+                ]
+            }
+        }
+    }
+
+    /// Trilinear interpolation of a cell-centred field at point `p`, using inside cells only
+    /// (weights renormalised); points beyond the outermost cell centres take the edge value.
+    /// Returns `fallback` if no inside cell is among the eight neighbours.
+    pub fn interpolate(&self, field: &[f64], p: [f64; 3], fallback: f64) -> f64 {
+        let mut i0 = [0usize; 3];
+        let mut t = [0.0f64; 3];
+        for a in 0..3 {
+            let f = (p[a] / self.h - 0.5).clamp(0.0, (self.n[a] - 1) as f64);
+            let base = (f.floor() as usize).min(self.n[a] - 2);
+            i0[a] = base;
+            t[a] = f - base as f64;
+        }
+        let mut sum = 0.0;
+        let mut wsum = 0.0;
+        for dk in 0..2 {
+            let wk = if dk == 0 { 1.0 - t[2] } else { t[2] };
+            for dj in 0..2 {
+                let wj = if dj == 0 { 1.0 - t[1] } else { t[1] };
+                for di in 0..2 {
+                    let wi = if di == 0 { 1.0 - t[0] } else { t[0] };
+                    let w = wi * wj * wk;
+                    let idx = self.index(i0[0] + di, i0[1] + dj, i0[2] + dk);
+                    if w > 0.0 && self.inside(idx) {
+                        sum += w * field[idx];
+                        wsum += w;
+                    }
+                }
+            }
+        }
+        if wsum > 1e-12 {
+            sum / wsum
+        } else {
+            fallback
+        }
+    }
+
+    /// Sum of a field over inside cells times the cell volume (amount of gas, mol, for a
+    /// concentration field in mol/m³).
+    pub fn integrate(&self, field: &[f64]) -> f64 {
+        let v = self.cell_volume();
+        let codes = &self.codes[0];
+        field
+            .iter()
+            .zip(codes)
+            .filter(|(_, c)| **c & INSIDE_BIT != 0)
+            .map(|(x, _)| *x)
+            .sum::<f64>()
+            * v
+    }
+
+    /// Weights of a spherically symmetric kernel of radius `a` centred at `p`, over inside
+    /// cells, summing to one: w ∝ (1 − (d/a)²)² for cell-centre distance d < a. Falls back to
+    /// the nearest inside cell if the kernel catches none.
+    pub fn kernel(&self, p: [f64; 3], a: f64, out: &mut Vec<(usize, f64)>) {
+        out.clear();
+        let h = self.h;
+        let mut lo = [0usize; 3];
+        let mut hi = [0usize; 3];
+        for ax in 0..3 {
+            lo[ax] = (((p[ax] - a) / h - 0.5).floor().max(0.0)) as usize;
+            hi[ax] = ((((p[ax] + a) / h - 0.5).ceil()) as isize).clamp(0, self.n[ax] as isize - 1)
+                as usize;
+        }
+        let mut total = 0.0;
+        for k in lo[2]..=hi[2] {
+            let z = (k as f64 + 0.5) * h - p[2];
+            for j in lo[1]..=hi[1] {
+                let y = (j as f64 + 0.5) * h - p[1];
+                for i in lo[0]..=hi[0] {
+                    let x = (i as f64 + 0.5) * h - p[0];
+                    let q = (x * x + y * y + z * z) / (a * a);
+                    if q < 1.0 {
+                        let idx = self.index(i, j, k);
+                        if self.inside(idx) {
+                            let w = (1.0 - q) * (1.0 - q);
+                            out.push((idx, w));
+                            total += w;
+                        }
+                    }
+                }
+            }
+        }
+        if total > 0.0 {
+            for (_, w) in out.iter_mut() {
+                *w /= total;
+            }
+        } else {
+            let mut best = (usize::MAX, f64::INFINITY);
+            for idx in 0..self.len() {
+                if !self.inside(idx) {
+                    continue;
+                }
+                let i = idx % self.n[0];
+                let j = (idx / self.n[0]) % self.n[1];
+                let k = idx / (self.n[0] * self.n[1]);
+                let d = ((i as f64 + 0.5) * h - p[0]).powi(2)
+                    + ((j as f64 + 0.5) * h - p[1]).powi(2)
+                    + ((k as f64 + 0.5) * h - p[2]).powi(2);
+                if d < best.1 {
+                    best = (idx, d);
+                }
+            }
+            out.push((best.0, 1.0));
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn cylinder_mask_volume_approaches_pi_r2_h() {
+        let g = Grid::new(
+            Shape::Cylinder {
+                diameter: 11e-3,
+                depth: 5e-3,
+            },
+            86.5e-6,
+            &[Face::Top, Face::Side],
+        )
+        .unwrap();
+        let e = g.extent();
+        let exact = std::f64::consts::PI * (e[0] / 2.0).powi(2) * e[2];
+        let v = g.n_inside as f64 * g.cell_volume();
+        assert!((v / exact - 1.0).abs() < 0.01, "{v} vs {exact}");
+    }
+
+    #[test]
+    fn kernel_weights_sum_to_one_and_centre_is_symmetric() {
+        let g = Grid::new(Shape::Box { size: [1e-3; 3] }, 1e-4, &[]).unwrap();
+        let mut k = Vec::new();
+        g.kernel([5e-4, 5e-4, 5e-4], 2.5e-4, &mut k);
+        let s: f64 = k.iter().map(|x| x.1).sum();
+        assert!((s - 1.0).abs() < 1e-12);
+        // first moment about the centre vanishes by symmetry
+        let mut m = [0.0; 3];
+        for (idx, w) in &k {
+            let i = idx % 10;
+            let j = (idx / 10) % 10;
+            let kk = idx / 100;
+            m[0] += w * ((i as f64 + 0.5) * 1e-4 - 5e-4);
+            m[1] += w * ((j as f64 + 0.5) * 1e-4 - 5e-4);
+            m[2] += w * ((kk as f64 + 0.5) * 1e-4 - 5e-4);
+        }
+        assert!(m.iter().all(|x| x.abs() < 1e-15));
+    }
+}

@@ -1,0 +1,9 @@
+//! The three-dimensional tissue-phantom bubble model (Walsh et al. 2017, section 2.1).
+
+pub mod bubble;
+pub mod diffusion;
+pub mod elasticity;
+pub mod grid;
+pub mod params;
+pub mod sim;
+pub mod surface;

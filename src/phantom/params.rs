@@ -1,0 +1,153 @@
+//! The phantom model's parameters: one documented struct, every field with its unit and
+//! default. Built from a phantom TOML by [`super::config`], or in code.
+
+use super::elasticity::{ElasticityLaw, NoElasticity};
+use super::grid::{Face, Shape};
+use super::surface::{EqualToBulk, SurfacePermeability};
+use crate::gas::Gas;
+use std::sync::Arc;
+
+/// Transport properties of one gas in the gel.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GasProperties {
+    /// Which gas.
+    pub gas: Gas,
+    /// Bulk diffusion coefficient D_bulk, m²/s (eq. 2.1; Table 1: 1e-10 … 2.7e-9).
+    pub diffusivity: f64,
+    /// Ostwald solubility coefficient L (dimensionless): C = L·p/(R_u·T) (eq. 2.2;
+    /// Table 1: L_N2 = 0.014, L_O2 = 0.013–0.027).
+    pub ostwald: f64,
+}
+
+/// How bubbles are placed at t = 0.
+#[derive(Debug, Clone, PartialEq)]
+pub enum BubblePlacement {
+    /// Explicit centres (m) and initial radii R_0 (m).
+    Explicit(Vec<([f64; 3], f64)>),
+    /// A seeded random population.
+    Random {
+        /// Number of bubbles.
+        count: usize,
+        /// Initial radius of each, m.
+        initial_radius: f64,
+        /// Minimum centre-to-centre spacing, m.
+        min_spacing: f64,
+        /// Minimum distance from a centre to any face, m.
+        margin: f64,
+        /// Seed of the ChaCha8 generator.
+        seed: u64,
+    },
+}
+
+/// Numerical settings of the time loop. The step follows the physics: it is the smallest
+/// of `max_step`, the pressure-change limit, the radius-change limit and the distance to the
+/// next profile breakpoint. Forward Euler is used when that step is within the explicit
+/// positivity limit, locally-one-dimensional backward Euler otherwise.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Numerics {
+    /// Largest time step, s. Default 20.
+    pub max_step: f64,
+    /// Largest change of ambient pressure per step as a fraction of ambient. Default 0.01.
+    pub max_pressure_change: f64,
+    /// Largest relative change of a bubble's gas content per step. Default 0.03
+    /// (≈ 1 % in radius).
+    pub max_content_change: f64,
+    /// Radius of the bubble's sink kernel in the 3-D grid: max(R, this × h). Default 1.5.
+    pub kernel_min_cells: f64,
+    /// Gap between the kernel (or the surface layer) and the coupling sphere ρ at which the
+    /// near field meets the 3-D field, in grid steps. Default 1.5.
+    pub coupling_gap_cells: f64,
+    /// Interval between recorded frames, s. 0 = every step. Default 1.
+    pub record_interval: f64,
+}
+
+impl Default for Numerics {
+    fn default() -> Self {
+        Numerics {
+            max_step: 20.0,
+            max_pressure_change: 0.01,
+            max_content_change: 0.03,
+            kernel_min_cells: 1.5,
+            coupling_gap_cells: 1.5,
+            record_interval: 1.0,
+        }
+    }
+}
+
+/// Every setting of the phantom model.
+#[derive(Debug, Clone)]
+pub struct PhantomParams {
+    /// Name for tables and legends.
+    pub name: String,
+    /// Shape and size.
+    pub shape: Shape,
+    /// Grid step h, m.
+    pub grid_step: f64,
+    /// Faces held at Henry equilibrium with the chamber/breathing gas; the others are sealed.
+    /// Default: all but the bottom.
+    pub open_faces: Vec<Face>,
+    /// Temperature T, K. Default 310.15 (37 °C).
+    pub temperature: f64,
+    /// Surface tension γ, N/m (eq. 2.4; Table 1: 0.042–0.07). Default 0.07.
+    pub surface_tension: f64,
+    /// Tissue elasticity Ω(R) (eqs. 2.6–2.9). Default none.
+    pub elasticity: Arc<dyn ElasticityLaw>,
+    /// Surface permeability D_surf law. Default equal to D_bulk.
+    pub surface: Arc<dyn SurfacePermeability>,
+    /// Thickness δ of the surface layer in which D_surf applies, m. Default: h.
+    pub surface_layer_thickness: f64,
+    /// Gas properties (every gas the profile uses must be listed).
+    pub gases: Vec<GasProperties>,
+    /// Nucleus radius R_min, m: at or below it the skin is impermeable (section 2.1.4).
+    /// Default: h.
+    pub min_radius: f64,
+    /// Bubbles at t = 0.
+    pub bubbles: BubblePlacement,
+    /// Time-loop settings.
+    pub numerics: Numerics,
+}
+
+impl PhantomParams {
+    /// A bare phantom: a box of the given size and step, all faces but the bottom open,
+    /// air-like gas properties (Table 1: D = 2.5e-9 m²/s as fitted for the hydrogel, L_N2 0.014,
+    /// L_O2 0.027), γ = 0.07, Ω = 0, D_surf = D_bulk, no bubbles.
+    pub fn box_phantom(size: [f64; 3], h: f64) -> PhantomParams {
+        PhantomParams {
+            name: "box".into(),
+            shape: Shape::Box { size },
+            grid_step: h,
+            open_faces: vec![
+                Face::XMinus,
+                Face::XPlus,
+                Face::YMinus,
+                Face::YPlus,
+                Face::Top,
+            ],
+            temperature: crate::units::BODY_TEMPERATURE_K,
+            surface_tension: 0.07,
+            elasticity: Arc::new(NoElasticity),
+            surface: Arc::new(EqualToBulk),
+            surface_layer_thickness: h,
+            gases: vec![
+                GasProperties {
+                    gas: Gas::N2,
+                    diffusivity: 2.5e-9,
+                    ostwald: 0.014,
+                },
+                GasProperties {
+                    gas: Gas::O2,
+                    diffusivity: 2.5e-9,
+                    ostwald: 0.027,
+                },
+            ],
+            min_radius: h,
+            bubbles: BubblePlacement::Explicit(Vec::new()),
+            numerics: Numerics::default(),
+        }
+    }
+
+    /// Properties of one gas, if listed.
+    pub fn gas(&self, g: Gas) -> Option<&GasProperties> {
+        self.gases.iter().find(|p| p.gas == g)
+    }
+}

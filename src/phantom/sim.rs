@@ -1,0 +1,806 @@
+//! The time loop: a two-scale model. The 3-D grid carries the far field of every gas; each
+//! bubble is a sub-grid object coupled to it through a quasi-steady spherical near field.
+//!
+//! Coupling (per bubble, per gas g), with R the radius, δ the surface-layer thickness,
+//! a = max(R, kernel_min·h) the sink-kernel radius and ρ = max(a, R + δ) + gap·h the coupling radius:
+//! - C̄_ρ: the 3-D field averaged over the sphere of radius ρ (trilinear samples);
+//! - C_s = L_g·x_g·P_B/(R_u·T): Henry's law at the gas's partial pressure in the bubble;
+//! - flux into the bubble, eq. (2.3) integrated over the quasi-steady shell R…ρ with the
+//!   surface layer R…R+δ (diffusivity D_surf) in series with the gel R+δ…ρ (D_bulk):
+//!   J = 4π(C̄_ρ − C_s) / [(1/R − 1/(R+δ))/D_surf + (1/(R+δ) − 1/ρ)/D_bulk].
+//!   With D_surf = D_bulk this is exactly the plain Henry interface, 4πD(C̄_ρ − C_s)/(1/R − 1/ρ);
+//!   the flux leaving the gel always equals the flux entering the bubble.
+//! - J·dt is removed from (or returned to) the 3-D cells with a spherically symmetric kernel
+//!   of radius a ≤ ρ, whose exterior field is that of a point sink (Newton's shell theorem),
+//!   so the field sampled at ρ sees the bubble as the continuum does. Total gas (grid +
+//!   bubbles) changes only through open faces: conserved to round-off.
+//!
+//! Bubbles whose radius is at or below R_min are impermeable (section 2.1.4) and follow
+//! Boyle/Laplace only. Touching bubbles coalesce; a bubble reaching a face ends the run.
+
+use super::bubble::{Balance, Bubble, BubbleFate};
+use super::diffusion;
+use super::grid::{Face, Grid};
+use super::params::{BubblePlacement, PhantomParams};
+use crate::error::Error;
+use crate::gas::Gas;
+use crate::profile::PressureHistory;
+use crate::units::GAS_CONSTANT;
+use rand::{Rng, SeedableRng};
+use std::f64::consts::PI;
+
+/// What the observer sees of one bubble at a recorded time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BubbleFrame {
+    /// Bubble id.
+    pub id: usize,
+    /// Radius, m.
+    pub radius: f64,
+    /// Volume, m³.
+    pub volume: f64,
+    /// Surface area, m².
+    pub area: f64,
+    /// Gas amounts, mol, in the run's gas order.
+    pub moles: Vec<f64>,
+    /// Total dissolved-gas tension of the gel at the coupling sphere, Pa (Σ_g C̄_ρ·R_u·T/L_g).
+    pub gel_tension: f64,
+    /// Centre, m.
+    pub position: [f64; 3],
+}
+
+/// One recorded time.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Frame {
+    /// Time, s.
+    pub time: f64,
+    /// Ambient pressure, Pa.
+    pub ambient: f64,
+    /// Active bubbles.
+    pub bubbles: Vec<BubbleFrame>,
+    /// Largest supersaturation in the gel, Σ_g tension − P_amb, Pa (over all inside cells).
+    pub max_supersaturation: f64,
+    /// Gas dissolved in the grid, mol, per gas.
+    pub grid_moles: Vec<f64>,
+}
+
+/// Receives what the simulation does (like ripgrep's `Sink`): recorders, CSV writers and
+/// progress bars are observers, the time loop knows nothing of files or terminals.
+pub trait Observer {
+    /// A recorded frame.
+    fn frame(&mut self, frame: &Frame);
+    /// Progress: simulated time and end time, s. Called every step; default does nothing.
+    fn progress(&mut self, _time: f64, _end: f64) {}
+}
+
+/// Keeps every frame in memory.
+#[derive(Debug, Default, Clone)]
+pub struct Recorder {
+    /// The frames in time order.
+    pub frames: Vec<Frame>,
+}
+
+impl Observer for Recorder {
+    fn frame(&mut self, frame: &Frame) {
+        self.frames.push(frame.clone());
+    }
+}
+
+/// Why the run ended.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Ending {
+    /// The profile ended.
+    Completed,
+    /// A bubble reached a face of the phantom at this time; everything up to it is kept.
+    BubbleReachedFace {
+        /// Bubble id.
+        bubble: usize,
+        /// Which face.
+        face: Face,
+        /// Time, s.
+        time: f64,
+    },
+}
+
+/// A bubble event.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Event {
+    /// Bubble `absorbed` merged into `into`.
+    Coalesced {
+        /// Time, s.
+        time: f64,
+        /// Surviving bubble.
+        into: usize,
+        /// Bubble that disappeared.
+        absorbed: usize,
+    },
+    /// A bubble dissolved completely.
+    Dissolved {
+        /// Time, s.
+        time: f64,
+        /// Bubble id.
+        bubble: usize,
+    },
+}
+
+/// Summary of a run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RunSummary {
+    /// Gases simulated, in column order.
+    pub gases: Vec<Gas>,
+    /// Largest radius reached by any bubble, m, its time (s) and bubble id.
+    pub max_radius: (f64, f64, usize),
+    /// Final radius of each bubble (0 if dissolved or merged), m.
+    pub final_radii: Vec<f64>,
+    /// Peak total bubble volume, m³, and its time, s.
+    pub peak_total_volume: (f64, f64),
+    /// |gas now − gas at start − gas in through open faces| / gas at start, at the end.
+    pub gas_balance_error: f64,
+    /// Steps taken (explicit, implicit).
+    pub steps: (usize, usize),
+    /// Simulated end time, s.
+    pub end_time: f64,
+    /// Why the run ended.
+    pub ending: Ending,
+    /// Coalescences and dissolutions.
+    pub events: Vec<Event>,
+    /// Cells inside the phantom.
+    pub cells: usize,
+}
+
+/// The simulation state.
+pub struct Simulation<'a> {
+    params: &'a PhantomParams,
+    grid: Grid,
+    gases: Vec<Gas>,
+    diffusivity: Vec<f64>,
+    ostwald: Vec<f64>,
+    explicit_limit: Vec<f64>,
+    fields: Vec<Vec<f64>>,
+    scratch: Vec<f64>,
+    /// Bubbles (all ever created; check `fate`).
+    pub bubbles: Vec<Bubble>,
+    rt: f64,
+    time: f64,
+    inflow: f64,
+    initial_total: f64,
+    sphere: Vec<[f64; 3]>,
+    kernel: Vec<(usize, f64)>,
+}
+
+fn fibonacci_sphere(n: usize) -> Vec<[f64; 3]> {
+    let golden = PI * (3.0 - 5f64.sqrt());
+    (0..n)
+        .map(|i| {
+            let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
+            let r = (1.0 - z * z).sqrt();
+            let th = golden * i as f64;
+            [r * th.cos(), r * th.sin(), z]
+        })
+        .collect()
+}
+
+impl<'a> Simulation<'a> {
+    /// Set up: grid, fields saturated with the profile's gas at t = 0, bubbles placed and
+    /// filled at Laplace equilibrium with the composition of the gel around them.
+    pub fn new(params: &'a PhantomParams, profile: &PressureHistory) -> Result<Self, Error> {
+        let input = |m: String| Error::Input(crate::error::InputError::new(m));
+        let grid = Grid::new(params.shape, params.grid_step, &params.open_faces).map_err(input)?;
+        let gases = profile.gases();
+        if gases.is_empty() {
+            return Err(input(
+                "the profile's gas contains no nitrogen, oxygen or helium".into(),
+            ));
+        }
+        let mut diffusivity = Vec::new();
+        let mut ostwald = Vec::new();
+        for g in &gases {
+            let p = params.gas(*g).ok_or_else(|| {
+                input(format!(
+                    "the profile uses {} but the phantom lists no properties for it; add [gases.{}] with diffusivity and ostwald",
+                    g.name(),
+                    g.name()
+                ))
+            })?;
+            diffusivity.push(p.diffusivity);
+            ostwald.push(p.ostwald);
+        }
+        let rt = GAS_CONSTANT * params.temperature;
+        let explicit_limit = diffusivity
+            .iter()
+            .map(|d| diffusion::explicit_limit(&grid, *d))
+            .collect();
+        let fields: Vec<Vec<f64>> = gases
+            .iter()
+            .zip(&ostwald)
+            .map(|(g, l)| {
+                let c = l * profile.inspired_partial_pressure(*g, 0.0) / rt;
+                (0..grid.len())
+                    .map(|i| if grid.inside(i) { c } else { 0.0 })
+                    .collect()
+            })
+            .collect();
+        let p0 = profile.ambient(0.0);
+        let placements = place_bubbles(params, &grid)?;
+        let partial: Vec<f64> = gases
+            .iter()
+            .map(|g| profile.inspired_partial_pressure(*g, 0.0))
+            .collect();
+        let psum: f64 = partial.iter().sum();
+        if !(psum > 0.0) {
+            return Err(input(
+                "the inspired inert-gas pressure at t = 0 is zero (water vapour ≥ ambient?)".into(),
+            ));
+        }
+        let mut bubbles = Vec::new();
+        for (id, (pos, r0)) in placements.into_iter().enumerate() {
+            let bal = Balance {
+                ambient: p0,
+                surface_tension: params.surface_tension,
+                law: params.elasticity.as_ref(),
+                initial_radius: r0,
+                initial_ambient: p0,
+            };
+            let n_total = bal.pv(r0) / rt;
+            if !(n_total > 0.0) {
+                return Err(input(format!(
+                    "bubble {id}: no gas at Laplace equilibrium with R0 = {r0} m (internal pressure ≤ 0)"
+                )));
+            }
+            bubbles.push(Bubble {
+                id,
+                position: pos,
+                initial_radius: r0,
+                initial_ambient: p0,
+                moles: partial.iter().map(|p| n_total * p / psum).collect(),
+                radius: r0,
+                fate: BubbleFate::Active,
+            });
+        }
+        let mut sim = Simulation {
+            params,
+            scratch: vec![0.0; grid.len()],
+            grid,
+            gases,
+            diffusivity,
+            ostwald,
+            explicit_limit,
+            fields,
+            bubbles,
+            rt,
+            time: 0.0,
+            inflow: 0.0,
+            initial_total: 0.0,
+            sphere: Vec::new(),
+            kernel: Vec::new(),
+        };
+        sim.initial_total = sim.total_moles();
+        Ok(sim)
+    }
+
+    /// The grid.
+    pub fn grid(&self) -> &Grid {
+        &self.grid
+    }
+
+    /// Gases in column order.
+    pub fn gases(&self) -> &[Gas] {
+        &self.gases
+    }
+
+    /// Concentration field of gas number `g` (mol/m³).
+    pub fn field(&self, g: usize) -> &[f64] {
+        &self.fields[g]
+    }
+
+    /// Mutable concentration field (for tests that set an initial state).
+    pub fn field_mut(&mut self, g: usize) -> &mut [f64] {
+        &mut self.fields[g]
+    }
+
+    /// Reset the gas-balance reference to the current state (after editing fields).
+    pub fn rebase_balance(&mut self) {
+        self.inflow = 0.0;
+        self.initial_total = self.total_moles();
+    }
+
+    /// Gas in the grid plus gas in active bubbles, mol.
+    pub fn total_moles(&self) -> f64 {
+        let grid: f64 = self.fields.iter().map(|f| self.grid.integrate(f)).sum();
+        grid + self
+            .bubbles
+            .iter()
+            .filter(|b| b.active())
+            .map(|b| b.total_moles())
+            .sum::<f64>()
+    }
+
+    /// Current time, s.
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+
+    fn balance_for<'b>(&'b self, b: &Bubble, ambient: f64) -> Balance<'b> {
+        Balance {
+            ambient,
+            surface_tension: self.params.surface_tension,
+            law: self.params.elasticity.as_ref(),
+            initial_radius: b.initial_radius,
+            initial_ambient: b.initial_ambient,
+        }
+    }
+
+    fn kernel_radius(&self, r: f64) -> f64 {
+        r.max(self.params.numerics.kernel_min_cells * self.grid.h)
+    }
+
+    fn coupling_radius(&self, r: f64) -> f64 {
+        self.kernel_radius(r)
+            .max(r + self.params.surface_layer_thickness)
+            + self.params.numerics.coupling_gap_cells * self.grid.h
+    }
+
+    /// Average of field `g` over the sphere of radius `rho` about `c`.
+    fn sphere_mean(&mut self, g: usize, c: [f64; 3], rho: f64, fallback: f64) -> f64 {
+        let want = ((16.0 * (rho / self.grid.h).powi(2)).ceil() as usize).clamp(64, 20_000);
+        if self.sphere.len() != want {
+            self.sphere = fibonacci_sphere(want);
+        }
+        let f = &self.fields[g];
+        let s: f64 = self
+            .sphere
+            .iter()
+            .map(|u| {
+                self.grid.interpolate(
+                    f,
+                    [c[0] + rho * u[0], c[1] + rho * u[1], c[2] + rho * u[2]],
+                    fallback,
+                )
+            })
+            .sum();
+        s / self.sphere.len() as f64
+    }
+
+    /// Gas fluxes into bubble `i` (mol/s per gas) and the gel tension at its coupling sphere.
+    fn fluxes(&mut self, i: usize, ambient: f64, profile: &PressureHistory) -> (Vec<f64>, f64) {
+        let b = self.bubbles[i].clone();
+        let ng = self.gases.len();
+        let rho = self.coupling_radius(b.radius);
+        let mut tension = 0.0;
+        let mut cbar = vec![0.0; ng];
+        for g in 0..ng {
+            let cb = self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], self.time)
+                / self.rt;
+            cbar[g] = self.sphere_mean(g, b.position, rho, cb);
+            tension += cbar[g] * self.rt / self.ostwald[g];
+        }
+        if b.radius <= self.params.min_radius {
+            return (vec![0.0; ng], tension);
+        }
+        let pb = self.balance_for(&b, ambient).internal_pressure(b.radius);
+        let n = b.total_moles();
+        let r = b.radius;
+        let outer = r + self.params.surface_layer_thickness;
+        let mut j = vec![0.0; ng];
+        for g in 0..ng {
+            let cs = self.ostwald[g] * (b.moles[g] / n) * pb / self.rt;
+            let d = self.diffusivity[g];
+            let ds = self.params.surface.d_surf(d, r, b.initial_radius);
+            if !(ds > 0.0) {
+                continue;
+            }
+            let resistance = (1.0 / r - 1.0 / outer) / ds + (1.0 / outer - 1.0 / rho) / d;
+            j[g] = 4.0 * PI * (cbar[g] - cs) / resistance;
+        }
+        (j, tension)
+    }
+
+    /// Run the profile to its end (or until a bubble reaches a face).
+    pub fn run(
+        &mut self,
+        profile: &PressureHistory,
+        observer: &mut dyn Observer,
+    ) -> Result<RunSummary, Error> {
+        let end = profile.duration_s();
+        let nb = self.bubbles.len();
+        let ng = self.gases.len();
+        let num = self.params.numerics;
+        let mut max_radius = (0.0f64, 0.0, 0usize);
+        let mut peak_volume = (0.0f64, 0.0);
+        let mut steps = (0usize, 0usize);
+        let mut events = Vec::new();
+        let mut ending = Ending::Completed;
+        let mut next_record = self.time;
+        let mut dt_prev = num.max_step.min(
+            self.explicit_limit
+                .iter()
+                .cloned()
+                .fold(f64::INFINITY, f64::min),
+        );
+        let mut tensions = vec![0.0; nb];
+        let mut fluxes = vec![vec![0.0; ng]; nb];
+        let h3 = self.grid.cell_volume();
+        // record the initial state
+        for i in 0..nb {
+            let a = profile.ambient(self.time);
+            tensions[i] = self.fluxes(i, a, profile).1;
+        }
+        self.record(profile, &tensions, observer);
+        next_record += num.record_interval;
+        while self.time < end - 1e-9 {
+            let t = self.time;
+            let p = profile.ambient(t);
+            // 1. fluxes at the start of the step
+            for i in 0..nb {
+                if self.bubbles[i].active() {
+                    let (j, ten) = self.fluxes(i, p, profile);
+                    fluxes[i] = j;
+                    tensions[i] = ten;
+                } else {
+                    fluxes[i].iter_mut().for_each(|x| *x = 0.0);
+                }
+            }
+            // 2. choose the step
+            let mut dt = num
+                .max_step
+                .min(2.0 * dt_prev)
+                .min(profile.next_breakpoint(t) - t)
+                .min(end - t);
+            let rate = profile.rate(t + 1e-9).abs();
+            if rate > 0.0 {
+                dt = dt.min(num.max_pressure_change * p / rate);
+            }
+            for (i, b) in self.bubbles.iter().enumerate() {
+                if !b.active() {
+                    continue;
+                }
+                let jt: f64 = fluxes[i].iter().sum();
+                let n = b.total_moles();
+                if jt.abs() > 0.0 && -jt * dt < n {
+                    dt = dt.min(num.max_content_change * n / jt.abs()).max(1e-6);
+                }
+            }
+            dt = dt.min(end - t).max(1e-9);
+            let t1 = t + dt;
+            let p1 = profile.ambient(t1);
+            // 3. exchange gas between bubbles and grid
+            for i in 0..nb {
+                if !self.bubbles[i].active() || fluxes[i].iter().all(|x| *x == 0.0) {
+                    continue;
+                }
+                let mut dn: Vec<f64> = fluxes[i].iter().map(|j| j * dt).collect();
+                let n_after: f64 = self.bubbles[i].total_moles() + dn.iter().sum::<f64>();
+                let dissolved = n_after <= 1e-6 * self.bubbles[i].total_moles() || n_after <= 0.0;
+                if dissolved {
+                    dn = self.bubbles[i].moles.iter().map(|m| -m).collect();
+                } else {
+                    for g in 0..ng {
+                        if self.bubbles[i].moles[g] + dn[g] < 0.0 {
+                            dn[g] = -self.bubbles[i].moles[g];
+                        }
+                    }
+                }
+                let (pos, a) = (
+                    self.bubbles[i].position,
+                    self.kernel_radius(self.bubbles[i].radius),
+                );
+                let mut kernel = std::mem::take(&mut self.kernel);
+                self.grid.kernel(pos, a, &mut kernel);
+                for g in 0..ng {
+                    let per_volume = dn[g] / h3;
+                    let f = &mut self.fields[g];
+                    for &(idx, w) in &kernel {
+                        f[idx] -= w * per_volume;
+                    }
+                    self.bubbles[i].moles[g] += dn[g];
+                }
+                self.kernel = kernel;
+                if dissolved {
+                    self.bubbles[i].moles.iter_mut().for_each(|m| *m = 0.0);
+                    self.bubbles[i].radius = 0.0;
+                    self.bubbles[i].fate = BubbleFate::Dissolved(t1);
+                    events.push(Event::Dissolved {
+                        time: t1,
+                        bubble: i,
+                    });
+                }
+            }
+            // 4. diffuse every gas
+            let implicit = self.explicit_limit.iter().any(|lim| dt > *lim);
+            for g in 0..ng {
+                let gas = self.gases[g];
+                let d = self.diffusivity[g];
+                let inflow = if implicit {
+                    let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t1) / self.rt;
+                    diffusion::implicit_step(
+                        &self.grid,
+                        &mut self.fields[g],
+                        &mut self.scratch,
+                        d,
+                        dt,
+                        cb,
+                    )
+                } else {
+                    let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t) / self.rt;
+                    let inflow = diffusion::explicit_step(
+                        &self.grid,
+                        &self.fields[g],
+                        &mut self.scratch,
+                        d,
+                        dt,
+                        cb,
+                    );
+                    std::mem::swap(&mut self.fields[g], &mut self.scratch);
+                    inflow
+                };
+                self.inflow += inflow * h3;
+            }
+            if implicit {
+                steps.1 += 1;
+            } else {
+                steps.0 += 1;
+            }
+            self.time = t1;
+            dt_prev = dt;
+            // 5. radii at the new pressure
+            for i in 0..nb {
+                if !self.bubbles[i].active() {
+                    continue;
+                }
+                let nrt = self.bubbles[i].total_moles() * self.rt;
+                let guess = self.bubbles[i].radius;
+                let r = self.balance_for(&self.bubbles[i], p1).radius_for(nrt, guess).ok_or_else(|| {
+                    Error::Solver(format!(
+                        "bubble {i} at t = {t1:.3} s: no radius satisfies the Laplace balance (P_amb = {p1:.0} Pa, n = {:.3e} mol); the elasticity law has no physical root here",
+                        nrt / self.rt
+                    ))
+                })?;
+                self.bubbles[i].radius = r;
+            }
+            // 6. coalescence
+            self.coalesce(t1, p1, &mut events)?;
+            // 7. health
+            for f in &self.fields {
+                if f.iter().step_by(97).any(|x| !x.is_finite()) {
+                    return Err(Error::Solver(format!(
+                        "non-finite concentration at t = {t1:.3} s"
+                    )));
+                }
+            }
+            // 8. bookkeeping
+            let mut vol = 0.0;
+            for b in self.bubbles.iter().filter(|b| b.active()) {
+                vol += b.volume();
+                if b.radius > max_radius.0 {
+                    max_radius = (b.radius, t1, b.id);
+                }
+            }
+            if vol > peak_volume.0 {
+                peak_volume = (vol, t1);
+            }
+            for b in self.bubbles.iter().filter(|b| b.active()) {
+                if let Some((face, _)) = self
+                    .grid
+                    .distance_to_faces(b.position)
+                    .into_iter()
+                    .find(|(_, d)| *d <= b.radius)
+                {
+                    ending = Ending::BubbleReachedFace {
+                        bubble: b.id,
+                        face,
+                        time: t1,
+                    };
+                    break;
+                }
+            }
+            observer.progress(t1, end);
+            let done = ending != Ending::Completed || self.time >= end - 1e-9;
+            if self.time >= next_record - 1e-9 || done {
+                for i in 0..nb {
+                    if self.bubbles[i].active() {
+                        tensions[i] = self.fluxes(i, p1, profile).1;
+                    }
+                }
+                self.record(profile, &tensions, observer);
+                while next_record <= self.time + 1e-9 {
+                    next_record += num.record_interval.max(1e-9);
+                }
+            }
+            if done {
+                break;
+            }
+        }
+        let total = self.total_moles();
+        let balance = ((total - self.initial_total - self.inflow) / self.initial_total).abs();
+        Ok(RunSummary {
+            gases: self.gases.clone(),
+            max_radius,
+            final_radii: self
+                .bubbles
+                .iter()
+                .map(|b| if b.active() { b.radius } else { 0.0 })
+                .collect(),
+            peak_total_volume: peak_volume,
+            gas_balance_error: balance,
+            steps,
+            end_time: self.time,
+            ending,
+            events,
+            cells: self.grid.n_inside,
+        })
+    }
+
+    fn coalesce(&mut self, t: f64, p: f64, events: &mut Vec<Event>) -> Result<(), Error> {
+        loop {
+            let mut pair = None;
+            'outer: for i in 0..self.bubbles.len() {
+                if !self.bubbles[i].active() {
+                    continue;
+                }
+                for j in i + 1..self.bubbles.len() {
+                    if !self.bubbles[j].active() {
+                        continue;
+                    }
+                    let (a, b) = (&self.bubbles[i], &self.bubbles[j]);
+                    let d2: f64 = (0..3)
+                        .map(|k| (a.position[k] - b.position[k]).powi(2))
+                        .sum();
+                    if d2.sqrt() <= a.radius + b.radius {
+                        pair = Some((i, j));
+                        break 'outer;
+                    }
+                }
+            }
+            let Some((i, j)) = pair else { return Ok(()) };
+            // the bubble with more gas survives; centre weighted by gas content
+            let (keep, gone) = if self.bubbles[i].total_moles() >= self.bubbles[j].total_moles() {
+                (i, j)
+            } else {
+                (j, i)
+            };
+            let nk = self.bubbles[keep].total_moles();
+            let ng = self.bubbles[gone].total_moles();
+            let mut pos = [0.0; 3];
+            for (k, c) in pos.iter_mut().enumerate() {
+                *c = (self.bubbles[keep].position[k] * nk + self.bubbles[gone].position[k] * ng)
+                    / (nk + ng);
+            }
+            let gone_moles = self.bubbles[gone].moles.clone();
+            let r0 = (self.bubbles[keep].initial_radius.powi(3)
+                + self.bubbles[gone].initial_radius.powi(3))
+            .cbrt();
+            {
+                let b = &mut self.bubbles[keep];
+                b.position = pos;
+                b.initial_radius = r0;
+                for (m, x) in b.moles.iter_mut().zip(&gone_moles) {
+                    *m += x;
+                }
+            }
+            self.bubbles[gone].fate = BubbleFate::Merged {
+                into: keep,
+                time: t,
+            };
+            self.bubbles[gone].moles.iter_mut().for_each(|m| *m = 0.0);
+            self.bubbles[gone].radius = 0.0;
+            let nrt = self.bubbles[keep].total_moles() * self.rt;
+            let guess = self.bubbles[keep].radius;
+            let r = self
+                .balance_for(&self.bubbles[keep], p)
+                .radius_for(nrt, guess)
+                .ok_or_else(|| Error::Solver(format!("merged bubble {keep}: no Laplace radius")))?;
+            self.bubbles[keep].radius = r;
+            events.push(Event::Coalesced {
+                time: t,
+                into: keep,
+                absorbed: gone,
+            });
+        }
+    }
+
+    fn record(&self, profile: &PressureHistory, tensions: &[f64], observer: &mut dyn Observer) {
+        let p = profile.ambient(self.time);
+        let mut max_ss = f64::NEG_INFINITY;
+        let len = self.grid.len();
+        let mut tension = vec![0.0; len];
+        for (g, f) in self.fields.iter().enumerate() {
+            let k = self.rt / self.ostwald[g];
+            for (t, c) in tension.iter_mut().zip(f) {
+                *t += c * k;
+            }
+        }
+        for (idx, t) in tension.iter().enumerate() {
+            if self.grid.inside(idx) && *t - p > max_ss {
+                max_ss = *t - p;
+            }
+        }
+        let frame = Frame {
+            time: self.time,
+            ambient: p,
+            bubbles: self
+                .bubbles
+                .iter()
+                .filter(|b| b.active())
+                .map(|b| BubbleFrame {
+                    id: b.id,
+                    radius: b.radius,
+                    volume: b.volume(),
+                    area: b.area(),
+                    moles: b.moles.clone(),
+                    gel_tension: tensions[b.id],
+                    position: b.position,
+                })
+                .collect(),
+            max_supersaturation: max_ss,
+            grid_moles: self.fields.iter().map(|f| self.grid.integrate(f)).collect(),
+        };
+        observer.frame(&frame);
+    }
+}
+
+/// Place the bubbles of `params` in `grid`: explicit positions are checked; a random
+/// population is drawn with ChaCha8 from the seed, rejecting centres closer than the spacing.
+pub fn place_bubbles(params: &PhantomParams, grid: &Grid) -> Result<Vec<([f64; 3], f64)>, Error> {
+    let input = |m: String| Error::Input(crate::error::InputError::new(m).field("bubbles"));
+    match &params.bubbles {
+        BubblePlacement::Explicit(list) => {
+            for (i, (p, r0)) in list.iter().enumerate() {
+                if !(*r0 > 0.0) {
+                    return Err(input(format!(
+                        "bubble {i}: initial radius must be positive (got {r0} m)"
+                    )));
+                }
+                if let Some((face, d)) = grid
+                    .distance_to_faces(*p)
+                    .into_iter()
+                    .find(|(_, d)| *d <= *r0)
+                {
+                    let e = grid.extent();
+                    return Err(input(format!(
+                        "bubble {i} at ({:.3e}, {:.3e}, {:.3e}) m with R0 = {r0:.3e} m is outside the phantom or touches its {} face (distance {d:.3e} m); the modelled phantom spans {:.3e} × {:.3e} × {:.3e} m",
+                        p[0], p[1], p[2], face.name(), e[0], e[1], e[2]
+                    )));
+                }
+            }
+            Ok(list.clone())
+        }
+        BubblePlacement::Random {
+            count,
+            initial_radius,
+            min_spacing,
+            margin,
+            seed,
+        } => {
+            let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(*seed);
+            let e = grid.extent();
+            let mut out: Vec<([f64; 3], f64)> = Vec::new();
+            let mut tries = 0;
+            while out.len() < *count {
+                tries += 1;
+                if tries > 100_000 {
+                    return Err(input(format!(
+                        "cannot place {count} bubbles {min_spacing} m apart and {margin} m from the faces; lower the count or the spacing"
+                    )));
+                }
+                let p = [
+                    rng.gen::<f64>() * e[0],
+                    rng.gen::<f64>() * e[1],
+                    rng.gen::<f64>() * e[2],
+                ];
+                if grid
+                    .distance_to_faces(p)
+                    .iter()
+                    .any(|(_, d)| *d < margin.max(*initial_radius * 1.01))
+                {
+                    continue;
+                }
+                if out.iter().any(|(q, _)| {
+                    (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt() < *min_spacing
+                }) {
+                    continue;
+                }
+                out.push((p, *initial_radius));
+            }
+            Ok(out)
+        }
+    }
+}

@@ -1,0 +1,119 @@
+//! Surface permeability D_surf of the bubble skin (the paper's section 4.1: D_surf was
+//! found to be D_bulk/30 at R_0 and to scale with the surface area). One small trait,
+//! a registry keyed by the TOML `law` name.
+
+use serde::Deserialize;
+
+/// A law for the diffusivity of the bubble's surface layer.
+pub trait SurfacePermeability: Send + Sync + std::fmt::Debug {
+    /// The name used in TOML.
+    fn name(&self) -> &'static str;
+    /// D_surf, m²/s, for bulk diffusivity `d_bulk` (m²/s), radius `r` and initial radius `r0` (m).
+    fn d_surf(&self, d_bulk: f64, r: f64, r0: f64) -> f64;
+}
+
+/// D_surf = D_bulk (the default: the skin is no barrier).
+#[derive(Debug, Clone, Copy)]
+pub struct EqualToBulk;
+impl SurfacePermeability for EqualToBulk {
+    fn name(&self) -> &'static str {
+        "equal"
+    }
+    fn d_surf(&self, d_bulk: f64, _: f64, _: f64) -> f64 {
+        d_bulk
+    }
+}
+
+/// D_surf = D_bulk/k (a constant fold; the paper found k = 30).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Fold {
+    /// k, dimensionless (> 0).
+    pub fold: f64,
+}
+impl SurfacePermeability for Fold {
+    fn name(&self) -> &'static str {
+        "fold"
+    }
+    fn d_surf(&self, d_bulk: f64, _: f64, _: f64) -> f64 {
+        d_bulk / self.fold
+    }
+}
+
+/// The paper-text area law (section 4.1): D_surf = (D_bulk/k)(R/R_0)².
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AreaLaw {
+    /// k, dimensionless (> 0).
+    pub fold: f64,
+}
+impl SurfacePermeability for AreaLaw {
+    fn name(&self) -> &'static str {
+        "area"
+    }
+    fn d_surf(&self, d_bulk: f64, r: f64, r0: f64) -> f64 {
+        d_bulk / self.fold * (r / r0).powi(2)
+    }
+}
+
+/// The law in the authors' published code: D_surf = (D_bulk/k)(1 − R_0/R)² (zero at R = R_0;
+/// clamped to zero for R < R_0).
+#[derive(Debug, Clone, Copy, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AuthorsCodeLaw {
+    /// k, dimensionless (> 0).
+    pub fold: f64,
+}
+impl SurfacePermeability for AuthorsCodeLaw {
+    fn name(&self) -> &'static str {
+        "authors-code"
+    }
+    fn d_surf(&self, d_bulk: f64, r: f64, r0: f64) -> f64 {
+        if r <= r0 {
+            0.0
+        } else {
+            d_bulk / self.fold * (1.0 - r0 / r).powi(2)
+        }
+    }
+}
+
+type Build = fn(toml::Value) -> Result<Box<dyn SurfacePermeability>, String>;
+
+fn parse<T: for<'de> Deserialize<'de> + SurfacePermeability + 'static>(
+    v: toml::Value,
+) -> Result<Box<dyn SurfacePermeability>, String> {
+    let fold = v
+        .get("fold")
+        .and_then(|f| f.as_float().or(f.as_integer().map(|i| i as f64)));
+    if let Some(k) = fold {
+        if !(k > 0.0) {
+            return Err(format!("fold must be positive (got {k})"));
+        }
+    }
+    T::deserialize(v)
+        .map(|x| Box::new(x) as Box<dyn SurfacePermeability>)
+        .map_err(|e| e.message().to_string())
+}
+
+/// The registry: TOML name → constructor.
+pub const REGISTRY: &[(&str, Build)] = &[
+    ("equal", |_| Ok(Box::new(EqualToBulk))),
+    ("fold", parse::<Fold>),
+    ("area", parse::<AreaLaw>),
+    ("authors-code", parse::<AuthorsCodeLaw>),
+];
+
+/// Build a law by name from its parameter table.
+pub fn build(name: &str, params: toml::Value) -> Result<Box<dyn SurfacePermeability>, String> {
+    let (_, b) = REGISTRY.iter().find(|(n, _)| *n == name).ok_or_else(|| {
+        format!(
+            "unknown surface law '{name}'; known: {}",
+            REGISTRY
+                .iter()
+                .map(|(n, _)| *n)
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    })?;
+    b(params)
+}
