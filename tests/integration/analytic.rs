@@ -1,0 +1,143 @@
+//! Verification against analytic solutions (the model issue's list, items 1–3).
+
+use decophantom::gas::Gas;
+use decophantom::gas::GasMix;
+use decophantom::phantom::params::{BubblePlacement, GasProperties, PhantomParams};
+use decophantom::phantom::sim::{Recorder, Simulation};
+use decophantom::profile::PressureHistory;
+
+/// Epstein & Plesset (1950), J. Chem. Phys. 18:1505, eq. (18) with surface tension zero:
+/// dR/dt = −D·L·(1 − f)·(1/R + 1/√(πDt)), L the Ostwald coefficient (the bubble's gas density
+/// over the saturation concentration) and f = C_∞/C_s. Integrated here with RK4 in s = √t,
+/// where the right-hand side is smooth. Returns (t, R) pairs until R reaches zero.
+fn epstein_plesset(r0: f64, d: f64, l: f64, f: f64, dt_out: f64) -> (Vec<(f64, f64)>, f64) {
+    let k = d * l * (1.0 - f);
+    let rhs =
+        |s: f64, r: f64| -2.0 * k * (s / r.max(1e-30) + 1.0 / (std::f64::consts::PI * d).sqrt());
+    let mut out = vec![(0.0, r0)];
+    let (mut s, mut r) = (0.0f64, r0);
+    let ds = 1e-3 * r0 / (k / r0).sqrt().max(1e-30) / 50.0; // fine steps in √t
+    let mut next = dt_out;
+    loop {
+        let k1 = rhs(s, r);
+        let k2 = rhs(s + ds / 2.0, r + ds / 2.0 * k1);
+        let k3 = rhs(s + ds / 2.0, r + ds / 2.0 * k2);
+        let k4 = rhs(s + ds, r + ds * k3);
+        let rn = r + ds / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
+        if rn <= 0.0 || rn < 1e-3 * r0 {
+            // linear extrapolation to R = 0 in s
+            let s0 = s + ds * r / (r - rn);
+            return (out, s0 * s0);
+        }
+        s += ds;
+        r = rn;
+        if s * s >= next {
+            out.push((s * s, r));
+            next += dt_out;
+        }
+    }
+}
+
+fn ep_case(r0: f64, h: f64, half_width: f64, duration: f64) -> (Vec<(f64, f64)>, f64) {
+    let (d, l, f, p) = (2e-9, 0.014, 0.2, 1e5);
+    let mut params = PhantomParams::box_phantom([2.0 * half_width; 3], h);
+    params.surface_tension = 0.0;
+    params.min_radius = 0.0;
+    params.gases = vec![GasProperties {
+        gas: Gas::N2,
+        diffusivity: d,
+        ostwald: l,
+    }];
+    params.open_faces = params.shape.faces().to_vec();
+    let e = 2.0 * half_width;
+    params.bubbles = BubblePlacement::Explicit(vec![([e / 2.0; 3], r0)]);
+    params.numerics.record_interval = 0.5;
+    // Pure N2 in the bubble at P; the gel (and the open faces) at f·L·P/(R_u T): the profile's
+    // "water vapour" of (1 − f)·P lowers the dissolved N2 tension to f·P.
+    let profile = PressureHistory::with_gas(
+        "ep",
+        vec![0.0, duration],
+        vec![p, p],
+        GasMix { o2: 0.0, he: 0.0 },
+        (1.0 - f) * p,
+    )
+    .unwrap();
+    let mut sim = Simulation::new(&params, &profile).unwrap();
+    let mut rec = Recorder::default();
+    let summary = sim.run(&profile, &mut rec).unwrap();
+    let hist: Vec<(f64, f64)> = rec
+        .frames
+        .iter()
+        .map(|fr| (fr.time, fr.bubbles.first().map_or(0.0, |b| b.radius)))
+        .collect();
+    let t_end = summary.events.iter().find_map(|e| match e {
+        decophantom::phantom::sim::Event::Dissolved { time, .. } => Some(*time),
+        _ => None,
+    });
+    (hist, t_end.unwrap_or(f64::NAN))
+}
+
+/// Item 3 of the verification list. A pure-N2 bubble (γ = 0, Ω = 0, D_surf = D_bulk) dissolving in
+/// gel at 20 % of its saturation (f = 0.2), L = 0.014 (Table 1's L_N2), D = 2e-9 m²/s, R0 = 100 µm,
+/// open box of half-width 10·R0, at R0 = 2h and R0 = 4h.
+///
+/// How far from Epstein–Plesset and why: EP is quasi-static (the field is that of a sphere of
+/// fixed radius); when the bubble shrinks, the gas it released earlier still sits around it, so the
+/// real bubble dissolves more slowly than EP late in its life. This deviation scales with
+/// ε = L(1 − f): measured with this set-up (R0 = 4h) +8.7 % on the dissolution time at ε = 0.04 and
+/// +5.2 % at ε = 0.02, nearly independent of h — the signature of EP's approximation, not of the
+/// grid. Here ε = 0.0112 and the test prints the deviation (+3.3 % at R0 = 4h when written); the
+/// radius over the first half of the life agrees with EP to 0.3 %.
+#[test]
+fn epstein_plesset_dissolution() {
+    let r0 = 1e-4;
+    let (d, l, f) = (2e-9, 0.014, 0.2);
+    let (reference, t_ep) = epstein_plesset(r0, d, l, f, 0.5);
+    let mut results = Vec::new();
+    for cells in [2.0, 4.0] {
+        let h = r0 / cells;
+        let (hist, t_sim) = ep_case(r0, h, 10.0 * r0, 1.3 * t_ep);
+        let interp = |t: f64| {
+            let i = reference
+                .partition_point(|x| x.0 <= t)
+                .min(reference.len() - 1)
+                .max(1);
+            let (a, b) = (reference[i - 1], reference[i]);
+            a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)
+        };
+        let mut worst: f64 = 0.0;
+        for (t, r) in &hist {
+            if *t > 0.0 && *t < t_ep / 2.0 {
+                worst = worst.max((r / interp(*t) - 1.0).abs());
+            }
+        }
+        eprintln!(
+            "R0 = {cells} h: worst radius error over the first half {worst:.4}; dissolution {t_sim:.2} s vs EP {t_ep:.2} s ({:+.4})",
+            t_sim / t_ep - 1.0
+        );
+        results.push((worst, t_sim));
+    }
+    let (coarse, fine) = (results[0], results[1]);
+    assert!(
+        fine.0 < 0.02,
+        "radius error over the first half at R0 = 4h: {:.4}",
+        fine.0
+    );
+    assert!(
+        (fine.1 / t_ep - 1.0).abs() < 0.06,
+        "dissolution time {} vs EP {}",
+        fine.1,
+        t_ep
+    );
+    // converging: the finer grid is no further from EP, and the two grids agree closely
+    assert!(
+        fine.0 <= coarse.0 * 1.05 + 1e-4,
+        "radius error grew with refinement: {:?} -> {:?}",
+        coarse,
+        fine
+    );
+    assert!(
+        (fine.1 / coarse.1 - 1.0).abs() < 0.01,
+        "dissolution time changed by more than 1 % from 2h to 4h"
+    );
+}
