@@ -864,4 +864,85 @@ mod tests {
             .iter()
             .all(|st| st.stop_min >= 1.0 && st.stop_min.fract() == 0.0));
     }
+
+    fn air_45_25(conv: Conventions) -> Schedule {
+        let alg = ZhL16Gf::new("t", Variant::C, FirstCompartment::One, 0.3, 0.85, conv);
+        alg.plan(&DivePlan {
+            depth_m: 45.0,
+            bottom_time_min: 25.0,
+            bottom_gas: GasMix::AIR,
+            deco_gases: vec![],
+        })
+        .unwrap()
+    }
+
+    #[test]
+    fn runtime_rounding_ends_every_stop_on_a_whole_minute() {
+        use crate::algorithm::conventions::BAKER;
+        let s = air_45_25(BAKER.clone());
+        assert!(!s.stops.is_empty());
+        for st in &s.stops {
+            assert!(
+                (st.runtime_min - st.runtime_min.round()).abs() < 1e-9,
+                "{st:?}"
+            );
+        }
+        // Stop minutes after the first include the 0.3 min travel from the previous stop.
+        for w in s.stops.windows(2) {
+            assert!((w[1].runtime_min - w[0].runtime_min - w[1].stop_min).abs() < 1e-9);
+        }
+    }
+
+    #[test]
+    fn per_second_stops_are_whole_seconds_and_no_longer_than_whole_minutes() {
+        use crate::algorithm::conventions::DIVE_DECO;
+        let s = air_45_25(DIVE_DECO.clone());
+        assert!(!s.stops.is_empty());
+        for st in &s.stops {
+            let sec = st.stop_min * 60.0;
+            assert!((sec - sec.round()).abs() < 1e-6, "{st:?}");
+        }
+        // Same conventions but whole minutes at the stop: never shorter in total.
+        let mut whole = DIVE_DECO.clone();
+        whole.stop_rounding = StopRounding::WholeMinutesAtStop;
+        whole.min_stop_min = 1.0;
+        assert!(air_45_25(whole).runtime_min() >= s.runtime_min());
+    }
+
+    #[test]
+    fn deepest_ceiling_anchor_moves_the_gf_line_the_right_way() {
+        // Anchoring GF-low deeper lowers the GF at every shallower stop (longer dive);
+        // shallower raises it (shorter dive). Compute the deepest raw GF-low ceiling of this
+        // dive independently (end of the bottom: descent 2.25 min + bottom 22.75 min at 45 m)
+        // and check the direction against the first-stop anchor.
+        let c = DECOTENGU.clone();
+        let m = ZhL16::new(compartments(Variant::C, FirstCompartment::One), 0.0627);
+        let t = m.surface_tissues(1.01325, 0.7902);
+        let t = m.load(&t, 1.01325, 20.0 * 0.09985, 2.25, GasMix::AIR);
+        let t = m.load(&t, 1.01325 + 45.0 * 0.09985, 0.0, 22.75, GasMix::AIR);
+        let anchor_m = (m.ceiling(&t, 0.3) - 1.01325) / 0.09985;
+        let a = air_45_25(c.clone());
+        let mut deep = c;
+        deep.gf_low_anchor = GfLowAnchor::DeepestCeiling;
+        let b = air_45_25(deep);
+        let first = a.stops[0].depth_m;
+        if anchor_m > first {
+            assert!(b.runtime_min() >= a.runtime_min());
+        } else {
+            assert!(b.runtime_min() <= a.runtime_min());
+        }
+        assert!(
+            anchor_m > 0.0 && (anchor_m - first).abs() < 6.0,
+            "{anchor_m} vs {first}"
+        );
+    }
+
+    #[test]
+    fn six_metre_last_stop_skips_three_metres() {
+        let mut c = DECOTENGU.clone();
+        c.last_stop_m = 6.0;
+        let s = air_45_25(c);
+        assert_eq!(s.stops.last().unwrap().depth_m, 6.0);
+        assert!(s.stops.iter().all(|st| st.depth_m >= 6.0));
+    }
 }
