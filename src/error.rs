@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Bad input from a person or a file: exit code 2.
-    #[error("{0}")]
+    #[error(transparent)]
     Input(#[from] InputError),
     /// The solver found itself unhealthy (NaN, lost gas, unstable settings).
     #[error("solver: {0}")]

@@ -112,7 +112,8 @@ pub fn parse_algorithm(text: &str, path: &Path) -> Result<LoadedAlgorithm, Input
             .filter(|f| !f.is_empty() && f.chars().all(|c| c.is_alphanumeric() || c == '_'));
         match field {
             Some(f) => {
-                let mut e = InputError::new(msg.clone())
+                let rest = msg.split_once(": ").map_or(msg.as_str(), |(_, r)| r);
+                let mut e = InputError::new(rest.to_string())
                     .in_file(path)
                     .field(format!("params.{f}"));
                 if let Some(l) = line_of_key(text, f).or_else(|| line_of_header(text, "[params]")) {
