@@ -9,6 +9,27 @@ use crate::error::InputError;
 use crate::gas::GasMix;
 use std::path::Path;
 
+/// Read any schedule a later command may be given: `.toml` (as `plan --out` writes it) or
+/// `.csv` waypoints (`time_min,depth_m[,gas]`, in `conventions`, starting on `default_gas`).
+pub fn read_schedule(
+    path: &Path,
+    conventions: &Conventions,
+    default_gas: GasMix,
+) -> Result<Schedule, InputError> {
+    match path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .as_deref()
+    {
+        Some("toml") => Schedule::read(path),
+        Some("csv") => read_waypoints_csv(path, conventions, default_gas),
+        _ => Err(InputError::new(
+            "unknown schedule format: use a .toml schedule (plan --out) or a .csv of time_min,depth_m[,gas]",
+        )
+        .in_file(path)),
+    }
+}
+
 /// Read a waypoint CSV file into a schedule in the given conventions (surface pressure,
 /// pressure per metre and water vapour are taken from them).
 pub fn read_waypoints_csv(
