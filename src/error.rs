@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, thiserror::Error)]
 pub enum Error {
     /// Bad input from a person or a file: exit code 2.
-    #[error("{0}")]
+    #[error(transparent)]
     Input(#[from] InputError),
     /// The solver found itself unhealthy (NaN, lost gas, unstable settings).
     #[error("solver: {0}")]
@@ -81,9 +81,13 @@ impl std::error::Error for InputError {}
 
 /// Convert a `toml` parse error into an [`InputError`] with file, line and field.
 pub fn toml_error(path: &Path, text: &str, err: &toml::de::Error) -> InputError {
-    let line = err
-        .span()
-        .map(|s| text[..s.start.min(text.len())].lines().count().max(1));
+    let line = err.span().map(|s| {
+        text.as_bytes()[..s.start.min(text.len())]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1
+    });
     let mut e = InputError::new(err.message().trim().to_string()).in_file(path);
     if let Some(l) = line {
         e = e.at_line(l);

@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 
 pub mod algorithm;
+pub mod app;
 pub mod error;
 pub mod gas;
 pub mod phantom;

@@ -1,4 +1,6 @@
 //! All integration tests compile into this one binary; one module per concern.
+#[path = "integration/algorithms.rs"]
+mod algorithms;
 #[path = "integration/analytic.rs"]
 mod analytic;
 #[path = "integration/common.rs"]

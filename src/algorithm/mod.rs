@@ -2,11 +2,17 @@
 //! [`Schedule`]; the registry maps the `kind` written in `algorithms/*.toml` to a constructor.
 //! Adding an algorithm is one new file and one registry line.
 
+pub mod buhlmann;
+pub mod config;
 pub mod conventions;
+pub mod oxygen;
+pub mod registry;
 pub mod schedule;
+pub mod waypoints;
 
+pub use config::{load_algorithm, LoadedAlgorithm};
 pub use conventions::Conventions;
-pub use schedule::{DecoGas, DivePlan, Leg, LegKind, Schedule, Stop};
+pub use schedule::{DecoGas, DivePlan, GasSwitch, Leg, LegKind, Schedule, Stop};
 
 /// A decompression algorithm: dive plan in, schedule out.
 pub trait DecoAlgorithm: Send + Sync {

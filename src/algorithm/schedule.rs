@@ -1,8 +1,134 @@
 //! A planned dive and the schedule an algorithm produces for it.
 
+use super::conventions::Conventions;
+use crate::error::{line_of_key, toml_error, InputError};
 use crate::gas::GasMix;
 use crate::profile::PressureHistory;
 use serde::{Deserialize, Serialize};
+use std::path::Path;
+
+/// Highest oxygen partial pressure a gas may be breathed at, bar (1.6: NOAA Diving Manual,
+/// 4th ed., table 3-3, the exceptional-exposure / deco limit; also the default deco ppO2 of
+/// DecoTengu users, Subsurface and most planners).
+pub const MAX_PPO2_BAR: f64 = 1.6;
+/// Below this oxygen partial pressure a gas is hypoxic, bar (0.16: the usual planning limit for
+/// breathing a gas at the surface, e.g. NOAA Diving Manual §16 on trimix travel gases).
+pub const HYPOXIC_PPO2_BAR: f64 = 0.16;
+
+/// Maximum operating depth of a mix at a ppO2 limit (bar) in these conventions, m (not rounded).
+pub fn mod_m(mix: GasMix, ppo2_bar: f64, conventions: &Conventions) -> f64 {
+    (ppo2_bar * 1e5 / mix.o2 - conventions.surface_pressure_pa) / conventions.pa_per_m
+}
+
+impl DecoGas {
+    /// Parse `50@21` (mix and switch depth in m) or `50` (switch at the MOD at 1.6 bar rounded to
+    /// the nearest metre, e.g. EAN50 → 22 m, O2 → 6 m in DecoTengu's conventions).
+    pub fn parse(s: &str, conventions: &Conventions) -> Result<DecoGas, String> {
+        let (mix_s, depth_s) = match s.split_once('@') {
+            Some((m, d)) => (m, Some(d)),
+            None => (s, None),
+        };
+        let mix = GasMix::parse(mix_s)?;
+        if mix.o2 <= 0.0 {
+            return Err(format!("deco gas '{s}' has no oxygen"));
+        }
+        let switch_depth_m = match depth_s {
+            Some(d) => d.trim().trim_end_matches('m').parse::<f64>().map_err(|_| {
+                format!("cannot read the switch depth in '{s}': write MIX@DEPTH_M, e.g. 50@21")
+            })?,
+            None => mod_m(mix, MAX_PPO2_BAR, conventions).round(),
+        };
+        Ok(DecoGas {
+            mix,
+            switch_depth_m,
+        })
+    }
+}
+
+impl DivePlan {
+    /// Check the plan: depth and time positive, bottom gas breathable at the surface (not
+    /// hypoxic) and at the bottom (within its MOD), deco gases within their MOD at their switch
+    /// depth, shallower than the bottom, at distinct positive depths. Errors name the
+    /// command-line field (`depth`, `time`, `gas`, `deco-gas`).
+    pub fn validate(&self, conventions: &Conventions) -> Result<(), InputError> {
+        if !(self.depth_m.is_finite() && self.depth_m > 0.0) {
+            return Err(InputError::new(format!(
+                "depth {} m: the maximum depth must be a positive number of metres",
+                self.depth_m
+            ))
+            .field("depth"));
+        }
+        if !(self.bottom_time_min.is_finite() && self.bottom_time_min > 0.0) {
+            return Err(InputError::new(format!(
+                "bottom time {} min must be a positive number of minutes",
+                self.bottom_time_min
+            ))
+            .field("time"));
+        }
+        let ppo2 = |mix: GasMix, d: f64| mix.o2 * conventions.pressure_at(d) / 1e5;
+        let g = self.bottom_gas;
+        if ppo2(g, 0.0) < HYPOXIC_PPO2_BAR - 1e-12 {
+            return Err(InputError::new(format!(
+                "bottom gas {} is hypoxic at the surface (ppO2 {:.3} bar < {HYPOXIC_PPO2_BAR} bar); \
+                 it cannot be breathed on the descent — choose a mix with more oxygen",
+                g.label(),
+                ppo2(g, 0.0)
+            ))
+            .field("gas"));
+        }
+        let max_depth = mod_m(g, MAX_PPO2_BAR, conventions).round();
+        if self.depth_m > max_depth + 1e-9 {
+            return Err(InputError::new(format!(
+                "bottom gas {} at {} m has ppO2 {:.2} bar, beyond its MOD {} m (ppO2 {MAX_PPO2_BAR} bar); \
+                 choose a mix with less oxygen or a shallower depth",
+                g.label(),
+                self.depth_m,
+                ppo2(g, self.depth_m),
+                max_depth
+            ))
+            .field("gas"));
+        }
+        for (i, d) in self.deco_gases.iter().enumerate() {
+            let lab = d.mix.label();
+            if !(d.switch_depth_m.is_finite() && d.switch_depth_m > 0.0) {
+                return Err(InputError::new(format!(
+                    "deco gas {lab}: switch depth {} m must be positive",
+                    d.switch_depth_m
+                ))
+                .field("deco-gas"));
+            }
+            let m = mod_m(d.mix, MAX_PPO2_BAR, conventions).round();
+            if d.switch_depth_m > m + 1e-9 {
+                return Err(InputError::new(format!(
+                    "deco gas {lab} switched at {} m is beyond its MOD {m} m (ppO2 {:.2} bar > {MAX_PPO2_BAR} bar); \
+                     switch at {m} m or shallower",
+                    d.switch_depth_m,
+                    ppo2(d.mix, d.switch_depth_m)
+                ))
+                .field("deco-gas"));
+            }
+            if d.switch_depth_m >= self.depth_m {
+                return Err(InputError::new(format!(
+                    "deco gas {lab} switch depth {} m is not shallower than the dive ({} m); \
+                     it would be a bottom gas — drop it or give a shallower switch depth",
+                    d.switch_depth_m, self.depth_m
+                ))
+                .field("deco-gas"));
+            }
+            if self.deco_gases[..i]
+                .iter()
+                .any(|o| (o.switch_depth_m - d.switch_depth_m).abs() < 1e-9)
+            {
+                return Err(InputError::new(format!(
+                    "two deco gases switch at {} m; give each its own switch depth",
+                    d.switch_depth_m
+                ))
+                .field("deco-gas"));
+            }
+        }
+        Ok(())
+    }
+}
 
 /// A decompression gas and the depth at which it is switched to.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
@@ -85,7 +211,291 @@ pub struct Schedule {
     pub stops: Vec<Stop>,
 }
 
+/// A gas switch found in a schedule.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GasSwitch {
+    /// Runtime of the switch, min.
+    pub runtime_min: f64,
+    /// Depth of the switch, m.
+    pub depth_m: f64,
+    /// The gas switched to.
+    pub gas: GasMix,
+}
+
+/// The text written for a gas in schedule files: `air`, `O2`, `EAN50`, `18/45`, with
+/// percentages to 1e-9 so that reading it back gives the same fractions.
+pub fn gas_text(mix: GasMix) -> String {
+    let pct = |x: f64| {
+        let v = (x * 100.0 * 1e9).round() / 1e9;
+        format!("{v}")
+    };
+    if mix.he > 0.0 {
+        format!("{}/{}", pct(mix.o2), pct(mix.he))
+    } else if mix == GasMix::AIR {
+        "air".into()
+    } else if mix.o2 == 1.0 {
+        "O2".into()
+    } else {
+        format!("EAN{}", pct(mix.o2))
+    }
+}
+
+/// Informational summary written into a schedule file (ignored when read back, except that
+/// unknown keys are errors).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ScheduleSummary {
+    /// Total runtime, min.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub runtime_min: Option<f64>,
+    /// CNS oxygen toxicity, % of the NOAA limit.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub cns_percent: Option<f64>,
+    /// Pulmonary oxygen toxicity units.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub otu: Option<f64>,
+    /// The algorithm file the schedule came from.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub algorithm: Option<String>,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawLeg {
+    kind: LegKind,
+    start_depth_m: f64,
+    end_depth_m: f64,
+    duration_s: f64,
+    gas: String,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawStop {
+    depth_m: f64,
+    stop_min: f64,
+    runtime_min: f64,
+    gas: String,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSchedule {
+    label: String,
+    surface_pressure_pa: f64,
+    pa_per_m: f64,
+    water_vapour_pa: f64,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    summary: Option<ScheduleSummary>,
+    legs: Vec<RawLeg>,
+    #[serde(default)]
+    stops: Vec<RawStop>,
+}
+
+/// 1-based line of the `n`-th (0-based) line equal to `header` (e.g. `[[legs]]`).
+fn line_of_nth(text: &str, header: &str, n: usize) -> Option<usize> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| l.trim() == header)
+        .nth(n)
+        .map(|(i, _)| i + 1)
+}
+
 impl Schedule {
+    /// Write as TOML (the `plan --out` format) with an optional summary.
+    pub fn to_toml_string(&self, summary: Option<&ScheduleSummary>) -> String {
+        let raw = RawSchedule {
+            label: self.label.clone(),
+            surface_pressure_pa: self.surface_pressure_pa,
+            pa_per_m: self.pa_per_m,
+            water_vapour_pa: self.water_vapour_pa,
+            summary: summary.cloned(),
+            legs: self
+                .legs
+                .iter()
+                .map(|l| RawLeg {
+                    kind: l.kind,
+                    start_depth_m: l.start_depth_m,
+                    end_depth_m: l.end_depth_m,
+                    duration_s: l.duration_s,
+                    gas: gas_text(l.gas),
+                })
+                .collect(),
+            stops: self
+                .stops
+                .iter()
+                .map(|s| RawStop {
+                    depth_m: s.depth_m,
+                    stop_min: s.stop_min,
+                    runtime_min: s.runtime_min,
+                    gas: gas_text(s.gas),
+                })
+                .collect(),
+        };
+        let body =
+            toml::to_string(&raw).unwrap_or_else(|e| format!("# serialisation failed: {e}\n"));
+        format!(
+            "# decophantom schedule: legs from the surface back to the surface.\n\
+             # Depths in m, durations in s, pressures in Pa; read back with any command.\n{body}"
+        )
+    }
+
+    /// Read a schedule TOML (as written by [`Schedule::to_toml_string`]). `path` is used in
+    /// error messages. Checks: at least one leg, legs continuous in depth, depths ≥ 0,
+    /// durations ≥ 0, stops/bottoms at constant depth, and the last leg ends at the surface.
+    pub fn from_toml_str(text: &str, path: &Path) -> Result<Schedule, InputError> {
+        let raw: RawSchedule = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+        let at_key = |key: &str, msg: String| {
+            let mut e = InputError::new(msg).in_file(path).field(key);
+            if let Some(l) = line_of_key(text, key) {
+                e = e.at_line(l);
+            }
+            e
+        };
+        if !(raw.surface_pressure_pa.is_finite() && raw.surface_pressure_pa > 0.0) {
+            return Err(at_key(
+                "surface_pressure_pa",
+                "surface pressure must be positive (Pa)".into(),
+            ));
+        }
+        if !(raw.pa_per_m.is_finite() && raw.pa_per_m > 0.0) {
+            return Err(at_key(
+                "pa_per_m",
+                "pressure per metre must be positive (Pa/m)".into(),
+            ));
+        }
+        if !(raw.water_vapour_pa.is_finite()
+            && raw.water_vapour_pa >= 0.0
+            && raw.water_vapour_pa < raw.surface_pressure_pa)
+        {
+            return Err(at_key(
+                "water_vapour_pa",
+                "water vapour must be in 0..surface pressure (Pa)".into(),
+            ));
+        }
+        if raw.legs.is_empty() {
+            return Err(
+                InputError::new("a schedule needs at least one [[legs]] entry")
+                    .in_file(path)
+                    .field("legs"),
+            );
+        }
+        let mut legs = Vec::with_capacity(raw.legs.len());
+        for (i, l) in raw.legs.iter().enumerate() {
+            let err = |field: &str, msg: String| {
+                let mut e = InputError::new(format!("leg {}: {msg}", i + 1))
+                    .in_file(path)
+                    .field(format!("legs.{field}"));
+                if let Some(line) = line_of_nth(text, "[[legs]]", i) {
+                    e = e.at_line(line);
+                }
+                e
+            };
+            let gas = GasMix::parse(&l.gas).map_err(|m| err("gas", m))?;
+            for (f, v) in [
+                ("start_depth_m", l.start_depth_m),
+                ("end_depth_m", l.end_depth_m),
+            ] {
+                if !(v.is_finite() && v >= 0.0) {
+                    return Err(err(f, format!("depth {v} m must be zero or positive")));
+                }
+            }
+            if !(l.duration_s.is_finite() && l.duration_s >= 0.0) {
+                return Err(err(
+                    "duration_s",
+                    format!("duration {} s must be zero or positive", l.duration_s),
+                ));
+            }
+            if let Some(prev) = legs.last().map(|p: &Leg| p.end_depth_m) {
+                if (prev - l.start_depth_m).abs() > 1e-6 {
+                    return Err(err(
+                        "start_depth_m",
+                        format!(
+                            "starts at {} m but the previous leg ends at {prev} m",
+                            l.start_depth_m
+                        ),
+                    ));
+                }
+            }
+            let constant = matches!(l.kind, LegKind::Stop | LegKind::Bottom);
+            if constant && (l.start_depth_m - l.end_depth_m).abs() > 1e-9 {
+                return Err(err(
+                    "end_depth_m",
+                    "a stop or bottom leg must stay at one depth".into(),
+                ));
+            }
+            legs.push(Leg {
+                kind: l.kind,
+                start_depth_m: l.start_depth_m,
+                end_depth_m: l.end_depth_m,
+                duration_s: l.duration_s,
+                gas,
+            });
+        }
+        let last = legs.last().map_or(0.0, |l| l.end_depth_m);
+        if last.abs() > 1e-9 {
+            return Err(InputError::new(format!(
+                "the schedule never surfaces: its last leg ends at {last} m; add an ascent to 0 m"
+            ))
+            .in_file(path)
+            .field("legs.end_depth_m"));
+        }
+        let mut stops = Vec::with_capacity(raw.stops.len());
+        for (i, s) in raw.stops.iter().enumerate() {
+            let gas = GasMix::parse(&s.gas).map_err(|m| {
+                let mut e = InputError::new(format!("stop {}: {m}", i + 1))
+                    .in_file(path)
+                    .field("stops.gas");
+                if let Some(line) = line_of_nth(text, "[[stops]]", i) {
+                    e = e.at_line(line);
+                }
+                e
+            })?;
+            stops.push(Stop {
+                depth_m: s.depth_m,
+                stop_min: s.stop_min,
+                runtime_min: s.runtime_min,
+                gas,
+            });
+        }
+        Ok(Schedule {
+            label: raw.label,
+            surface_pressure_pa: raw.surface_pressure_pa,
+            pa_per_m: raw.pa_per_m,
+            water_vapour_pa: raw.water_vapour_pa,
+            legs,
+            stops,
+        })
+    }
+
+    /// Read a schedule TOML file.
+    pub fn read(path: &Path) -> Result<Schedule, InputError> {
+        let text = std::fs::read_to_string(path)
+            .map_err(|e| InputError::new(format!("cannot read the schedule: {e}")).in_file(path))?;
+        Schedule::from_toml_str(&text, path)
+    }
+
+    /// The gas switches: every change of gas between consecutive legs of positive duration.
+    pub fn gas_switches(&self) -> Vec<GasSwitch> {
+        let mut out = Vec::new();
+        let mut now = 0.0;
+        let mut prev: Option<GasMix> = None;
+        for l in &self.legs {
+            if let Some(p) = prev {
+                if p != l.gas {
+                    out.push(GasSwitch {
+                        runtime_min: now / 60.0,
+                        depth_m: l.start_depth_m,
+                        gas: l.gas,
+                    });
+                }
+            }
+            prev = Some(l.gas);
+            now += l.duration_s;
+        }
+        out
+    }
+
     /// Total runtime, min.
     pub fn runtime_min(&self) -> f64 {
         self.legs.iter().map(|l| l.duration_s).sum::<f64>() / 60.0

@@ -1,0 +1,246 @@
+//! Schedules from other tools: a CSV of waypoints `time_min,depth_m[,gas]` (header required,
+//! linear between waypoints). The gas on a row is breathed from that waypoint to the next;
+//! rows without a `gas` column (or with an empty cell) keep the previous gas, starting from
+//! `default_gas`. Constant-depth segments after the deepest point become stops.
+
+use super::conventions::Conventions;
+use super::schedule::{Leg, LegKind, Schedule, Stop};
+use crate::error::InputError;
+use crate::gas::GasMix;
+use std::path::Path;
+
+/// Read any schedule a later command may be given: `.toml` (as `plan --out` writes it) or
+/// `.csv` waypoints (`time_min,depth_m[,gas]`, in `conventions`, starting on `default_gas`).
+pub fn read_schedule(
+    path: &Path,
+    conventions: &Conventions,
+    default_gas: GasMix,
+) -> Result<Schedule, InputError> {
+    match path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .as_deref()
+    {
+        Some("toml") => Schedule::read(path),
+        Some("csv") => read_waypoints_csv(path, conventions, default_gas),
+        _ => Err(InputError::new(
+            "unknown schedule format: use a .toml schedule (plan --out) or a .csv of time_min,depth_m[,gas]",
+        )
+        .in_file(path)),
+    }
+}
+
+/// Read a waypoint CSV file into a schedule in the given conventions (surface pressure,
+/// pressure per metre and water vapour are taken from them).
+pub fn read_waypoints_csv(
+    path: &Path,
+    conventions: &Conventions,
+    default_gas: GasMix,
+) -> Result<Schedule, InputError> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        InputError::new(format!("cannot read the waypoint file: {e}")).in_file(path)
+    })?;
+    parse_waypoints_csv(&text, path, conventions, default_gas)
+}
+
+/// Parse waypoint CSV text; `path` names it in errors.
+pub fn parse_waypoints_csv(
+    text: &str,
+    path: &Path,
+    conventions: &Conventions,
+    default_gas: GasMix,
+) -> Result<Schedule, InputError> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(text.as_bytes());
+    let headers = rdr
+        .headers()
+        .map_err(|e| {
+            InputError::new(format!("cannot read the CSV header: {e}"))
+                .in_file(path)
+                .at_line(1)
+        })?
+        .clone();
+    let col = |name: &str| headers.iter().position(|h| h.eq_ignore_ascii_case(name));
+    let header_line = text
+        .lines()
+        .position(|l| !l.trim().is_empty() && !l.trim_start().starts_with('#'))
+        .map_or(1, |i| i + 1);
+    let need = |name: &str| {
+        col(name).ok_or_else(|| {
+            InputError::new(format!(
+                "the header needs a '{name}' column (columns: time_min,depth_m[,gas]); found: {}",
+                headers.iter().collect::<Vec<_>>().join(",")
+            ))
+            .in_file(path)
+            .at_line(header_line)
+            .field(name)
+        })
+    };
+    let (ti, di) = (need("time_min")?, need("depth_m")?);
+    let gi = col("gas");
+    let mut pts: Vec<(f64, f64, GasMix, usize)> = Vec::new();
+    let mut gas = default_gas;
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| {
+            let mut err = InputError::new(format!("bad CSV row: {e}")).in_file(path);
+            if let Some(p) = e.position() {
+                err = err.at_line(p.line() as usize);
+            }
+            err
+        })?;
+        let line = rec.position().map_or(0, |p| p.line() as usize);
+        let num = |i: usize, name: &str| -> Result<f64, InputError> {
+            let s = rec.get(i).unwrap_or("");
+            s.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    InputError::new(format!("'{s}' is not a number"))
+                        .in_file(path)
+                        .at_line(line)
+                        .field(name)
+                })
+        };
+        let t = num(ti, "time_min")?;
+        let d = num(di, "depth_m")?;
+        if d < 0.0 {
+            return Err(InputError::new(format!("depth {d} m is negative"))
+                .in_file(path)
+                .at_line(line)
+                .field("depth_m"));
+        }
+        if let Some(g) = gi.and_then(|i| rec.get(i)).filter(|s| !s.is_empty()) {
+            gas = GasMix::parse(g)
+                .map_err(|m| InputError::new(m).in_file(path).at_line(line).field("gas"))?;
+        }
+        if let Some(&(tp, _, _, _)) = pts.last() {
+            if t <= tp {
+                return Err(InputError::new(format!(
+                    "time {t} min does not increase (previous row is at {tp} min)"
+                ))
+                .in_file(path)
+                .at_line(line)
+                .field("time_min"));
+            }
+        } else if t != 0.0 {
+            return Err(InputError::new(format!(
+                "the first waypoint must be at time 0, not {t} min"
+            ))
+            .in_file(path)
+            .at_line(line)
+            .field("time_min"));
+        }
+        pts.push((t, d, gas, line));
+    }
+    if pts.len() < 2 {
+        return Err(InputError::new("a schedule needs at least two waypoints").in_file(path));
+    }
+    let (_, last_d, _, last_line) = *pts.last().unwrap();
+    if last_d != 0.0 {
+        return Err(InputError::new(format!(
+            "the schedule never surfaces: the last waypoint is at {last_d} m; end with a row at depth 0"
+        ))
+        .in_file(path)
+        .at_line(last_line)
+        .field("depth_m"));
+    }
+    let max_d = pts.iter().map(|p| p.1).fold(0.0, f64::max);
+    let first_at_max = pts.iter().position(|p| p.1 == max_d).unwrap_or(0);
+    let mut left_bottom = false;
+    let mut legs = Vec::with_capacity(pts.len() - 1);
+    let mut stops = Vec::new();
+    for (i, w) in pts.windows(2).enumerate() {
+        let ((t0, d0, g, _), (t1, d1, _, _)) = (w[0], w[1]);
+        let kind = if d1 > d0 {
+            LegKind::Descent
+        } else if d1 < d0 {
+            left_bottom = true;
+            LegKind::Ascent
+        } else if !left_bottom && i >= first_at_max && d0 == max_d {
+            LegKind::Bottom
+        } else if d0 > 0.0 && i > first_at_max {
+            LegKind::Stop
+        } else {
+            LegKind::Bottom
+        };
+        if kind == LegKind::Stop {
+            stops.push(Stop {
+                depth_m: d0,
+                stop_min: t1 - t0,
+                runtime_min: t1,
+                gas: g,
+            });
+        }
+        legs.push(Leg {
+            kind,
+            start_depth_m: d0,
+            end_depth_m: d1,
+            duration_s: (t1 - t0) * 60.0,
+            gas: g,
+        });
+    }
+    Ok(Schedule {
+        label: path
+            .file_stem()
+            .map_or_else(|| "waypoints".into(), |s| s.to_string_lossy().into_owned()),
+        surface_pressure_pa: conventions.surface_pressure_pa,
+        pa_per_m: conventions.pa_per_m,
+        water_vapour_pa: conventions.water_vapour_pa,
+        legs,
+        stops,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::algorithm::conventions::DECOTENGU;
+
+    #[test]
+    fn reads_waypoints_with_gas_column() {
+        let text = "time_min,depth_m,gas\n0,0,air\n2,30,\n20,30,\n23,6,EAN50\n26,6,O2\n27,0,\n";
+        let s = parse_waypoints_csv(text, Path::new("w.csv"), &DECOTENGU, GasMix::AIR).unwrap();
+        assert_eq!(s.legs.len(), 5);
+        assert_eq!(s.legs[1].kind, LegKind::Bottom);
+        assert_eq!(s.legs[3].kind, LegKind::Stop);
+        assert_eq!(s.stops.len(), 1);
+        assert_eq!(s.stops[0].depth_m, 6.0);
+        assert_eq!(s.stops[0].stop_min, 3.0);
+        assert_eq!(s.stops[0].gas, GasMix::new(0.5, 0.0).unwrap());
+        assert!((s.runtime_min() - 27.0).abs() < 1e-12);
+        assert_eq!(s.gas_switches().len(), 2);
+        let h = s.to_pressure_history().unwrap();
+        assert!((h.ambient(120.0) - (101_325.0 + 30.0 * 9_985.0)).abs() < 1e-6);
+    }
+
+    #[test]
+    fn errors_name_line_and_column() {
+        let e = parse_waypoints_csv(
+            "time_min,depth_m\n0,0\n2,30\n20,30\n",
+            Path::new("w.csv"),
+            &DECOTENGU,
+            GasMix::AIR,
+        )
+        .unwrap_err();
+        assert_eq!((e.line, e.field.as_deref()), (Some(4), Some("depth_m")));
+        assert!(e.message.contains("never surfaces"));
+        let e = parse_waypoints_csv(
+            "time_min,depth_m\n0,0\n2,x\n3,0\n",
+            Path::new("w.csv"),
+            &DECOTENGU,
+            GasMix::AIR,
+        )
+        .unwrap_err();
+        assert_eq!((e.line, e.field.as_deref()), (Some(3), Some("depth_m")));
+        let e = parse_waypoints_csv(
+            "t,depth_m\n0,0\n",
+            Path::new("w.csv"),
+            &DECOTENGU,
+            GasMix::AIR,
+        )
+        .unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("time_min"));
+    }
+}

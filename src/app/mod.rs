@@ -1,0 +1,4 @@
+//! One library function per subcommand; the CLI only parses arguments and prints what these
+//! return. Nothing here touches the terminal.
+
+pub mod plan;

@@ -1,0 +1,200 @@
+//! `decophantom plan`: load an algorithm file, plan a dive, format the stop table.
+
+use crate::algorithm::oxygen::{self, OxygenExposure};
+use crate::algorithm::schedule::{gas_text, ScheduleSummary};
+use crate::algorithm::{load_algorithm, DecoGas, DivePlan, Schedule};
+use crate::error::InputError;
+use crate::gas::GasMix;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Output format of the stop table.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum PlanFormat {
+    /// Markdown table plus summary lines.
+    #[default]
+    Md,
+    /// CSV `depth_m,stop_min,runtime_min,gas`; the last row (depth 0) is the arrival at the
+    /// surface, its runtime the total dive time.
+    Csv,
+    /// The schedule TOML (as `--out` writes it).
+    Toml,
+}
+
+impl PlanFormat {
+    /// Parse `md`, `csv`, `toml`.
+    pub fn parse(s: &str) -> Option<PlanFormat> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "md" | "markdown" => Some(PlanFormat::Md),
+            "csv" => Some(PlanFormat::Csv),
+            "toml" => Some(PlanFormat::Toml),
+            _ => None,
+        }
+    }
+}
+
+/// What the user asked for.
+#[derive(Debug, Clone)]
+pub struct PlanRequest {
+    /// The algorithm TOML file.
+    pub algorithm: PathBuf,
+    /// Maximum depth, m.
+    pub depth_m: f64,
+    /// Bottom time, min.
+    pub time_min: f64,
+    /// Bottom gas (`air`, `32`, `18/45` ...); air if absent.
+    pub gas: Option<String>,
+    /// Deco gases, `50@21` or `50` (switch at the MOD at 1.6 bar).
+    pub deco_gases: Vec<String>,
+    /// Output format.
+    pub format: PlanFormat,
+    /// Where to write the schedule TOML, if anywhere.
+    pub out: Option<PathBuf>,
+}
+
+/// The planned dive and its formatted table.
+#[derive(Debug, Clone)]
+pub struct PlanOutcome {
+    /// The schedule.
+    pub schedule: Schedule,
+    /// CNS % and OTU.
+    pub oxygen: OxygenExposure,
+    /// The text to print, in the requested format.
+    pub text: String,
+}
+
+/// Plan the dive; write `--out` if asked. Bad input → [`InputError`] (exit code 2).
+pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
+    let alg = load_algorithm(&req.algorithm)?;
+    let cmd =
+        |field: &str, msg: String| InputError::new(msg).in_file("<command line>").field(field);
+    let bottom_gas = match &req.gas {
+        Some(g) => GasMix::parse(g).map_err(|m| cmd("--gas", m))?,
+        None => GasMix::AIR,
+    };
+    let deco_gases = req
+        .deco_gases
+        .iter()
+        .map(|s| DecoGas::parse(s, &alg.conventions).map_err(|m| cmd("--deco-gas", m)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let plan = DivePlan {
+        depth_m: req.depth_m,
+        bottom_time_min: req.time_min,
+        bottom_gas,
+        deco_gases,
+    };
+    plan.validate(&alg.conventions).map_err(|e| {
+        let f = e.field.clone().map(|f| format!("--{f}"));
+        let mut e = e.in_file("<command line>");
+        e.field = f;
+        e
+    })?;
+    let schedule = alg.algorithm.plan(&plan).map_err(|e| {
+        if e.file.is_none() {
+            let f = e.field.clone().map(|f| format!("--{f}"));
+            let mut e = e.in_file("<command line>");
+            e.field = f;
+            e
+        } else {
+            e
+        }
+    })?;
+    let oxygen = oxygen::exposure(&schedule);
+    let summary = ScheduleSummary {
+        runtime_min: Some(schedule.runtime_min()),
+        cns_percent: Some(oxygen.cns_percent),
+        otu: Some(oxygen.otu),
+        algorithm: Some(req.algorithm.display().to_string()),
+    };
+    let toml_text = schedule.to_toml_string(Some(&summary));
+    if let Some(out) = &req.out {
+        std::fs::write(out, &toml_text).map_err(|e| crate::error::Error::Io {
+            path: out.clone(),
+            source: e,
+        })?;
+    }
+    let text = match req.format {
+        PlanFormat::Toml => toml_text,
+        PlanFormat::Csv => csv_table(&schedule),
+        PlanFormat::Md => markdown(&schedule, &plan, &oxygen),
+    };
+    Ok(PlanOutcome {
+        schedule,
+        oxygen,
+        text,
+    })
+}
+
+/// Minutes for tables: whole numbers without decimals, others to 0.01.
+fn fmt_min(x: f64) -> String {
+    if (x - x.round()).abs() < 1e-9 {
+        format!("{}", x.round())
+    } else {
+        format!("{x:.2}")
+    }
+}
+
+fn csv_table(s: &Schedule) -> String {
+    let mut out = String::from("depth_m,stop_min,runtime_min,gas\n");
+    for st in &s.stops {
+        let _ = writeln!(
+            out,
+            "{},{},{},{}",
+            st.depth_m,
+            fmt_min(st.stop_min),
+            fmt_min(st.runtime_min),
+            gas_text(st.gas)
+        );
+    }
+    let last_gas = s.legs.last().map_or(GasMix::AIR, |l| l.gas);
+    let _ = writeln!(
+        out,
+        "0,0,{},{}",
+        fmt_min(s.runtime_min()),
+        gas_text(last_gas)
+    );
+    out
+}
+
+fn markdown(s: &Schedule, plan: &DivePlan, o: &OxygenExposure) -> String {
+    let mut out = String::new();
+    let _ = writeln!(
+        out,
+        "# {}: {} m for {} min on {}\n",
+        s.label,
+        plan.depth_m,
+        fmt_min(plan.bottom_time_min),
+        gas_text(plan.bottom_gas)
+    );
+    if s.stops.is_empty() {
+        let _ = writeln!(out, "No decompression stops.\n");
+    } else {
+        out.push_str("| depth_m | stop_min | runtime_min | gas |\n|---:|---:|---:|---|\n");
+        for st in &s.stops {
+            let _ = writeln!(
+                out,
+                "| {} | {} | {} | {} |",
+                st.depth_m,
+                fmt_min(st.stop_min),
+                fmt_min(st.runtime_min),
+                gas_text(st.gas)
+            );
+        }
+        out.push('\n');
+    }
+    for g in s.gas_switches() {
+        let _ = writeln!(
+            out,
+            "Gas switch to {} at {} m (runtime {} min).",
+            gas_text(g.gas),
+            g.depth_m,
+            fmt_min(g.runtime_min)
+        );
+    }
+    let deco: f64 = s.stops.iter().map(|st| st.stop_min).sum();
+    let _ = writeln!(out, "Total dive time: {} min", fmt_min(s.runtime_min()));
+    let _ = writeln!(out, "Total stop time: {} min", fmt_min(deco));
+    let _ = writeln!(out, "CNS: {:.1} %", o.cns_percent);
+    let _ = writeln!(out, "OTU: {:.1}", o.otu);
+    out
+}

@@ -1,0 +1,393 @@
+//! Decompression algorithms: DecoTengu oracle, loader, plan command, schedule I/O, errors.
+
+use crate::common::{bin, root, tempdir};
+use decophantom::algorithm::buhlmann::{FirstCompartment, Variant, ZhL16Gf};
+use decophantom::algorithm::conventions::DECOTENGU;
+use decophantom::algorithm::{load_algorithm, DecoAlgorithm, DecoGas, DivePlan, Schedule};
+use decophantom::gas::GasMix;
+use std::process::Command;
+
+/// One row of tests/oracles/decotengu_reference.csv (written by decotengu_tables.py with
+/// DecoTengu 0.14.1).
+struct RefDive {
+    dive: String,
+    variant: Variant,
+    gf_low: f64,
+    gf_high: f64,
+    depth_m: f64,
+    time_min: f64,
+    gas: GasMix,
+    deco: Vec<DecoGas>,
+    last_stop_m: f64,
+    runtime_min: f64,
+    stops: Vec<(f64, f64)>,
+}
+
+fn reference_dives() -> Vec<RefDive> {
+    let path = root().join("tests/oracles/decotengu_reference.csv");
+    let mut rdr = csv::Reader::from_path(&path).unwrap();
+    let mut out = Vec::new();
+    for rec in rdr.records() {
+        let r = rec.unwrap();
+        let f = |i: usize| r[i].parse::<f64>().unwrap();
+        let deco = r[7]
+            .split_whitespace()
+            .map(|s| DecoGas::parse(s, &DECOTENGU).unwrap())
+            .collect();
+        let stops = r[10]
+            .split_whitespace()
+            .map(|s| {
+                let (d, t) = s.split_once(':').unwrap();
+                (d.parse().unwrap(), t.parse().unwrap())
+            })
+            .collect();
+        out.push(RefDive {
+            dive: r[0].to_string(),
+            variant: if &r[1] == "zh-l16b" {
+                Variant::B
+            } else {
+                Variant::C
+            },
+            gf_low: f(2),
+            gf_high: f(3),
+            depth_m: f(4),
+            time_min: f(5),
+            gas: GasMix::parse(&r[6]).unwrap(),
+            deco,
+            last_stop_m: f(8),
+            runtime_min: f(9),
+            stops,
+        });
+    }
+    out
+}
+
+#[test]
+fn matches_decotengu_stop_for_stop_and_minute_for_minute() {
+    let dives = reference_dives();
+    assert!(dives.len() >= 8);
+    let mut failures = Vec::new();
+    for d in &dives {
+        let mut conv = DECOTENGU.clone();
+        conv.last_stop_m = d.last_stop_m;
+        let alg = ZhL16Gf::new(
+            "t",
+            d.variant,
+            d.variant.default_first_compartment(),
+            d.gf_low / 100.0,
+            d.gf_high / 100.0,
+            conv,
+        );
+        let plan = DivePlan {
+            depth_m: d.depth_m,
+            bottom_time_min: d.time_min,
+            bottom_gas: d.gas,
+            deco_gases: d.deco.clone(),
+        };
+        let s = alg.plan(&plan).unwrap();
+        let got: Vec<(f64, f64)> = s.stops.iter().map(|st| (st.depth_m, st.stop_min)).collect();
+        if got != d.stops || (s.runtime_min() - d.runtime_min).abs() > 1e-6 {
+            failures.push(format!(
+                "dive {}: ours {:?} runtime {:.4}; DecoTengu {:?} runtime {}",
+                d.dive,
+                got,
+                s.runtime_min(),
+                d.stops,
+                d.runtime_min
+            ));
+        }
+    }
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+}
+
+#[test]
+fn decotengu_docstring_example_through_the_shipped_file() {
+    // DecoTengu 0.14.1 package docstring (decotengu/__init__.py): 35 m for 40 min on air,
+    // ZH-L16B GF 30/85 → 18:1 15:1 12:4 9:6 6:10 3:22, total 44 min, last step at 87.5 min;
+    // ZH-L16C GF 30/85 → total 52 min, first stop 18 m 1 min, last 3 m 26 min.
+    let plan = DivePlan {
+        depth_m: 35.0,
+        bottom_time_min: 40.0,
+        bottom_gas: GasMix::AIR,
+        deco_gases: vec![],
+    };
+    let b = load_algorithm(&root().join("algorithms/zhl16b-gf30-85.toml")).unwrap();
+    let s = b.algorithm.plan(&plan).unwrap();
+    let got: Vec<(f64, f64)> = s.stops.iter().map(|st| (st.depth_m, st.stop_min)).collect();
+    assert_eq!(
+        got,
+        vec![
+            (18.0, 1.0),
+            (15.0, 1.0),
+            (12.0, 4.0),
+            (9.0, 6.0),
+            (6.0, 10.0),
+            (3.0, 22.0)
+        ]
+    );
+    assert!((s.runtime_min() - 87.5).abs() < 1e-9);
+    let c = load_algorithm(&root().join("algorithms/zhl16c-gf30-85.toml")).unwrap();
+    let s = c.algorithm.plan(&plan).unwrap();
+    assert_eq!(s.stops.iter().map(|st| st.stop_min).sum::<f64>(), 52.0);
+    assert_eq!((s.stops[0].depth_m, s.stops[0].stop_min), (18.0, 1.0));
+    assert_eq!(s.stops.last().unwrap().stop_min, 26.0);
+}
+
+#[test]
+fn every_shipped_zhl16_file_loads_and_plans() {
+    let dir = root().join("algorithms");
+    let plan = DivePlan {
+        depth_m: 45.0,
+        bottom_time_min: 25.0,
+        bottom_gas: GasMix::AIR,
+        deco_gases: vec![],
+    };
+    let mut n = 0;
+    for e in std::fs::read_dir(dir).unwrap() {
+        let p = e.unwrap().path();
+        let text = std::fs::read_to_string(&p).unwrap();
+        if !text.contains("kind = \"zhl16\"") {
+            continue;
+        }
+        let a = load_algorithm(&p).unwrap_or_else(|e| panic!("{e}"));
+        let s = a.algorithm.plan(&plan).unwrap();
+        assert!(!s.stops.is_empty(), "{}", p.display());
+        n += 1;
+    }
+    assert!(n >= 9, "{n} ZH-L16 files");
+    // More conservative gradient factors never shorten the dive (same model, same dive).
+    let rt = |f: &str| {
+        load_algorithm(&root().join("algorithms").join(f))
+            .unwrap()
+            .algorithm
+            .plan(&plan)
+            .unwrap()
+            .runtime_min()
+    };
+    assert!(rt("zhl16c-gf30-70.toml") >= rt("zhl16c-gf30-85.toml"));
+    assert!(rt("zhl16c-gf30-85.toml") >= rt("zhl16c-gf100-100.toml"));
+    assert!(rt("zhl16c-gf30-85.toml") >= rt("zhl16b-gf30-85.toml"));
+}
+
+#[test]
+fn schedule_toml_round_trips_and_feeds_the_phantom() {
+    let alg = ZhL16Gf::new(
+        "ZH-L16C GF 30/70",
+        Variant::C,
+        FirstCompartment::One,
+        0.3,
+        0.7,
+        DECOTENGU.clone(),
+    );
+    let plan = DivePlan {
+        depth_m: 60.0,
+        bottom_time_min: 20.0,
+        bottom_gas: GasMix::parse("18/45").unwrap(),
+        deco_gases: vec![
+            DecoGas::parse("50", &DECOTENGU).unwrap(),
+            DecoGas::parse("100@6", &DECOTENGU).unwrap(),
+        ],
+    };
+    let s = alg.plan(&plan).unwrap();
+    let dir = tempdir("schedule-roundtrip");
+    let path = dir.join("s.toml");
+    std::fs::write(&path, s.to_toml_string(None)).unwrap();
+    let back = Schedule::read(&path).unwrap();
+    assert_eq!(back, s);
+    let h = back.to_pressure_history().unwrap();
+    assert!((h.duration_s() / 60.0 - s.runtime_min()).abs() < 1e-9);
+    // The deepest point is 60 m in DecoTengu's 0.09985 bar/m.
+    let pmax = h.ambient_pa.iter().cloned().fold(0.0, f64::max);
+    assert!((pmax - (101_325.0 + 60.0 * 9_985.0)).abs() < 1e-6);
+    // Gas switches appear at the switch depths (EAN50's MOD 22 m → first used at 21 m stop).
+    let sw = s.gas_switches();
+    assert_eq!(sw.len(), 2, "{sw:?}");
+    assert_eq!(sw[1].depth_m, 6.0);
+}
+
+fn plan_cmd(args: &[&str]) -> std::process::Output {
+    Command::new(bin())
+        .current_dir(root())
+        .arg("plan")
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn plan_command_prints_table_and_writes_a_readable_schedule() {
+    let dir = tempdir("plan-cmd");
+    let out = dir.join("s.toml");
+    let o = plan_cmd(&[
+        "--algorithm",
+        "algorithms/zhl16b-gf30-85.toml",
+        "--depth",
+        "35",
+        "--time",
+        "40",
+        "--format",
+        "csv",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8(o.stdout).unwrap();
+    // DecoTengu docstring stops (see above) and total 87.5 min.
+    assert!(
+        text.starts_with("depth_m,stop_min,runtime_min,gas\n18,1,"),
+        "{text}"
+    );
+    assert!(text.contains("\n3,22,"), "{text}");
+    assert!(text.trim_end().ends_with("0,0,87.50,air"), "{text}");
+    let s = Schedule::read(&out).unwrap();
+    assert_eq!(s.stops.len(), 6);
+    let md = plan_cmd(&[
+        "--algorithm",
+        "algorithms/zhl16c-gf30-85.toml",
+        "--depth",
+        "45",
+        "--time",
+        "25",
+        "--deco-gas",
+        "50@21",
+        "--deco-gas",
+        "100@6",
+    ]);
+    assert!(md.status.success());
+    let md = String::from_utf8(md.stdout).unwrap();
+    assert!(
+        md.contains("| depth_m | stop_min | runtime_min | gas |"),
+        "{md}"
+    );
+    assert!(md.contains("Total dive time:") && md.contains("CNS:") && md.contains("OTU:"));
+    assert!(md.contains("Gas switch to EAN50 at 21 m"), "{md}");
+}
+
+#[test]
+fn bad_plans_exit_with_code_2_and_a_clear_message() {
+    let dir = tempdir("plan-bad");
+    let bad_gf = dir.join("gf.toml");
+    std::fs::write(
+        &bad_gf,
+        "kind = \"zhl16\"\n[conventions]\npreset = \"decotengu\"\n[params]\nmodel = \"zh-l16c\"\ngf_low = 90\ngf_high = 80\n",
+    )
+    .unwrap();
+    let bad_kind = dir.join("kind.toml");
+    std::fs::write(&bad_kind, "kind = \"bogus\"\n").unwrap();
+    let bad_rate = dir.join("rate.toml");
+    std::fs::write(
+        &bad_rate,
+        "kind = \"zhl16\"\n[conventions]\npreset = \"decotengu\"\nascent_rate_m_min = -9.0\n[params]\nmodel = \"zh-l16c\"\ngf_low = 30\ngf_high = 80\n",
+    )
+    .unwrap();
+    let alg = "algorithms/zhl16c-gf30-85.toml";
+    let cases: Vec<(Vec<&str>, &str)> = vec![
+        (
+            vec!["--algorithm", alg, "--depth", "0", "--time", "20"],
+            "depth",
+        ),
+        (
+            vec!["--algorithm", alg, "--depth", "-5", "--time", "20"],
+            "depth",
+        ),
+        (
+            vec![
+                "--algorithm",
+                alg,
+                "--depth",
+                "60",
+                "--time",
+                "20",
+                "--gas",
+                "10/70",
+            ],
+            "hypoxic",
+        ),
+        (
+            vec![
+                "--algorithm",
+                alg,
+                "--depth",
+                "45",
+                "--time",
+                "20",
+                "--deco-gas",
+                "50@30",
+            ],
+            "beyond its MOD",
+        ),
+        (
+            vec![
+                "--algorithm",
+                alg,
+                "--depth",
+                "45",
+                "--time",
+                "20",
+                "--gas",
+                "32",
+            ],
+            "beyond its MOD",
+        ),
+        (
+            vec![
+                "--algorithm",
+                bad_kind.to_str().unwrap(),
+                "--depth",
+                "30",
+                "--time",
+                "20",
+            ],
+            "unknown algorithm kind",
+        ),
+        (
+            vec![
+                "--algorithm",
+                bad_gf.to_str().unwrap(),
+                "--depth",
+                "30",
+                "--time",
+                "20",
+            ],
+            "GF-low",
+        ),
+        (
+            vec![
+                "--algorithm",
+                bad_rate.to_str().unwrap(),
+                "--depth",
+                "30",
+                "--time",
+                "20",
+            ],
+            "ascent_rate_m_min",
+        ),
+    ];
+    for (args, needle) in cases {
+        let o = plan_cmd(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(needle), "{args:?}: {err}");
+    }
+}
+
+#[test]
+fn schedule_that_never_surfaces_is_an_error() {
+    let dir = tempdir("never-surfaces");
+    let p = dir.join("s.toml");
+    std::fs::write(
+        &p,
+        "label = \"x\"\nsurface_pressure_pa = 101325.0\npa_per_m = 10000.0\nwater_vapour_pa = 6270.0\n\n\
+         [[legs]]\nkind = \"descent\"\nstart_depth_m = 0.0\nend_depth_m = 30.0\nduration_s = 90.0\ngas = \"air\"\n",
+    )
+    .unwrap();
+    let e = Schedule::read(&p).unwrap_err();
+    assert!(e.message.contains("never surfaces"), "{e}");
+    std::fs::write(
+        &p,
+        "label = \"x\"\nsurface_pressure_pa = 101325.0\npa_per_m = 10000.0\nwater_vapour_pa = 6270.0\nextra = 1\n",
+    )
+    .unwrap();
+    let e = Schedule::read(&p).unwrap_err();
+    assert_eq!(e.line, Some(5), "{e}");
+}
