@@ -4,6 +4,7 @@
 
 pub mod conventions;
 pub mod schedule;
+pub mod vpmb;
 
 pub use conventions::Conventions;
 pub use schedule::{DecoGas, DivePlan, Leg, LegKind, Schedule, Stop};
