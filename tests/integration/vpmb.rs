@@ -442,3 +442,48 @@ fn shipped_algorithm_files_parse() {
     }
     assert_eq!(n, 6);
 }
+
+#[test]
+fn other_rounding_conventions_and_last_stop() {
+    let plan = dive(45.0, 25.0, "air", &[]);
+    let baker = vpm(raw(0), baker_msw(20.0, 10.0)).plan(&plan).unwrap();
+    // Whole minutes at the stop (Subsurface, DecoTengu): every stop leg lasts whole minutes.
+    let at_stop = Conventions {
+        stop_rounding: StopRounding::WholeMinutesAtStop,
+        ..baker_msw(20.0, 10.0)
+    };
+    let s = vpm(raw(0), at_stop).plan(&plan).unwrap();
+    assert!(!s.stops.is_empty());
+    for st in &s.stops {
+        assert!(
+            st.stop_min >= 1.0 && (st.stop_min - st.stop_min.round()).abs() < 1e-9,
+            "{}",
+            table(&s)
+        );
+    }
+    // No rounding: stops end as soon as the ceiling allows (to the second), never longer in
+    // total than whole minutes at the stop.
+    let none = Conventions {
+        stop_rounding: StopRounding::None,
+        min_stop_min: 0.0,
+        ..baker_msw(20.0, 10.0)
+    };
+    let s_none = vpm(raw(0), none).plan(&plan).unwrap();
+    assert!(s_none.runtime_min() <= s.runtime_min() + 1e-9);
+    // Last stop at 6 m: no 3 m stop, and the 6 m stop is held until the surface is allowed,
+    // so it is longer than the 6 m stop with a 3 m last stop.
+    let six = Conventions {
+        last_stop_m: 6.0,
+        ..baker_msw(20.0, 10.0)
+    };
+    let s6 = vpm(raw(0), six).plan(&plan).unwrap();
+    let last = s6.stops.last().unwrap();
+    assert_eq!(last.depth_m, 6.0, "{}", table(&s6));
+    let six_baker = baker.stops.iter().find(|x| x.depth_m == 6.0).unwrap();
+    assert!(
+        last.stop_min > six_baker.stop_min,
+        "{} / {}",
+        table(&s6),
+        table(&baker)
+    );
+}
