@@ -5,3 +5,5 @@ mod algorithms;
 mod analytic;
 #[path = "integration/common.rs"]
 mod common;
+#[path = "integration/vpmb.rs"]
+mod vpmb;

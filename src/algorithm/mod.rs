@@ -8,6 +8,7 @@ pub mod conventions;
 pub mod oxygen;
 pub mod registry;
 pub mod schedule;
+pub mod vpmb;
 pub mod waypoints;
 
 pub use config::{load_algorithm, LoadedAlgorithm};

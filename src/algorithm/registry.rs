@@ -4,10 +4,10 @@
 //! A builder's error string should start with the offending `[params]` field followed by `: `
 //! (e.g. `gf_low: ...`); the loader then points at that field's line.
 
-use super::{buhlmann, Builder};
+use super::{buhlmann, vpmb, Builder};
 
 /// The registered algorithms, keyed by `kind`.
-pub static REGISTRY: &[(&str, Builder)] = &[("zhl16", buhlmann::build)];
+pub static REGISTRY: &[(&str, Builder)] = &[("zhl16", buhlmann::build), ("vpm-b", vpmb::build)];
 
 /// The builder registered for `kind` (case-insensitive).
 pub fn builder(kind: &str) -> Option<Builder> {

@@ -1,0 +1,489 @@
+//! VPM-B against Baker's published outputs.
+//!
+//! References:
+//! - the issue (#3): air 30 m / 40 min +0 and air 45 m / 25 min +2 in Baker's conventions;
+//! - Baker's VPMDECO (Model: VPM-B) output files run by Baker's FORTRAN program and shipped as
+//!   test data with the `bwaite/vpmb` Python port (tests/msw_test/VPMDECO.OUT, run 02-16-2010;
+//!   tests/gradient_onset_of_imperm_greater/VPMDECO.OUT, run 03-01-2010). Only the printed
+//!   schedules are used here, as reference values.
+
+use decophantom::algorithm::conventions::{GfLowAnchor, StopRounding};
+use decophantom::algorithm::vpmb::{self, RawVpmbParams, VpmB};
+use decophantom::algorithm::{Conventions, DecoAlgorithm, DecoGas, DivePlan, Schedule};
+use decophantom::gas::GasMix;
+use decophantom::units::ATM_PA;
+
+/// Baker's metric conventions (VPMDECO with Units='msw'): 10.1325 msw per atm, 0.493 msw
+/// water vapour, whole minutes of runtime, minimum stop 1 min. Rates as given per dive.
+fn baker_msw(descent: f64, ascent: f64) -> Conventions {
+    Conventions {
+        surface_pressure_pa: 101_325.0,
+        pa_per_m: 10_000.0,
+        water_vapour_pa: 4_930.0,
+        descent_rate_m_min: descent,
+        ascent_rate_m_min: ascent,
+        stop_spacing_m: 3.0,
+        last_stop_m: 3.0,
+        bottom_time_includes_descent: true,
+        stop_rounding: StopRounding::WholeMinutesOfRuntime,
+        gf_low_anchor: GfLowAnchor::FirstStop,
+        min_stop_min: 1.0,
+    }
+}
+
+fn vpm(raw: RawVpmbParams, c: Conventions) -> VpmB {
+    VpmB::new("VPM-B", raw.validate().unwrap(), c).unwrap()
+}
+
+fn raw(conservatism: i64) -> RawVpmbParams {
+    RawVpmbParams {
+        conservatism,
+        ..RawVpmbParams::default()
+    }
+}
+
+fn dive(depth: f64, time: f64, gas: &str, deco: &[(&str, f64)]) -> DivePlan {
+    DivePlan {
+        depth_m: depth,
+        bottom_time_min: time,
+        bottom_gas: GasMix::parse(gas).unwrap(),
+        deco_gases: deco
+            .iter()
+            .map(|(g, d)| DecoGas {
+                mix: GasMix::parse(g).unwrap(),
+                switch_depth_m: *d,
+            })
+            .collect(),
+    }
+}
+
+fn table(s: &Schedule) -> String {
+    s.stops
+        .iter()
+        .map(|st| format!("{}:{}", st.depth_m, st.stop_min))
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Stops must be the same depths, each within ±`tol` min of the reference.
+fn assert_stops(s: &Schedule, want: &[(f64, f64)], tol: f64) {
+    let got: Vec<(f64, f64)> = s.stops.iter().map(|x| (x.depth_m, x.stop_min)).collect();
+    assert_eq!(
+        got.len(),
+        want.len(),
+        "stops {} vs reference {want:?}",
+        table(s)
+    );
+    for ((gd, gt), (wd, wt)) in got.iter().zip(want) {
+        assert!(
+            (gd - wd).abs() < 1e-6,
+            "stop depth {gd} vs {wd}: {}",
+            table(s)
+        );
+        assert!(
+            (gt - wt).abs() <= tol,
+            "stop {gd} m: {gt} vs {wt} min: {}",
+            table(s)
+        );
+    }
+}
+
+#[test]
+fn issue_air_30m_40min_plus0() {
+    // Issue #3 reference (Baker's VPM-B, Baker conventions, +0, λ 7500): stops 12 m 2,
+    // 9 m 5, 6 m 8, 3 m 14; runtime 70.3 min.
+    let alg = vpm(raw(0), baker_msw(20.0, 10.0));
+    let s = alg.plan(&dive(30.0, 40.0, "air", &[])).unwrap();
+    println!("30/40 +0: {} rt {:.1}", table(&s), s.runtime_min());
+    assert_stops(&s, &[(12.0, 2.0), (9.0, 5.0), (6.0, 8.0), (3.0, 14.0)], 1.0);
+    // In fact every stop and the runtime match exactly.
+    assert_stops(&s, &[(12.0, 2.0), (9.0, 5.0), (6.0, 8.0), (3.0, 14.0)], 0.0);
+    assert!((s.runtime_min() - 70.3).abs() < 1e-6, "{}", s.runtime_min());
+}
+
+#[test]
+fn issue_air_45m_25min_plus2() {
+    // Issue #3 reference: 24 m 1, 21 m 2, 18 m 3, 15 m 3, 12 m 6, 9 m 7, 6 m 12, 3 m 22 (83.3 min).
+    let alg = vpm(raw(2), baker_msw(20.0, 10.0));
+    let s = alg.plan(&dive(45.0, 25.0, "air", &[])).unwrap();
+    println!("45/25 +2: {} rt {:.1}", table(&s), s.runtime_min());
+    assert_stops(
+        &s,
+        &[
+            (24.0, 1.0),
+            (21.0, 2.0),
+            (18.0, 3.0),
+            (15.0, 3.0),
+            (12.0, 6.0),
+            (9.0, 7.0),
+            (6.0, 12.0),
+            (3.0, 22.0),
+        ],
+        1.0,
+    );
+    assert!(
+        (s.runtime_min() - 83.3).abs() <= 1.0 + 1e-9,
+        "{}",
+        s.runtime_min()
+    );
+}
+
+/// Baker's sample dive: TRIMIX DIVE TO 80 MSW, 15/45, descent 23 msw/min, bottom until
+/// runtime 30 min, ascent 10 msw/min, EAN36 from 33 m, O2 from 6 m, radii 0.6/0.5 µm, λ 7500.
+fn baker_trimix_80m() -> (VpmB, DivePlan) {
+    let r = RawVpmbParams {
+        critical_radius_n2_um: 0.6,
+        critical_radius_he_um: 0.5,
+        ..RawVpmbParams::default()
+    };
+    (
+        vpm(r, baker_msw(23.0, 10.0)),
+        dive(80.0, 30.0, "15/45", &[("36", 33.0), ("o2", 6.0)]),
+    )
+}
+
+#[test]
+fn baker_vpmdeco_trimix_80m_with_deco_gases() {
+    // VPMDECO.OUT (Baker's FORTRAN VPM-B, 02-16-2010), msw_test: first stop 54 m, stops
+    // 54:1 51:1 48:1 45:2 42:2 39:2 36:3 33:2 30:1 27:2 24:3 21:4 18:4 15:7 12:8 9:13 6:13 3:23,
+    // run time 125 min. Baker ascends at 3 msw/min on oxygen from 6 m (a per-gas rate that a
+    // DivePlan does not carry); here the ascent stays 10 m/min, which only moves the last
+    // two stops' travel and the final ascent (runtime tolerance 1 min for that).
+    let (alg, plan) = baker_trimix_80m();
+    let s = alg.plan(&plan).unwrap();
+    println!("80 m trimix: {} rt {:.1}", table(&s), s.runtime_min());
+    let want = [
+        (54.0, 1.0),
+        (51.0, 1.0),
+        (48.0, 1.0),
+        (45.0, 2.0),
+        (42.0, 2.0),
+        (39.0, 2.0),
+        (36.0, 3.0),
+        (33.0, 2.0),
+        (30.0, 1.0),
+        (27.0, 2.0),
+        (24.0, 3.0),
+        (21.0, 4.0),
+        (18.0, 4.0),
+        (15.0, 7.0),
+        (12.0, 8.0),
+        (9.0, 13.0),
+        (6.0, 13.0),
+        (3.0, 23.0),
+    ];
+    assert_stops(&s, &want, 1.0);
+    // 16 of the 18 stops match exactly (here 15 m 6 and 12 m 9 against Baker's 7 and 8), and
+    // the total stop time is Baker's 92 min.
+    let exact = s
+        .stops
+        .iter()
+        .zip(&want)
+        .filter(|(a, b)| a.stop_min == b.1)
+        .count();
+    assert!(exact >= 16, "{exact} exact");
+    assert_eq!(s.stops.iter().map(|x| x.stop_min).sum::<f64>(), 92.0);
+    // Gas switches as in Baker's table: EAN36 from the 33 m stop, O2 from the 6 m stop.
+    for st in &s.stops {
+        let o2 = if st.depth_m <= 6.0 {
+            1.0
+        } else if st.depth_m <= 33.0 {
+            0.36
+        } else {
+            0.15
+        };
+        assert!((st.gas.o2 - o2).abs() < 1e-12, "gas at {} m", st.depth_m);
+    }
+    assert!(
+        (s.runtime_min() - 125.0).abs() <= 1.5,
+        "{}",
+        s.runtime_min()
+    );
+    // Baker prints "Leading compartment enters the decompression zone at 64.8 mswg"; the
+    // root here is 64.73 m (an independent port, ZPlanKit's vpmb_ref.c notes, also finds
+    // 64.73 against Baker's 64.8: his bisection stops early). Tolerance 0.1 m.
+    let zone = alg.start_of_deco_zone_m(&plan).unwrap();
+    assert!((zone - 64.8).abs() <= 0.1, "{zone}");
+}
+
+#[test]
+fn baker_vpmdeco_trimix_260fsw_impermeable() {
+    // VPMDECO.OUT (Baker's FORTRAN VPM-B, 03-01-2010), gradient_onset_of_imperm_greater, first
+    // dive: 15/45 to 260 fsw, descent 75 fsw/min, bottom until runtime 30, ascent 30 fsw/min,
+    // 10 fsw stops, last stop 20 fsw, radii 0.8/0.7 µm, onset of impermeability 5.4 atm (so
+    // the impermeable crushing branch is used), λ 7500. Stops (fsw:min):
+    // 190:1 180:1 170:1 160:1 150:2 140:3 130:3 120:3 110:4 100:6 90:7 80:9 70:10 60:16
+    // 50:22 40:32 30:52 20:777; "enters the decompression zone at 209.7 fswg".
+    // Baker's final ascent from 20 fsw is at 10 fsw/min; here 30 fsw/min (after the last stop).
+    let ft = 0.3048;
+    let c = Conventions {
+        surface_pressure_pa: ATM_PA,
+        pa_per_m: ATM_PA / 33.0 / ft,
+        water_vapour_pa: 1.607 * ATM_PA / 33.0, // Baker: 1.607 fsw
+        descent_rate_m_min: 75.0 * ft,
+        ascent_rate_m_min: 30.0 * ft,
+        stop_spacing_m: 10.0 * ft,
+        last_stop_m: 20.0 * ft,
+        ..baker_msw(0.0, 0.0)
+    };
+    let r = RawVpmbParams {
+        critical_radius_n2_um: 0.8,
+        critical_radius_he_um: 0.7,
+        crushing_onset_atm: 5.4,
+        ..RawVpmbParams::default()
+    };
+    let alg = vpm(r, c);
+    let plan = dive(260.0 * ft, 30.0, "15/45", &[]);
+    let s = alg.plan(&plan).unwrap();
+    let fsw: Vec<String> = s
+        .stops
+        .iter()
+        .map(|x| format!("{:.0}:{}", x.depth_m / ft, x.stop_min))
+        .collect();
+    println!("260 fsw: {} rt {:.1}", fsw.join(" "), s.runtime_min());
+    let want: Vec<(f64, f64)> = [
+        (190.0, 1.0),
+        (180.0, 1.0),
+        (170.0, 1.0),
+        (160.0, 1.0),
+        (150.0, 2.0),
+        (140.0, 3.0),
+        (130.0, 3.0),
+        (120.0, 3.0),
+        (110.0, 4.0),
+        (100.0, 6.0),
+        (90.0, 7.0),
+        (80.0, 9.0),
+        (70.0, 10.0),
+        (60.0, 16.0),
+        (50.0, 22.0),
+        (40.0, 32.0),
+        (30.0, 52.0),
+        (20.0, 777.0),
+    ]
+    .iter()
+    .map(|(d, t)| (d * ft, *t))
+    .collect();
+    assert_stops(&s, &want, 1.0);
+    // In fact every stop matches exactly; the runtime differs only by the slower final ascent.
+    assert_stops(&s, &want, 0.0);
+    assert!(
+        (s.runtime_min() - 984.0).abs() <= 1.5,
+        "{}",
+        s.runtime_min()
+    );
+    let zone = alg.start_of_deco_zone_m(&plan).unwrap() / ft;
+    assert!((zone - 209.7).abs() <= 0.05 + 1e-9, "{zone}");
+}
+
+#[test]
+fn more_conservatism_means_deeper_first_stop_and_longer_dive() {
+    // Larger critical radii (+2: ×1.12, +4: ×1.35) give smaller allowable gradients: the first
+    // stop is never shallower and the dive is longer; on deep dives the first stop moves deeper.
+    let dives = [
+        dive(30.0, 40.0, "air", &[]),
+        dive(45.0, 25.0, "air", &[]),
+        dive(60.0, 20.0, "21/35", &[("50", 21.0)]),
+        dive(80.0, 30.0, "15/45", &[("36", 33.0), ("o2", 6.0)]),
+    ];
+    let mut strictly_deeper = 0;
+    for plan in &dives {
+        let s: Vec<Schedule> = [0, 2, 4]
+            .iter()
+            .map(|&k| vpm(raw(k), baker_msw(20.0, 10.0)).plan(plan).unwrap())
+            .collect();
+        for w in s.windows(2) {
+            assert!(
+                w[1].stops[0].depth_m >= w[0].stops[0].depth_m,
+                "{} / {}",
+                table(&w[0]),
+                table(&w[1])
+            );
+            assert!(
+                w[1].runtime_min() > w[0].runtime_min(),
+                "{} / {}",
+                table(&w[0]),
+                table(&w[1])
+            );
+            if w[1].stops[0].depth_m > w[0].stops[0].depth_m {
+                strictly_deeper += 1;
+            }
+        }
+    }
+    assert!(strictly_deeper >= 2, "{strictly_deeper}");
+}
+
+#[test]
+fn smaller_lambda_gives_longer_deco() {
+    // λ sets how much supersaturation volume is tolerated: a smaller λ (Subsurface 6500)
+    // relaxes the gradients less than Baker's 7500, so the deco is at least as long.
+    let plan = dive(45.0, 25.0, "air", &[]);
+    let with = |l: f64| {
+        let r = RawVpmbParams {
+            critical_volume_lambda_fsw_min: l,
+            ..raw(0)
+        };
+        vpm(r, baker_msw(20.0, 10.0)).plan(&plan).unwrap()
+    };
+    let (a, b) = (with(6500.0), with(7500.0));
+    assert!(
+        a.runtime_min() >= b.runtime_min(),
+        "{} vs {}",
+        table(&a),
+        table(&b)
+    );
+    // Far apart the difference must show.
+    assert!(with(3000.0).runtime_min() > with(15000.0).runtime_min());
+    // Without the critical-volume algorithm (initial gradients only) the deco is longest.
+    let off = RawVpmbParams {
+        critical_volume: false,
+        ..raw(0)
+    };
+    let s_off = vpm(off, baker_msw(20.0, 10.0)).plan(&plan).unwrap();
+    assert!(s_off.runtime_min() > b.runtime_min());
+}
+
+#[test]
+fn schedule_is_consistent_and_converts_to_a_pressure_history() {
+    let (alg, plan) = baker_trimix_80m();
+    let s = alg.plan(&plan).unwrap();
+    // Stop runtimes are whole minutes (Baker's rounding) and the legs add up to them.
+    let mut t = 0.0;
+    let mut k = 0;
+    for leg in &s.legs {
+        t += leg.duration_s / 60.0;
+        if leg.kind == decophantom::algorithm::LegKind::Stop {
+            let st = &s.stops[k];
+            assert!((st.runtime_min - t).abs() < 1e-9);
+            assert!((st.runtime_min - st.runtime_min.round()).abs() < 1e-9);
+            k += 1;
+        }
+    }
+    assert_eq!(k, s.stops.len());
+    let last = s.legs.last().unwrap();
+    assert_eq!(last.end_depth_m, 0.0);
+    let h = s.to_pressure_history().unwrap();
+    assert!((h.times_s.last().unwrap() / 60.0 - s.runtime_min()).abs() < 1e-9);
+}
+
+#[test]
+fn no_deco_dive_has_no_stops() {
+    let s = vpm(raw(0), baker_msw(20.0, 10.0))
+        .plan(&dive(12.0, 20.0, "air", &[]))
+        .unwrap();
+    assert!(s.stops.is_empty(), "{}", table(&s));
+    assert!((s.runtime_min() - (20.0 + 1.2)).abs() < 1e-9);
+}
+
+#[test]
+fn bad_plans_are_input_errors() {
+    let alg = vpm(raw(0), baker_msw(20.0, 10.0));
+    let e = alg.plan(&dive(0.0, 20.0, "air", &[])).unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("depth"));
+    let e = alg.plan(&dive(60.0, 20.0, "10/70", &[])).unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("gas"));
+    let e = alg
+        .plan(&dive(40.0, 20.0, "air", &[("50", 30.0)]))
+        .unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("deco-gas"));
+    assert!(e.message.contains("MOD"), "{e}");
+}
+
+#[test]
+fn build_reads_params_and_rejects_unknown_keys() {
+    let params = toml::Value::Table(
+        "conservatism = 2\ncritical_volume_lambda_fsw_min = 6500"
+            .parse()
+            .unwrap(),
+    );
+    let alg = vpmb::build("VPM-B +2", params, baker_msw(20.0, 10.0)).unwrap();
+    assert_eq!(alg.label(), "VPM-B +2");
+    let bad = toml::Value::Table("conservatism = 2\nlambda = 6500".parse().unwrap());
+    let e = vpmb::build("x", bad, baker_msw(20.0, 10.0)).err().unwrap();
+    assert!(e.contains("lambda"), "{e}");
+    let bad = toml::Value::Table("conservatism = 9".parse().unwrap());
+    let e = vpmb::build("x", bad, baker_msw(20.0, 10.0)).err().unwrap();
+    assert!(e.starts_with("conservatism"), "{e}");
+}
+
+#[test]
+fn shipped_algorithm_files_parse() {
+    // The [params] tables of algorithms/vpmb-*.toml build (the loader itself is elsewhere).
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("algorithms");
+    let mut n = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let name = path.file_name().unwrap().to_string_lossy().to_string();
+        if !name.starts_with("vpmb-") {
+            continue;
+        }
+        let doc: toml::Table = std::fs::read_to_string(&path).unwrap().parse().unwrap();
+        assert_eq!(doc["kind"].as_str(), Some("vpm-b"), "{name}");
+        let params = doc
+            .get("params")
+            .cloned()
+            .unwrap_or(toml::Value::Table(Default::default()));
+        let lambda = params["critical_volume_lambda_fsw_min"]
+            .as_integer()
+            .unwrap();
+        let preset = doc["conventions"]["preset"].as_str().unwrap();
+        assert_eq!(
+            lambda,
+            if preset == "baker" { 7500 } else { 6500 },
+            "{name}"
+        );
+        vpmb::build(
+            doc["label"].as_str().unwrap(),
+            params,
+            baker_msw(20.0, 10.0),
+        )
+        .unwrap();
+        n += 1;
+    }
+    assert_eq!(n, 6);
+}
+
+#[test]
+fn other_rounding_conventions_and_last_stop() {
+    let plan = dive(45.0, 25.0, "air", &[]);
+    let baker = vpm(raw(0), baker_msw(20.0, 10.0)).plan(&plan).unwrap();
+    // Whole minutes at the stop (Subsurface, DecoTengu): every stop leg lasts whole minutes.
+    let at_stop = Conventions {
+        stop_rounding: StopRounding::WholeMinutesAtStop,
+        ..baker_msw(20.0, 10.0)
+    };
+    let s = vpm(raw(0), at_stop).plan(&plan).unwrap();
+    assert!(!s.stops.is_empty());
+    for st in &s.stops {
+        assert!(
+            st.stop_min >= 1.0 && (st.stop_min - st.stop_min.round()).abs() < 1e-9,
+            "{}",
+            table(&s)
+        );
+    }
+    // No rounding: stops end as soon as the ceiling allows (to the second), never longer in
+    // total than whole minutes at the stop.
+    let none = Conventions {
+        stop_rounding: StopRounding::None,
+        min_stop_min: 0.0,
+        ..baker_msw(20.0, 10.0)
+    };
+    let s_none = vpm(raw(0), none).plan(&plan).unwrap();
+    assert!(s_none.runtime_min() <= s.runtime_min() + 1e-9);
+    // Last stop at 6 m: no 3 m stop, and the 6 m stop is held until the surface is allowed,
+    // so it is longer than the 6 m stop with a 3 m last stop.
+    let six = Conventions {
+        last_stop_m: 6.0,
+        ..baker_msw(20.0, 10.0)
+    };
+    let s6 = vpm(raw(0), six).plan(&plan).unwrap();
+    let last = s6.stops.last().unwrap();
+    assert_eq!(last.depth_m, 6.0, "{}", table(&s6));
+    let six_baker = baker.stops.iter().find(|x| x.depth_m == 6.0).unwrap();
+    assert!(
+        last.stop_min > six_baker.stop_min,
+        "{} / {}",
+        table(&s6),
+        table(&baker)
+    );
+}
