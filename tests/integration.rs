@@ -1,3 +1,5 @@
 //! All integration tests compile into this one binary; one module per concern.
 #[path = "integration/common.rs"]
 mod common;
+#[path = "integration/profiles.rs"]
+mod profiles;
