@@ -3,3 +3,5 @@
 mod common;
 #[path = "integration/profiles.rs"]
 mod profiles;
+#[path = "integration/report.rs"]
+mod report;
