@@ -287,3 +287,249 @@ fn bad_files_are_refused_with_file_and_line() {
     close(h.ambient_pa[0], 9.0e4, "altitude surface");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+// ---------------------------------------------------------------------------------------------
+// Dive-log import (Subsurface XML, UDDF). Reference numbers: shared/dive-files/README.md
+// ("What each file contains", depths in m, times in min), which were measured with an
+// independent throw-away parser; rounding there is to 0.1 m and 0.1 min.
+
+mod divelogs {
+    use super::close;
+    use decophantom::gas::GasMix;
+    use decophantom::profile::divelog::{self, Format, ImportedDive};
+    use decophantom::units::STANDARD_GRAVITY;
+    use std::path::{Path, PathBuf};
+
+    const DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/dive-files");
+
+    fn read(name: &str) -> Vec<ImportedDive> {
+        let p: PathBuf = Path::new(DIR).join(name);
+        divelog::read(&p).unwrap_or_else(|e| panic!("{e}"))
+    }
+
+    fn gas(s: &str) -> GasMix {
+        GasMix::parse(s).unwrap()
+    }
+
+    /// Max depth (m) and sample span (min) against the README, to its rounding.
+    fn check(d: &ImportedDive, max_m: f64, minutes: f64) {
+        assert!(
+            (d.max_depth_m() - max_m).abs() <= 0.05 + 1e-9,
+            "{}: max {}",
+            d.label,
+            d.max_depth_m()
+        );
+        assert!(
+            (d.duration_s() / 60.0 - minutes).abs() <= 0.05 + 1e-9,
+            "{}: {} min",
+            d.label,
+            d.duration_s() / 60.0
+        );
+        // Every open-circuit dive becomes a valid pressure history.
+        let h = d.history(0.0).unwrap();
+        close(h.duration_s(), d.duration_s(), &d.label);
+    }
+
+    #[test]
+    fn subsurface_planned_trimix_test51() {
+        let ds = read("subsurface__test51.xml");
+        assert_eq!(ds.len(), 1);
+        let d = &ds[0];
+        assert!(d.planned && !d.closed_circuit && d.format == Format::Subsurface);
+        check(d, 110.0, 123.5);
+        // 47 samples, two of them at 94:00 merged into one.
+        assert_eq!(d.samples.len(), 46);
+        assert_eq!(d.samples[0], (0.0, 0.0));
+        // <surface pressure='0.896 bar'/>, <water salinity='1025 g/l'/>.
+        close(d.surface_pa, 0.896e5, "surface");
+        close(d.density_kg_m3, 1025.0, "density");
+        let mixes = ["ean55", "30/22", "31/30", "11/60", "o2"].map(gas);
+        assert_eq!(d.gases, mixes);
+        assert_eq!(d.initial_gas, 0);
+        // Tx31/30 @10:01, Tx11/60 @14:01, Tx31/30 @36:21, EAN55 @49:21, O2 @80:21.
+        let want = [
+            (601.0, 2),
+            (841.0, 3),
+            (2181.0, 2),
+            (2961.0, 0),
+            (4821.0, 4),
+        ];
+        assert_eq!(d.switches, want);
+        assert_eq!(d.gas_at(700.0), mixes[2]);
+        assert_eq!(d.gas_at(5000.0), mixes[4]);
+        // At 110 m: 0.896 bar + 110 m · 1025 kg/m³ · g.
+        let h = d.history(0.0).unwrap();
+        let top = h.ambient_pa.iter().cloned().fold(0.0, f64::max);
+        close(
+            top,
+            0.896e5 + 110.0 * 1025.0 * STANDARD_GRAVITY,
+            "ambient at 110 m",
+        );
+        assert_eq!(h.gas_at(900.0), mixes[3]);
+    }
+
+    #[test]
+    fn subsurface_repetitive_ostc_dives() {
+        let ds = read("subsurface__ostc.xml");
+        assert_eq!(ds.len(), 2);
+        check(&ds[0], 26.1, 76.9);
+        check(&ds[1], 27.0, 70.8);
+        for (d, surface) in ds.iter().zip([1.008e5, 1.009e5]) {
+            // EAN32 from the gaschange at 0:02 = the first sample.
+            assert_eq!(d.gases[d.initial_gas], gas("ean32"));
+            assert!(d.switches.is_empty());
+            close(d.surface_pa, surface, "surface");
+            // No salinity: the sea-water default, and a note says so.
+            close(d.density_kg_m3, divelog::DEFAULT_DENSITY_KG_M3, "density");
+            assert!(d.notes.iter().any(|n| n.contains("water density")));
+            // First sample 0:02 at 2.465 / 2.505 m: a surface point is prepended.
+            assert_eq!(d.samples[0], (0.0, 0.0));
+            assert_eq!(d.samples[1].0, 2.0);
+        }
+        close(ds[0].samples[1].1, 2.465, "first depth");
+        assert_eq!(ds[0].start.as_deref(), Some("2017-02-03 06:58:00"));
+        assert_eq!(ds[1].start.as_deref(), Some("2017-02-03 10:24:00"));
+    }
+
+    #[test]
+    fn subsurface_trimix_and_rebreather_dives() {
+        let ds = read("subsurface__test40-42.xml");
+        assert_eq!(ds.len(), 3);
+        let d = ds
+            .iter()
+            .find(|d| d.number.as_deref() == Some("417"))
+            .unwrap();
+        check(d, 79.6, 114.7);
+        assert_eq!(d.samples.len(), 689);
+        // Header says 81.5 m; the profile's maximum is 79.6 m.
+        assert_eq!(d.stated_max_depth_m, Some(81.5));
+        // 7 gaschange events: the start on 50/6 and six switches, back and forth, O2 at 72:00.
+        assert_eq!(d.gases[d.initial_gas], gas("50/6"));
+        assert_eq!(d.switches.len(), 6);
+        assert_eq!(d.switches.last(), Some(&(72.0 * 60.0, 6)));
+        assert_eq!(d.gas_at(72.0 * 60.0), gas("o2"));
+        assert_eq!(d.gas_at(20.0 * 60.0), gas("16/55"));
+        // The two OSTC 3 CCR dives: read, flagged, refused as histories.
+        let ccr: Vec<_> = ds.iter().filter(|d| d.closed_circuit).collect();
+        assert_eq!(ccr.len(), 2);
+        for d in ccr {
+            assert!((d.max_depth_m() - 39.0).abs() < 0.05, "{}", d.max_depth_m());
+            close(d.density_kg_m3, 1000.0, "fresh water");
+            let e = d.history(0.0).unwrap_err();
+            assert!(e.message.contains("closed-circuit"), "{e}");
+        }
+    }
+
+    #[test]
+    fn subsurface_v1_value_only_gas_changes() {
+        let ds = read("subsurface__test20.xml");
+        assert_eq!(ds.len(), 1);
+        let d = &ds[0];
+        check(d, 70.0, 29.5);
+        assert_eq!(d.samples.len(), 7);
+        close(d.stated_duration_s.unwrap(), 30.0 * 60.0, "duration 30:00");
+        assert_eq!(d.gases, ["21/30", "12/70", "ean50"].map(gas));
+        // value='12' → Tx12/70, '21' → Tx21/30, '50' → EAN50 (nearest O2, He unknown).
+        assert_eq!(d.switches, [(180.0, 1), (900.0, 0), (1230.0, 2)]);
+    }
+
+    #[test]
+    fn uddf_dialects() {
+        // UDDF 2.2.0 (Diving Log 5.0): no namespace, flat dive children, density 1030.
+        let ds = read("subsurface-history__TestDiveDiveLog5.08.uddf");
+        assert_eq!(ds.len(), 1);
+        check(&ds[0], 24.7, 32.0);
+        assert_eq!(ds[0].samples.len(), 65);
+        assert_eq!(ds[0].gases, [GasMix::AIR]);
+        close(ds[0].density_kg_m3, 1030.0, "density");
+        assert_eq!(ds[0].format, Format::Uddf);
+
+        // Kenozooid logbook: no gas definitions → air.
+        let ds = read("kenozooid__logbook.uddf");
+        assert_eq!(ds.len(), 2);
+        check(&ds[0], 30.1, 64.5);
+        check(&ds[1], 29.4, 61.8);
+        assert_eq!((ds[0].samples.len(), ds[1].samples.len()), (387, 371));
+        assert_eq!(ds[0].stated_max_depth_m, Some(30.3));
+        assert!(ds.iter().all(|d| d.gases == [GasMix::AIR]));
+
+        // OSTC dump: O2 in percent; dive 1 switches air → EAN32 at 20 s (13 m).
+        let ds = read("kenozooid__ostc-dump-02.uddf");
+        assert_eq!(ds.len(), 2);
+        check(&ds[0], 33.0, 67.5);
+        check(&ds[1], 45.0, 63.5);
+        assert_eq!(ds[0].gases[ds[0].initial_gas], GasMix::AIR);
+        assert_eq!(ds[0].switches.len(), 1);
+        assert_eq!(ds[0].switches[0].0, 20.0);
+        assert_eq!(ds[0].gases[ds[0].switches[0].1], gas("ean32"));
+        let at20 = ds[0].samples.iter().find(|s| s.0 == 20.0).unwrap();
+        close(at20.1, 13.0, "depth at the switch");
+        assert!(ds[1].switches.is_empty() && ds[1].gases[ds[1].initial_gas] == GasMix::AIR);
+
+        // Shearwater: EAN32, bogus 70-bar surface pressure replaced, density 1020 from
+        // <tablegeneration> linked to the dive.
+        let ds = read("swift-uddf__dive31.uddf");
+        assert_eq!(ds.len(), 1);
+        check(&ds[0], 17.0, 37.5);
+        assert_eq!(ds[0].samples.len(), 226);
+        assert_eq!(ds[0].gases, [gas("ean32")]);
+        close(ds[0].surface_pa, 101_325.0, "defaulted surface");
+        assert!(ds[0].notes.iter().any(|n| n.contains("implausible")));
+        close(ds[0].density_kg_m3, 1020.0, "density");
+    }
+
+    #[test]
+    fn bad_dive_logs_are_refused_with_a_line() {
+        let p = Path::new("bad.uddf");
+        let e = divelog::parse(
+            "<uddf>\n<gasdefinitions><mix id='a'><o2>0.21</o2></mix></gasdefinitions>\n<profiledata><repetitiongroup><dive>\n<samples>\n<waypoint><depth>0</depth><divetime>0</divetime><switchmix ref='nope'/></waypoint>\n</samples></dive></repetitiongroup></profiledata></uddf>",
+            p,
+        )
+        .unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(5), Some("switchmix")),
+            "{e}"
+        );
+        let e = divelog::parse("<divelog>\n<dives>\n<dive>\n</dives>", p).unwrap_err();
+        assert!(e.message.contains("XML"), "{e}");
+        let e = divelog::parse("<divelog><dives></dives></divelog>", p).unwrap_err();
+        assert!(e.message.contains("no dive"), "{e}");
+        let e = divelog::parse(
+            "<divelog><dives><dive><divecomputer>\n<sample time='-1:00 min' depth='3 m'/>\n</divecomputer></dive></dives></divelog>",
+            p,
+        )
+        .unwrap_err();
+        assert_eq!(e.line, Some(2), "{e}");
+    }
+}
+
+#[test]
+fn load_dispatches_dive_logs() {
+    let dir = Path::new(concat!(env!("CARGO_MANIFEST_DIR"), "/../shared/dive-files"));
+    // One dive: no number needed. test20: 70 m, 1030 kg/m³ default, 101325 Pa default.
+    let h = profile::load(&dir.join("subsurface__test20.xml"), &LoadOptions::default()).unwrap();
+    let top = h.ambient_pa.iter().cloned().fold(0.0, f64::max);
+    close(
+        top,
+        ATM_PA + 70.0 * 1030.0 * decophantom::units::STANDARD_GRAVITY,
+        "70 m",
+    );
+    // Two dives: a number is required and checked.
+    let ostc = dir.join("subsurface__ostc.xml");
+    let e = profile::load(&ostc, &LoadOptions::default()).unwrap_err();
+    assert!(e.message.contains("2 dives"), "{e}");
+    let two = LoadOptions {
+        dive: Some(2),
+        ..LoadOptions::default()
+    };
+    let h = profile::load(&ostc, &two).unwrap();
+    assert!(h.label.contains("10:24"), "{}", h.label);
+    let three = LoadOptions {
+        dive: Some(3),
+        ..LoadOptions::default()
+    };
+    assert!(profile::load(&ostc, &three).is_err());
+    assert!(profile::load(&ostc, &opts(TimeUnit::S, PressureUnit::Pa)).is_err());
+    assert!(profile::load(&legacy_path("test1.txt"), &two).is_err());
+}
