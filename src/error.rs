@@ -81,16 +81,23 @@ impl std::error::Error for InputError {}
 
 /// Convert a `toml` parse error into an [`InputError`] with file, line and field.
 pub fn toml_error(path: &Path, text: &str, err: &toml::de::Error) -> InputError {
-    let line = err.span().map(|s| {
-        text.as_bytes()[..s.start.min(text.len())]
-            .iter()
-            .filter(|&&b| b == b'\n')
-            .count()
-            + 1
-    });
-    let mut e = InputError::new(err.message().trim().to_string()).in_file(path);
+    // Count newlines before the span: `lines().count()` would be one short when the span
+    // starts a line (the usual case for an unknown key).
+    let line = err
+        .span()
+        .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
+    let msg = err.message().trim().to_string();
+    // serde names the offending key as "unknown field `x`"; surface it as the field.
+    let field = msg
+        .strip_prefix("unknown field `")
+        .and_then(|r| r.split_once('`'))
+        .map(|(f, _)| f.to_string());
+    let mut e = InputError::new(msg).in_file(path);
     if let Some(l) = line {
         e = e.at_line(l);
+    }
+    if let Some(f) = field {
+        e = e.field(f);
     }
     e
 }

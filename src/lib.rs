@@ -11,4 +11,5 @@ pub mod error;
 pub mod gas;
 pub mod phantom;
 pub mod profile;
+pub mod report;
 pub mod units;

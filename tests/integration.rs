@@ -5,5 +5,9 @@ mod algorithms;
 mod analytic;
 #[path = "integration/common.rs"]
 mod common;
+#[path = "integration/profiles.rs"]
+mod profiles;
+#[path = "integration/report.rs"]
+mod report;
 #[path = "integration/vpmb.rs"]
 mod vpmb;

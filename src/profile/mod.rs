@@ -2,7 +2,135 @@
 //! faces over time. A dive schedule, a laboratory TOML profile, a CSV of waypoints and
 //! the paper's legacy two-column files all become a [`PressureHistory`].
 
+use std::path::Path;
+
+use crate::error::InputError;
 use crate::gas::{Gas, GasMix};
+use crate::units::{PressureUnit, TimeUnit};
+
+pub mod divelog;
+pub mod legacy;
+pub mod toml;
+
+/// Options for [`load`]: what a legacy two-column file does not say. A TOML profile states all
+/// of these itself, so every field must be `None` for a `.toml` file.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct LoadOptions {
+    /// Unit of the time column (required for legacy files).
+    pub time_unit: Option<TimeUnit>,
+    /// Unit of the pressure column (required for legacy files).
+    pub pressure_unit: Option<PressureUnit>,
+    /// Zero of gauge and depth units, absolute Pa (legacy default 101 325).
+    pub surface_pa: Option<f64>,
+    /// Chamber or breathing gas (legacy default air).
+    pub gas: Option<GasMix>,
+    /// Water-vapour pressure subtracted at the open faces, Pa (legacy and dive-log default 0;
+    /// give the alveolar value, e.g. 6 270 Pa, when a breathed gas drives the phantom).
+    pub vapour_pa: Option<f64>,
+    /// Which dive of a dive log (1-based); required when the log holds more than one.
+    pub dive: Option<usize>,
+}
+
+/// Load a pressure profile: `.toml` files with [`toml::read`] (their units are in the file);
+/// dive logs (`.xml`, `.ssrf`: Subsurface; `.uddf`) with [`divelog::read`], choosing
+/// `opts.dive`; anything else as a legacy two-column file with [`legacy::read`], which needs
+/// `opts.time_unit` and `opts.pressure_unit`.
+pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputError> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .unwrap_or_default();
+    if opts.dive.is_some() && !matches!(ext.as_str(), "xml" | "ssrf" | "uddf") {
+        return Err(InputError::new(
+            "a dive number applies only to dive logs (.xml, .ssrf, .uddf); leave it out",
+        )
+        .in_file(path)
+        .field("dive"));
+    }
+    if matches!(ext.as_str(), "xml" | "ssrf" | "uddf") {
+        let given = [
+            (
+                opts.time_unit.is_some() || opts.pressure_unit.is_some(),
+                "--units",
+            ),
+            (opts.surface_pa.is_some(), "surface pressure"),
+            (opts.gas.is_some(), "gas"),
+        ];
+        if let Some((_, what)) = given.iter().find(|(g, _)| *g) {
+            return Err(InputError::new(format!(
+                "a dive log states its own depths, gases and surface pressure; leave out the {what} option"
+            ))
+            .in_file(path)
+            .field(*what));
+        }
+        let dives = divelog::read(path)?;
+        let k = match (opts.dive, dives.len()) {
+            (None, 1) => 0,
+            (None, n) => {
+                return Err(InputError::new(format!(
+                    "the log holds {n} dives; choose one with a dive number 1..={n}"
+                ))
+                .in_file(path)
+                .field("dive"))
+            }
+            (Some(k), n) if k >= 1 && k <= n => k - 1,
+            (Some(k), n) => {
+                return Err(InputError::new(format!(
+                    "dive {k} does not exist: the log holds {n} dive(s), numbered from 1"
+                ))
+                .in_file(path)
+                .field("dive"))
+            }
+        };
+        return dives[k]
+            .history(opts.vapour_pa.unwrap_or(0.0))
+            .map_err(|e| e.in_file(path));
+    }
+    if ext == "toml" {
+        let given = [
+            (
+                opts.time_unit.is_some() || opts.pressure_unit.is_some(),
+                "--units",
+            ),
+            (opts.surface_pa.is_some(), "surface pressure"),
+            (opts.gas.is_some(), "gas"),
+            (opts.vapour_pa.is_some(), "water vapour"),
+            (opts.dive.is_some(), "dive"),
+        ];
+        if let Some((_, what)) = given.iter().find(|(g, _)| *g) {
+            return Err(InputError::new(format!(
+                "a TOML profile states its own units, surface pressure, gas and water vapour; leave out the {what} option (or edit the file)"
+            ))
+            .in_file(path)
+            .field(*what));
+        }
+        return toml::read(path).map(|p| p.history);
+    }
+    let (Some(time), Some(pressure)) = (opts.time_unit, opts.pressure_unit) else {
+        return Err(InputError::new(
+            "a legacy two-column profile carries no units; give them, e.g. --units min,psi-gauge (time s|min|h, pressure pa|kpa|bar|atm|psi-gauge|psia|msw|fsw)",
+        )
+        .in_file(path)
+        .field("--units"));
+    };
+    let mut u = legacy::LegacyUnits::new(time, pressure);
+    if let Some(s) = opts.surface_pa {
+        if !(s.is_finite() && s > 0.0) {
+            return Err(
+                InputError::new(format!("surface pressure {s} Pa must be positive"))
+                    .field("surface pressure"),
+            );
+        }
+        u.surface_pa = s;
+    }
+    if let Some(g) = opts.gas {
+        u.gas = g;
+    }
+    if let Some(v) = opts.vapour_pa {
+        u.vapour_pa = v;
+    }
+    legacy::read(path, &u)
+}
 
 /// A piecewise-linear ambient-pressure history with the breathing (or chamber) gas
 /// in force on each segment. Times in s, pressures absolute Pa.

@@ -1,0 +1,859 @@
+//! Import logged or planned dives from Subsurface XML (v1–v3) and UDDF (2.x, 3.x), following
+//! the research notes in `shared/dive-files/FORMATS.md`.
+//!
+//! Every file becomes a list of [`ImportedDive`]s (depth samples, gases, gas switches, surface
+//! pressure, water density, what was defaulted and why); [`ImportedDive::history`] turns one
+//! into a [`PressureHistory`]: ambient = surface pressure + depth · ρ · g (g = standard gravity,
+//! [`STANDARD_GRAVITY`]), piecewise linear between samples as both formats define it.
+//!
+//! Rules (FORMATS.md §0 and the quirks listed there):
+//! - Elements and attributes are matched by lower-cased local name (namespaces, prefixes and
+//!   upper-case `UDDF` roots are ignored), children by name, never by position; unknown
+//!   elements are skipped. Numbers may carry units (`'30.0 m'`), exponents or decimal commas.
+//! - Samples are sorted by time, duplicate times merged (the last wins), negative depths
+//!   clamped to 0; if the first sample is not at time 0, a surface point (0 s, 0 m) is
+//!   prepended (recorded in [`ImportedDive::notes`]).
+//! - Surface pressure and water density are taken from the file when present and plausible
+//!   (0.5–1.1 bar, 990–1040 kg/m³), else 101 325 Pa and 1030 kg/m³ (Subsurface's sea-water
+//!   default), noted. A UDDF altitude without a surface pressure gives the ISA pressure.
+//! - Gas fractions above 1 are percent. A Subsurface cylinder without `o2` is air; a UDDF file
+//!   without `<gasdefinitions>` breathes air (UDDF spec). N2 is the balance.
+//! - Closed-circuit dives (Subsurface `dctype`, UDDF `divemode`) are read, flagged, and refused
+//!   by [`ImportedDive::history`]: their inspired gas depends on the set-point.
+//! - Only the first `<divecomputer>` of a Subsurface dive is used (its primary computer).
+
+use std::path::Path;
+
+use quick_xml::events::Event;
+
+use super::PressureHistory;
+use crate::error::InputError;
+use crate::gas::GasMix;
+use crate::units::{ATM_PA, BAR_PA, STANDARD_GRAVITY};
+
+/// Default water density, kg/m³ (Subsurface's sea-water default, `core/dive.cpp`, per FORMATS.md §2.6).
+pub const DEFAULT_DENSITY_KG_M3: f64 = 1030.0;
+/// Plausible surface pressures, Pa (FORMATS.md §0.4: 0.5–1.1 bar).
+const SURFACE_RANGE: (f64, f64) = (0.5e5, 1.1e5);
+/// Plausible water densities, kg/m³ (FORMATS.md §0.4).
+const DENSITY_RANGE: (f64, f64) = (990.0, 1040.0);
+
+/// The file format a dive came from.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// Subsurface XML (`<divelog>` v2/v3 or legacy `<dives>` v1).
+    Subsurface,
+    /// UDDF (`<uddf>`), any version.
+    Uddf,
+}
+
+/// One dive read from a log file.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ImportedDive {
+    /// `<file stem> #<n> <start>`.
+    pub label: String,
+    /// Format of the source file.
+    pub format: Format,
+    /// Start date-time as written (`2017-02-03 06:58:00`, `2009-10-22T15:32:43`), if any.
+    pub start: Option<String>,
+    /// Dive number from the file, if any.
+    pub number: Option<String>,
+    /// A planned dive (Subsurface `model='planned dive'`).
+    pub planned: bool,
+    /// A closed- or semi-closed-circuit dive (not supported by [`ImportedDive::history`]).
+    pub closed_circuit: bool,
+    /// Surface pressure, Pa.
+    pub surface_pa: f64,
+    /// Water density, kg/m³.
+    pub density_kg_m3: f64,
+    /// Breathing gases in file order (Subsurface cylinders, UDDF mixes).
+    pub gases: Vec<GasMix>,
+    /// Index into `gases` of the gas at the start.
+    pub initial_gas: usize,
+    /// Gas switches after the start: (time s, index into `gases`), increasing in time.
+    pub switches: Vec<(f64, usize)>,
+    /// Normalised samples (time s, depth m): from time 0, strictly increasing times.
+    pub samples: Vec<(f64, f64)>,
+    /// Maximum depth stated in the file's summary, m (may differ from the samples').
+    pub stated_max_depth_m: Option<f64>,
+    /// Duration stated in the file's summary, s (usually shorter than the samples' span).
+    pub stated_duration_s: Option<f64>,
+    /// What was assumed or repaired while reading (defaults, prepended surface point, …).
+    pub notes: Vec<String>,
+}
+
+impl ImportedDive {
+    /// Deepest sample, m.
+    pub fn max_depth_m(&self) -> f64 {
+        self.samples.iter().map(|s| s.1).fold(0.0, f64::max)
+    }
+
+    /// Time of the last sample, s.
+    pub fn duration_s(&self) -> f64 {
+        self.samples.last().map(|s| s.0).unwrap_or(0.0)
+    }
+
+    /// Ambient pressure at a depth, Pa: surface + depth · ρ · g.
+    pub fn ambient_pa(&self, depth_m: f64) -> f64 {
+        self.surface_pa + depth_m * self.density_kg_m3 * STANDARD_GRAVITY
+    }
+
+    /// The gas breathed at time `t` (s).
+    pub fn gas_at(&self, t: f64) -> GasMix {
+        let idx = self
+            .switches
+            .iter()
+            .rev()
+            .find(|s| s.0 <= t)
+            .map(|s| s.1)
+            .unwrap_or(self.initial_gas);
+        self.gases[idx]
+    }
+
+    /// The dive as a pressure history (breakpoints at every sample and gas switch);
+    /// `vapour_pa` is the water-vapour pressure subtracted at the open faces (e.g. 6 270 Pa
+    /// alveolar for a breathed gas). Closed-circuit dives are refused.
+    pub fn history(&self, vapour_pa: f64) -> Result<PressureHistory, InputError> {
+        if self.closed_circuit {
+            return Err(InputError::new(format!(
+                "dive '{}' is a closed-circuit (rebreather) dive: its inspired gas depends on the set-point, which decophantom does not model; choose an open-circuit dive"
+            , self.label)));
+        }
+        let mut times: Vec<f64> = self.samples.iter().map(|s| s.0).collect();
+        let mut depths: Vec<f64> = self.samples.iter().map(|s| s.1).collect();
+        for &(t, _) in &self.switches {
+            let k = times.partition_point(|&x| x < t);
+            if k < times.len() && times[k] == t || k == 0 || k >= times.len() {
+                continue;
+            }
+            let f = (t - times[k - 1]) / (times[k] - times[k - 1]);
+            let d = depths[k - 1] + f * (depths[k] - depths[k - 1]);
+            times.insert(k, t);
+            depths.insert(k, d);
+        }
+        let nseg = times.len().max(2) - 1;
+        let gas: Vec<GasMix> = (0..nseg).map(|i| self.gas_at(times[i])).collect();
+        let ambient = depths.iter().map(|&d| self.ambient_pa(d)).collect();
+        PressureHistory::new(self.label.clone(), times, ambient, gas, vapour_pa)
+            .map_err(|e| InputError::new(format!("dive '{}': {e}", self.label)))
+    }
+}
+
+/// Read every dive in a Subsurface XML or UDDF file.
+pub fn read(path: &Path) -> Result<Vec<ImportedDive>, InputError> {
+    let bytes = std::fs::read(path).map_err(|e| {
+        InputError::new(format!("cannot read the dive log: {e}; check the path")).in_file(path)
+    })?;
+    let text = String::from_utf8_lossy(&bytes);
+    parse(&text, path)
+}
+
+/// Parse dive-log text; `path` names the file in errors and labels.
+pub fn parse(text: &str, path: &Path) -> Result<Vec<ImportedDive>, InputError> {
+    let root = parse_xml(text, path)?;
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "dive".into());
+    let cx = Cx { text, path, stem };
+    let dives = match root.name.as_str() {
+        "divelog" | "dives" => subsurface(&root, &cx)?,
+        "uddf" => uddf(&root, &cx)?,
+        other => {
+            return Err(InputError::new(format!(
+                "root element <{other}> is neither Subsurface XML (<divelog> or <dives>) nor UDDF (<uddf>)"
+            ))
+            .in_file(path)
+            .at_line(1))
+        }
+    };
+    if dives.is_empty() {
+        return Err(InputError::new("the file holds no dive with depth samples").in_file(path));
+    }
+    Ok(dives)
+}
+
+/// Shared context for error messages.
+struct Cx<'a> {
+    text: &'a str,
+    path: &'a Path,
+    stem: String,
+}
+
+impl Cx<'_> {
+    fn err(&self, node: &Node, field: &str, msg: impl Into<String>) -> InputError {
+        InputError::new(msg)
+            .in_file(self.path)
+            .at_line(line_at(self.text, node.offset))
+            .field(field)
+    }
+}
+
+fn line_at(text: &str, offset: usize) -> usize {
+    let end = offset.min(text.len());
+    let end = (0..=end)
+        .rev()
+        .find(|&i| text.is_char_boundary(i))
+        .unwrap_or(0);
+    text[..end].matches('\n').count() + 1
+}
+
+// ---------------------------------------------------------------------------------------------
+// A minimal element tree (lower-cased local names), enough for both formats.
+
+#[derive(Debug, Default)]
+struct Node {
+    name: String,
+    attrs: Vec<(String, String)>,
+    text: String,
+    children: Vec<Node>,
+    offset: usize,
+}
+
+impl Node {
+    fn attr(&self, key: &str) -> Option<&str> {
+        self.attrs
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+    }
+    fn child(&self, name: &str) -> Option<&Node> {
+        self.children.iter().find(|c| c.name == name)
+    }
+    fn children_named<'a>(&'a self, name: &'a str) -> impl Iterator<Item = &'a Node> + 'a {
+        self.children.iter().filter(move |c| c.name == name)
+    }
+    /// Descendants named `name` in document order, not descending into matches.
+    fn find_all<'a>(&'a self, name: &str, out: &mut Vec<&'a Node>) {
+        for c in &self.children {
+            if c.name == name {
+                out.push(c);
+            } else {
+                c.find_all(name, out);
+            }
+        }
+    }
+    fn text_of(&self, name: &str) -> Option<&str> {
+        self.child(name)
+            .map(|c| c.text.trim())
+            .filter(|t| !t.is_empty())
+    }
+}
+
+fn local_lower(qname: &[u8]) -> String {
+    let s = String::from_utf8_lossy(qname);
+    s.rsplit(':').next().unwrap_or("").to_ascii_lowercase()
+}
+
+fn parse_xml(text: &str, path: &Path) -> Result<Node, InputError> {
+    let mut reader = quick_xml::Reader::from_str(text);
+    let mut stack: Vec<Node> = vec![Node::default()];
+    let xml_err = |pos: u64, e: String| {
+        InputError::new(format!("not well-formed XML: {e}"))
+            .in_file(path)
+            .at_line(line_at(text, pos as usize))
+    };
+    loop {
+        let pos = reader.buffer_position();
+        let ev = reader
+            .read_event()
+            .map_err(|e| xml_err(reader.error_position(), e.to_string()))?;
+        match ev {
+            Event::Start(ref e) | Event::Empty(ref e) => {
+                let mut node = Node {
+                    name: local_lower(e.name().as_ref()),
+                    offset: pos as usize,
+                    ..Node::default()
+                };
+                for a in e.attributes().with_checks(false).flatten() {
+                    let v = a
+                        .normalized_value(quick_xml::XmlVersion::Implicit1_0)
+                        .map(|c| c.into_owned())
+                        .unwrap_or_else(|_| String::from_utf8_lossy(&a.value).into_owned());
+                    node.attrs.push((local_lower(a.key.as_ref()), v));
+                }
+                if matches!(ev, Event::Empty(_)) {
+                    stack.last_mut().expect("root").children.push(node);
+                } else {
+                    stack.push(node);
+                }
+            }
+            Event::End(_) => {
+                if stack.len() < 2 {
+                    return Err(xml_err(pos, "unexpected closing tag".into()));
+                }
+                let node = stack.pop().expect("checked");
+                stack.last_mut().expect("root").children.push(node);
+            }
+            Event::Text(t) => {
+                let s = t.decode().map_err(|e| xml_err(pos, e.to_string()))?;
+                stack.last_mut().expect("root").text.push_str(&s);
+            }
+            Event::CData(t) => {
+                let s = t.decode().map_err(|e| xml_err(pos, e.to_string()))?;
+                stack.last_mut().expect("root").text.push_str(&s);
+            }
+            Event::GeneralRef(r) => {
+                let c = if r.is_char_ref() {
+                    r.resolve_char_ref().ok().flatten()
+                } else {
+                    match r
+                        .decode()
+                        .map(|s| s.into_owned())
+                        .unwrap_or_default()
+                        .as_str()
+                    {
+                        "amp" => Some('&'),
+                        "lt" => Some('<'),
+                        "gt" => Some('>'),
+                        "quot" => Some('"'),
+                        "apos" => Some('\''),
+                        _ => None,
+                    }
+                };
+                if let Some(c) = c {
+                    stack.last_mut().expect("root").text.push(c);
+                }
+            }
+            Event::Eof => break,
+            // Declarations, comments, processing instructions and DOCTYPEs carry nothing we
+            // use; entities declared in a DOCTYPE are never expanded.
+            _ => {}
+        }
+    }
+    if stack.len() != 1 {
+        return Err(xml_err(
+            text.len() as u64,
+            format!(
+                "<{}> is never closed",
+                stack.last().map(|n| n.name.as_str()).unwrap_or("")
+            ),
+        ));
+    }
+    let doc = stack.pop().expect("root");
+    doc.children
+        .into_iter()
+        .next()
+        .ok_or_else(|| InputError::new("the file holds no XML element").in_file(path))
+}
+
+// ---------------------------------------------------------------------------------------------
+// Values.
+
+/// A number from text that may carry a unit suffix, a `%`, an exponent or a decimal comma.
+fn num(s: &str) -> Option<f64> {
+    let tok = s.split_whitespace().next()?;
+    let tok = tok.trim_end_matches('%').replace(',', ".");
+    let tok = tok.trim_end_matches(|c: char| c.is_ascii_alphabetic() && c != 'e' && c != 'E');
+    tok.parse::<f64>().ok().filter(|v| v.is_finite())
+}
+
+/// A gas fraction: `31.0%` or `31` (> 1: percent) or `0.31`.
+fn fraction(s: &str) -> Option<f64> {
+    let v = num(s)?;
+    Some(if s.trim().ends_with('%') || v > 1.0 {
+        v / 100.0
+    } else {
+        v
+    })
+}
+
+/// A Subsurface time: `m:ss min`, `h:mm:ss`, or plain seconds.
+fn time_s(s: &str) -> Option<f64> {
+    let tok = s.split_whitespace().next()?;
+    if tok.contains(':') {
+        let parts: Vec<f64> = tok
+            .split(':')
+            .map(|p| p.parse::<f64>().ok())
+            .collect::<Option<_>>()?;
+        return match parts.as_slice() {
+            [m, s] => Some(m * 60.0 + s),
+            [h, m, s] => Some(h * 3600.0 + m * 60.0 + s),
+            _ => None,
+        };
+    }
+    num(tok)
+}
+
+/// Standard-atmosphere pressure at an altitude, Pa (ICAO/ISA troposphere:
+/// p = 101325 (1 − 2.25577e-5 h)^5.25588).
+pub fn isa_pressure_pa(altitude_m: f64) -> f64 {
+    ATM_PA * (1.0 - 2.255_77e-5 * altitude_m).powf(5.255_88)
+}
+
+fn mix(o2: Option<f64>, he: Option<f64>) -> Result<GasMix, String> {
+    match o2 {
+        None => Ok(GasMix::AIR),
+        Some(o) => GasMix::new(o, he.unwrap_or(0.0)),
+    }
+}
+
+/// Check surface pressure and density, defaulting implausible or missing values with a note.
+fn environment(surface: Option<f64>, density: Option<f64>, notes: &mut Vec<String>) -> (f64, f64) {
+    let s = match surface {
+        Some(p) if (SURFACE_RANGE.0..=SURFACE_RANGE.1).contains(&p) => p,
+        Some(p) => {
+            notes.push(format!(
+                "surface pressure {p} Pa is implausible (outside 0.5–1.1 bar); used {ATM_PA} Pa"
+            ));
+            ATM_PA
+        }
+        None => {
+            notes.push(format!("no surface pressure in the file; used {ATM_PA} Pa"));
+            ATM_PA
+        }
+    };
+    let d = match density {
+        Some(r) if (DENSITY_RANGE.0..=DENSITY_RANGE.1).contains(&r) => r,
+        Some(r) => {
+            notes.push(format!(
+                "water density {r} kg/m³ is implausible (outside 990–1040); used {DEFAULT_DENSITY_KG_M3}"
+            ));
+            DEFAULT_DENSITY_KG_M3
+        }
+        None => {
+            notes.push(format!(
+                "no water density in the file; used {DEFAULT_DENSITY_KG_M3} kg/m³ (sea water)"
+            ));
+            DEFAULT_DENSITY_KG_M3
+        }
+    };
+    (s, d)
+}
+
+/// Sort, merge duplicate times (last wins), clamp negative depths, prepend the surface.
+fn normalise(
+    mut samples: Vec<(f64, f64, usize)>,
+    cx: &Cx,
+    dive: &Node,
+    notes: &mut Vec<String>,
+) -> Result<Vec<(f64, f64)>, InputError> {
+    if let Some(&(t, _, off)) = samples.iter().find(|s| s.0 < 0.0) {
+        return Err(InputError::new(format!(
+            "sample at negative time {t} s; dive times start at 0"
+        ))
+        .in_file(cx.path)
+        .at_line(line_at(cx.text, off))
+        .field("time"));
+    }
+    samples.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out: Vec<(f64, f64)> = Vec::with_capacity(samples.len());
+    let mut merged = 0;
+    let mut clamped = 0;
+    for (t, d, _) in samples {
+        let d = if d < 0.0 {
+            clamped += 1;
+            0.0
+        } else {
+            d
+        };
+        match out.last_mut() {
+            Some(last) if last.0 == t => {
+                *last = (t, d);
+                merged += 1;
+            }
+            _ => out.push((t, d)),
+        }
+    }
+    if merged > 0 {
+        notes.push(format!(
+            "{merged} sample(s) with a duplicate time merged (last kept)"
+        ));
+    }
+    if clamped > 0 {
+        notes.push(format!("{clamped} negative depth(s) set to 0 m"));
+    }
+    match out.first() {
+        None => {
+            return Err(cx.err(
+                dive,
+                "samples",
+                "the dive has no samples with both time and depth",
+            ))
+        }
+        Some(&(t, d)) if t > 0.0 => {
+            notes.push(format!(
+                "first sample at {t} s and {d} m; a surface point (0 s, 0 m) was prepended"
+            ));
+            out.insert(0, (0.0, 0.0));
+        }
+        Some(&(_, d)) if d > 0.0 => {
+            notes.push(format!("the dive starts at {d} m (first sample at time 0)"));
+        }
+        _ => {}
+    }
+    Ok(out)
+}
+
+/// Gas switches in time order; those at or before the first real sample set the initial gas.
+fn settle_switches(
+    mut events: Vec<(f64, usize)>,
+    first_sample_s: f64,
+    default_initial: usize,
+) -> (usize, Vec<(f64, usize)>) {
+    events.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut initial = default_initial;
+    let mut switches: Vec<(f64, usize)> = Vec::new();
+    for (t, g) in events {
+        if t <= first_sample_s.max(1.0) {
+            initial = g;
+        } else if switches.last().map(|s| s.1).unwrap_or(initial) != g {
+            match switches.last_mut() {
+                Some(last) if last.0 == t => last.1 = g,
+                _ => switches.push((t, g)),
+            }
+        }
+    }
+    (initial, switches)
+}
+
+// ---------------------------------------------------------------------------------------------
+// Subsurface XML.
+
+fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
+    let mut dive_nodes = Vec::new();
+    root.find_all("dive", &mut dive_nodes);
+    let mut dives = Vec::new();
+    for (n, dive) in dive_nodes.into_iter().enumerate() {
+        let mut notes = Vec::new();
+        let mut gases = Vec::new();
+        let mut diluent = None;
+        for c in dive.children_named("cylinder") {
+            let m = mix(
+                c.attr("o2").and_then(fraction),
+                c.attr("he").and_then(fraction),
+            )
+            .map_err(|e| cx.err(c, "cylinder", e))?;
+            if diluent.is_none() && c.attr("use") == Some("diluent") {
+                diluent = Some(gases.len());
+            }
+            gases.push(m);
+        }
+        if gases.is_empty() {
+            notes.push("no cylinders; breathing air".into());
+            gases.push(GasMix::AIR);
+        }
+        // The primary dive computer, or the dive itself in the v1 format.
+        let dc = dive.child("divecomputer");
+        let src = dc.unwrap_or(dive);
+        let planned = dc.and_then(|d| d.attr("model")) == Some("planned dive");
+        let closed_circuit = dc
+            .and_then(|d| d.attr("dctype"))
+            .is_some_and(|t| matches!(t.to_ascii_uppercase().as_str(), "CCR" | "PSCR"));
+        let surface = src
+            .child("surface")
+            .and_then(|s| s.attr("pressure"))
+            .or_else(|| dive.attr("airpressure"))
+            .and_then(num)
+            .map(|bar| bar * BAR_PA);
+        let density = src
+            .child("water")
+            .and_then(|w| w.attr("salinity"))
+            .or_else(|| dive.attr("watersalinity"))
+            .and_then(num);
+        let (surface_pa, density_kg_m3) = environment(surface, density, &mut notes);
+
+        let raw: Vec<(f64, f64, usize)> = src
+            .children_named("sample")
+            .filter_map(|s| Some((time_s(s.attr("time")?)?, num(s.attr("depth")?)?, s.offset)))
+            .collect();
+        let first_sample = raw.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
+        let samples = normalise(raw, cx, dive, &mut notes)?;
+
+        let mut events = Vec::new();
+        for ev in src.children_named("event") {
+            if ev.attr("name") != Some("gaschange") {
+                continue;
+            }
+            let Some(t) = ev.attr("time").and_then(time_s) else {
+                return Err(cx.err(ev, "event.time", "gas change without a readable time"));
+            };
+            let idx = match ev.attr("cylinder").and_then(num) {
+                Some(c) if c >= 0.0 && (c as usize) < gases.len() => c as usize,
+                _ => {
+                    let o2 = ev.attr("o2").and_then(fraction);
+                    let he = ev.attr("he").and_then(fraction);
+                    let (target, he_known) = match (o2, ev.attr("value").and_then(num)) {
+                        (Some(o), _) => (GasMix::new(o, he.unwrap_or(0.0)), true),
+                        (None, Some(v)) => {
+                            let v = v as u64;
+                            let (o, h) = ((v & 0xffff) as f64 / 100.0, (v >> 16) as f64 / 100.0);
+                            (GasMix::new(o, h), h > 0.0)
+                        }
+                        (None, None) => {
+                            return Err(cx.err(
+                                ev,
+                                "event",
+                                "gas change names no cylinder and no mix",
+                            ))
+                        }
+                    };
+                    let target = target.map_err(|e| cx.err(ev, "event", e))?;
+                    nearest_gas(&mut gases, target, he_known, &mut notes)
+                }
+            };
+            events.push((t, idx));
+        }
+        let default_initial = if closed_circuit {
+            diluent.unwrap_or(0)
+        } else {
+            0
+        };
+        let (initial_gas, switches) = settle_switches(events, first_sample, default_initial);
+
+        let stated_max_depth_m = src
+            .child("depth")
+            .and_then(|d| d.attr("max"))
+            .or_else(|| dive.child("depth").and_then(|d| d.attr("max")))
+            .and_then(num);
+        let start = match (dive.attr("date"), dive.attr("time")) {
+            (Some(d), Some(t)) => Some(format!("{d} {t}")),
+            (Some(d), None) => Some(d.to_string()),
+            _ => None,
+        };
+        dives.push(ImportedDive {
+            label: label(&cx.stem, n, start.as_deref()),
+            format: Format::Subsurface,
+            start,
+            number: dive.attr("number").map(str::to_string),
+            planned,
+            closed_circuit,
+            surface_pa,
+            density_kg_m3,
+            gases,
+            initial_gas,
+            switches,
+            samples,
+            stated_max_depth_m,
+            stated_duration_s: dive.attr("duration").and_then(time_s),
+            notes,
+        });
+    }
+    Ok(dives)
+}
+
+/// Index of the listed gas nearest to `target` (by O2 alone when He is unknown, as in
+/// value-only gas-change events); a mix with explicit fractions that matches no listed gas
+/// within 1 % is appended.
+fn nearest_gas(
+    gases: &mut Vec<GasMix>,
+    target: GasMix,
+    he_known: bool,
+    notes: &mut Vec<String>,
+) -> usize {
+    let dist = |g: &GasMix| {
+        if he_known {
+            (g.o2 - target.o2).abs() + (g.he - target.he).abs()
+        } else {
+            (g.o2 - target.o2).abs()
+        }
+    };
+    let (best, d) = gases
+        .iter()
+        .enumerate()
+        .map(|(i, g)| (i, dist(g)))
+        .fold((0, f64::INFINITY), |a, b| if b.1 < a.1 { b } else { a });
+    if d <= 0.01 || !he_known {
+        return best;
+    }
+    notes.push(format!(
+        "gas change to {} matches no cylinder; added it",
+        target.label()
+    ));
+    gases.push(target);
+    gases.len() - 1
+}
+
+fn label(stem: &str, n: usize, start: Option<&str>) -> String {
+    match start {
+        Some(s) => format!("{stem} #{} {s}", n + 1),
+        None => format!("{stem} #{}", n + 1),
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// UDDF.
+
+fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
+    // Gas definitions: id -> index.
+    let mut ids: Vec<String> = Vec::new();
+    let mut gases: Vec<GasMix> = Vec::new();
+    let gasdefs = {
+        let mut v = Vec::new();
+        root.find_all("gasdefinitions", &mut v);
+        v
+    };
+    for gd in &gasdefs {
+        for m in gd.children_named("mix") {
+            let id = m.attr("id").unwrap_or("").trim().to_string();
+            let g = mix(
+                Some(m.text_of("o2").and_then(fraction).unwrap_or(GasMix::AIR.o2)),
+                m.text_of("he").and_then(fraction),
+            )
+            .map_err(|e| cx.err(m, "mix", format!("mix '{id}': {e}")))?;
+            ids.push(id);
+            gases.push(g);
+        }
+    }
+    let no_gasdefs = gasdefs.is_empty() || gases.is_empty();
+    // Water densities of tablegeneration profiles (Shearwater links a dive to one).
+    let mut profile_density: Vec<(String, f64)> = Vec::new();
+    let mut tg = Vec::new();
+    root.find_all("tablegeneration", &mut tg);
+    for t in tg {
+        let mut ps = Vec::new();
+        t.find_all("profile", &mut ps);
+        for p in ps {
+            if let (Some(id), Some(d)) = (p.attr("id"), p.text_of("density").and_then(num)) {
+                profile_density.push((id.trim().to_string(), d));
+            }
+        }
+    }
+
+    let mut pd = Vec::new();
+    root.find_all("profiledata", &mut pd);
+    let mut dive_nodes = Vec::new();
+    for p in pd {
+        p.find_all("dive", &mut dive_nodes);
+    }
+    let mut dives = Vec::new();
+    for (n, dive) in dive_nodes.into_iter().enumerate() {
+        let mut notes = Vec::new();
+        let mut gases = gases.clone();
+        if no_gasdefs {
+            notes.push("no gas definitions: breathing air (UDDF rule)".into());
+            gases = vec![GasMix::AIR];
+        }
+        let ibd = dive.child("informationbeforedive");
+        let before = |name: &str| {
+            ibd.and_then(|i| i.text_of(name))
+                .or_else(|| dive.text_of(name))
+        };
+        let mut surface = before("surfacepressure").and_then(num);
+        if surface.is_none() {
+            if let Some(alt) = before("altitude").and_then(num) {
+                let p = isa_pressure_pa(alt);
+                notes.push(format!(
+                    "surface pressure from the altitude {alt} m (ISA): {p:.0} Pa"
+                ));
+                surface = Some(p);
+            }
+        }
+        let linked_density = ibd.and_then(|i| {
+            i.children_named("link").find_map(|l| {
+                let r = l.attr("ref")?.trim();
+                profile_density.iter().find(|(id, _)| id == r).map(|p| p.1)
+            })
+        });
+        let density = before("density").and_then(num).or(linked_density);
+        let (surface_pa, density_kg_m3) = environment(surface, density, &mut notes);
+
+        let mut raw = Vec::new();
+        let mut events = Vec::new();
+        let mut closed_circuit = false;
+        let mut first_switch_on_first_wp = false;
+        if let Some(samples) = dive.child("samples") {
+            for (k, wp) in samples.children_named("waypoint").enumerate() {
+                let t = wp.text_of("divetime").and_then(num);
+                let d = wp.text_of("depth").and_then(num);
+                if let Some(sm) = wp.child("switchmix") {
+                    let r = sm.attr("ref").unwrap_or("").trim();
+                    let Some(idx) = ids.iter().position(|id| id == r) else {
+                        return Err(cx.err(
+                            sm,
+                            "switchmix",
+                            format!("switch to mix '{r}', which <gasdefinitions> does not define; fix the reference"),
+                        ));
+                    };
+                    if let Some(t) = t {
+                        events.push((t, idx));
+                        if k == 0 {
+                            first_switch_on_first_wp = true;
+                        }
+                    }
+                }
+                if let Some(m) = wp.child("divemode").and_then(|m| m.attr("type")) {
+                    if matches!(m, "closedcircuit" | "semiclosedcircuit") {
+                        closed_circuit = true;
+                    }
+                }
+                if let (Some(t), Some(d)) = (t, d) {
+                    raw.push((t, d, wp.offset));
+                }
+            }
+        }
+        let first_sample = raw.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
+        let samples = normalise(raw, cx, dive, &mut notes)?;
+        if !first_switch_on_first_wp && !no_gasdefs && gases.len() > 1 {
+            notes.push(format!(
+                "no gas switch on the first waypoint; starting on the first mix '{}'",
+                ids.first().map(String::as_str).unwrap_or("")
+            ));
+        }
+        let (initial_gas, switches) = settle_switches(events, first_sample, 0);
+
+        let iad = dive.child("informationafterdive");
+        let after = |name: &str| {
+            iad.and_then(|i| i.text_of(name))
+                .or_else(|| dive.text_of(name))
+        };
+        let start = before("datetime").map(str::to_string).or_else(|| {
+            let d = dive.child("date")?;
+            let y = d.text_of("year")?;
+            let mo = d.text_of("month")?;
+            let da = d.text_of("day")?;
+            let t = dive.child("time");
+            let h = t.and_then(|t| t.text_of("hour")).unwrap_or("0");
+            let mi = t.and_then(|t| t.text_of("minute")).unwrap_or("0");
+            Some(format!("{y}-{mo:0>2}-{da:0>2}T{h:0>2}:{mi:0>2}"))
+        });
+        dives.push(ImportedDive {
+            label: label(&cx.stem, n, start.as_deref()),
+            format: Format::Uddf,
+            start,
+            number: before("divenumber").map(str::to_string),
+            planned: false,
+            closed_circuit,
+            surface_pa,
+            density_kg_m3,
+            gases,
+            initial_gas,
+            switches,
+            samples,
+            stated_max_depth_m: after("greatestdepth").and_then(num),
+            stated_duration_s: after("diveduration").and_then(num),
+            notes,
+        });
+    }
+    Ok(dives)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn values() {
+        assert_eq!(num("30.0 m"), Some(30.0));
+        assert_eq!(num("1,5"), Some(1.5));
+        assert_eq!(num("1.896059E+07"), Some(1.896059e7));
+        assert_eq!(num("40 ft"), Some(40.0));
+        assert_eq!(fraction("31.0%"), Some(0.31));
+        assert_eq!(fraction("32"), Some(0.32));
+        assert_eq!(fraction("0.32"), Some(0.32));
+        assert_eq!(time_s("10:01 min"), Some(601.0));
+        assert_eq!(time_s("1:02:03"), Some(3723.0));
+        assert_eq!(time_s("90"), Some(90.0));
+        // ISA at 0 m is 1 atm; at 1000 m about 89 875 Pa (ICAO standard atmosphere table).
+        assert!((isa_pressure_pa(0.0) - ATM_PA).abs() < 1e-9);
+        assert!((isa_pressure_pa(1000.0) - 89_875.0).abs() < 5.0);
+    }
+
+    #[test]
+    fn malformed_xml_names_the_line() {
+        let e = parse("<uddf>\n<profiledata>\n</uddf>\n", Path::new("x.uddf")).unwrap_err();
+        assert!(e.line.is_some(), "{e}");
+        let e = parse("<foo/>", Path::new("x.xml")).unwrap_err();
+        assert!(e.message.contains("neither"), "{e}");
+    }
+}

@@ -1,0 +1,874 @@
+//! Plot models rendered to SVG strings with plotters (SVG backend only, no font files).
+//!
+//! Text without fonts: plotters is built without its `ttf`/`ab_glyph` features, so it sizes
+//! text with a fixed estimate (an em of `size / 1.24²` and 0.7 em per character) and writes
+//! every label as an SVG `<text>` element with `font-family="sans-serif"` and
+//! `font-size = size / 1.24`; the viewer's own sans-serif font draws it. Label areas here are
+//! sized with margin to spare for that estimate. Font sizes are chosen so that a 960 px wide
+//! plot printed across a page gives tick labels of about 8 pt and titles of about 13 pt.
+//!
+//! Bad data never panics: non-finite points (and, on a log axis, points with y ≤ 0) are
+//! skipped, breaking the line there; a plot with nothing left to draw is an error.
+//! The output is deterministic: the same model gives byte-identical SVG.
+
+use std::ops::Range;
+
+use plotters::coord::ranged1d::ValueFormatter;
+use plotters::coord::types::RangedCoordf64;
+use plotters::coord::Shift;
+use plotters::element::DashedPathElement;
+use plotters::prelude::*;
+use plotters::style::text_anchor::{HPos, Pos, VPos};
+
+/// Default plot size in px (width, height).
+pub const DEFAULT_SIZE: (u32, u32) = (960, 600);
+
+/// Line colours: the Okabe–Ito colour-blind-safe palette without its yellow (too pale on white),
+/// plus grey. Source: Okabe & Ito (2008), "Color Universal Design".
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(0, 114, 178),   // blue
+    RGBColor(213, 94, 0),    // vermillion
+    RGBColor(0, 158, 115),   // bluish green
+    RGBColor(204, 121, 167), // reddish purple
+    RGBColor(230, 159, 0),   // orange
+    RGBColor(86, 180, 233),  // sky blue
+    RGBColor(0, 0, 0),       // black
+    RGBColor(120, 120, 120), // grey
+];
+
+const FONT: &str = "sans-serif";
+/// Plotters font sizes (the SVG font-size is these / 1.24).
+const TITLE_SIZE: f64 = 30.0;
+const DESC_SIZE: f64 = 24.0;
+const TICK_SIZE: f64 = 19.0;
+const LEGEND_SIZE: f64 = 19.0;
+
+/// Why a plot could not be drawn.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum PlotError {
+    /// Nothing finite (and positive, on a log axis) to draw.
+    #[error("plot '{0}': no finite data to draw")]
+    NoData(String),
+    /// The model is inconsistent (e.g. a bar chart whose values do not match its categories).
+    #[error("plot '{title}': {message}")]
+    Invalid {
+        /// Plot title.
+        title: String,
+        /// What is wrong.
+        message: String,
+    },
+    /// The drawing backend failed.
+    #[error("plot '{title}': drawing failed: {message}")]
+    Draw {
+        /// Plot title.
+        title: String,
+        /// Backend message.
+        message: String,
+    },
+}
+
+/// One named line of (x, y) points, in the units of the plot's axis labels.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    /// Legend entry.
+    pub name: String,
+    /// Points in drawing order; non-finite ones break the line.
+    pub points: Vec<(f64, f64)>,
+    /// Draw against the secondary (right) y axis.
+    pub secondary: bool,
+}
+
+impl Series {
+    /// A series on the primary axis.
+    pub fn new(name: impl Into<String>, points: Vec<(f64, f64)>) -> Self {
+        Series {
+            name: name.into(),
+            points,
+            secondary: false,
+        }
+    }
+    /// Move this series to the secondary (right) y axis.
+    pub fn on_secondary(mut self) -> Self {
+        self.secondary = true;
+        self
+    }
+}
+
+/// A line plot: several series, a legend, labelled axes (put units in the labels, e.g.
+/// `"time (s)"`), optionally a log primary y axis and a linear secondary y axis.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinePlot {
+    /// Title above the plot.
+    pub title: String,
+    /// x-axis label with unit.
+    pub x_label: String,
+    /// Primary y-axis label with unit.
+    pub y_label: String,
+    /// The lines. With more than six, each also gets a marker shape; beyond seven, dashes.
+    pub series: Vec<Series>,
+    /// Logarithmic primary y axis (points with y ≤ 0 are skipped).
+    pub log_y: bool,
+    /// Secondary (right) y-axis label with unit; required if any series is secondary.
+    pub secondary_y_label: Option<String>,
+    /// Size in px (width, height).
+    pub size: (u32, u32),
+}
+
+impl LinePlot {
+    /// An empty plot of [`DEFAULT_SIZE`] with the given title and axis labels.
+    pub fn new(
+        title: impl Into<String>,
+        x_label: impl Into<String>,
+        y_label: impl Into<String>,
+    ) -> Self {
+        LinePlot {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            series: Vec::new(),
+            log_y: false,
+            secondary_y_label: None,
+            size: DEFAULT_SIZE,
+        }
+    }
+
+    /// Add a series (builder style).
+    pub fn with(mut self, s: Series) -> Self {
+        self.series.push(s);
+        self
+    }
+
+    /// Render to an SVG document.
+    pub fn to_svg(&self) -> Result<String, PlotError> {
+        let n = self.series.len();
+        let runs: Vec<Vec<Vec<(f64, f64)>>> = self
+            .series
+            .iter()
+            .map(|s| finite_runs(&s.points, self.log_y && !s.secondary))
+            .collect();
+        let all = |secondary: bool| {
+            self.series
+                .iter()
+                .zip(&runs)
+                .filter(move |(s, _)| s.secondary == secondary)
+                .flat_map(|(_, r)| r.iter().flatten().copied())
+        };
+        let x = bounds(all(false).chain(all(true)).map(|p| p.0))
+            .ok_or_else(|| PlotError::NoData(self.title.clone()))?;
+        let has_secondary = self.series.iter().any(|s| s.secondary);
+        if has_secondary && self.secondary_y_label.is_none() {
+            return Err(PlotError::Invalid {
+                title: self.title.clone(),
+                message: "a series is on the secondary axis but `secondary_y_label` is not set"
+                    .into(),
+            });
+        }
+        let y = bounds(all(false).map(|p| p.1));
+        let y2 = bounds(all(true).map(|p| p.1));
+        let xr = pad_linear(x, false);
+        let (w, h) = self.size;
+        let draw_err = |e: String| PlotError::Draw {
+            title: self.title.clone(),
+            message: e,
+        };
+        let mut svg = String::new();
+        {
+            let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+            root.fill(&WHITE).map_err(|e| draw_err(e.to_string()))?;
+            let mut b = ChartBuilder::on(&root);
+            b.caption(&self.title, (FONT, TITLE_SIZE))
+                .margin(18)
+                .x_label_area_size(70)
+                .y_label_area_size(110)
+                .right_y_label_area_size(if has_secondary { 110 } else { 0 });
+            let styles: Vec<LineLook> = (0..n).map(|i| LineLook::of(i, n)).collect();
+            let y2r = has_secondary.then(|| pad_linear(y2.unwrap_or((0.0, 1.0)), true));
+            let (lo, hi) = y.map(decades).unwrap_or((1.0, 10.0));
+            let yr = pad_linear(y.unwrap_or((0.0, 1.0)), true);
+            // Data in fractions of the plotting area, to keep the legend off the lines.
+            let frac = |v: f64, r: &Range<f64>| (v - r.start) / (r.end - r.start);
+            let mut pts = Vec::new();
+            for (s, rs) in self.series.iter().zip(&runs) {
+                for run in rs {
+                    let f: Vec<(f64, f64)> = run
+                        .iter()
+                        .map(|&(x, yv)| {
+                            let fy = match (&y2r, s.secondary, self.log_y) {
+                                (Some(r2), true, _) => frac(yv, r2),
+                                (_, _, true) => {
+                                    (yv.log10() - lo.log10()) / (hi.log10() - lo.log10())
+                                }
+                                _ => frac(yv, &yr),
+                            };
+                            (frac(x, &xr), fy)
+                        })
+                        .collect();
+                    densify(&f, &mut pts);
+                }
+            }
+            let plot_w = w as f64 - 36.0 - 110.0 - if has_secondary { 110.0 } else { 0.0 };
+            let plot_h = h as f64 - 36.0 - 70.0 - 45.0;
+            let (bw, bh) = legend_box_px(self.series.iter().map(|s| s.name.as_str()));
+            let lines = LinesToDraw {
+                plot: self,
+                runs: &runs,
+                styles: &styles,
+                y2: y2r,
+                corner: Corner::emptiest(&pts, bw / plot_w.max(1.0), bh / plot_h.max(1.0)),
+            };
+            if self.log_y {
+                let chart = b
+                    .build_cartesian_2d(xr.clone(), (lo..hi).log_scale())
+                    .map_err(|e| draw_err(e.to_string()))?;
+                lines.draw(chart, xr).map_err(draw_err)?;
+            } else {
+                let chart = b
+                    .build_cartesian_2d(xr.clone(), yr)
+                    .map_err(|e| draw_err(e.to_string()))?;
+                lines.draw(chart, xr).map_err(draw_err)?;
+            }
+            root.present().map_err(|e| draw_err(e.to_string()))?;
+        }
+        Ok(svg)
+    }
+}
+
+/// How one series looks: colour, dash pattern, marker.
+#[derive(Debug, Clone, Copy)]
+struct LineLook {
+    color: RGBColor,
+    /// 0 solid, 1 dashed, 2 dotted.
+    dash: usize,
+    /// Marker shape index, if markers are used.
+    marker: Option<usize>,
+}
+
+impl LineLook {
+    fn of(i: usize, n: usize) -> Self {
+        LineLook {
+            color: PALETTE[i % 7],
+            dash: (i / 7) % 3,
+            marker: if n > 6 { Some(i % 8) } else { None },
+        }
+    }
+    fn style(&self) -> ShapeStyle {
+        ShapeStyle {
+            color: self.color.to_rgba(),
+            filled: false,
+            stroke_width: 2,
+        }
+    }
+}
+
+/// Marker shapes 0..8: filled/hollow circle, triangle, square, diamond, as one composed
+/// element centred on `$c` (a macro because plotters does not export the composed type).
+/// The shapes not wanted are transparent: the SVG backend writes nothing for them.
+macro_rules! marker {
+    ($c:expr, $k:expr, $color:expr) => {{
+        let k: Option<usize> = $k;
+        let shape = k.map(|k| (k / 2) % 4);
+        let filled = k.is_some_and(|k| k % 2 == 0);
+        let color: RGBColor = $color;
+        let st = |which: usize| ShapeStyle {
+            color: if shape == Some(which) {
+                color.to_rgba()
+            } else {
+                TRANSPARENT
+            },
+            filled,
+            stroke_width: 2,
+        };
+        EmptyElement::at($c)
+            + Circle::new((0, 0), 5, st(0))
+            + TriangleMarker::new((0, 0), 6, st(1))
+            + Rectangle::new([(-4, -4), (4, 4)], st(2))
+            + Polygon::new(vec![(0, -6), (6, 0), (0, 6), (-6, 0)], st(3))
+    }};
+}
+
+/// Marker positions of one series: about ten, shifted per series so that they do not coincide.
+fn marker_points(runs: &[Vec<(f64, f64)>], look: LineLook, index: usize) -> Vec<(f64, f64)> {
+    if look.marker.is_none() {
+        return Vec::new();
+    }
+    let pts: Vec<(f64, f64)> = runs.iter().flatten().copied().collect();
+    if pts.is_empty() {
+        return Vec::new();
+    }
+    let step = (pts.len() / 10).max(1);
+    let offset = (index * step / 7) % step;
+    pts.into_iter().skip(offset).step_by(step).collect()
+}
+
+/// Dash and gap lengths in px for a look (solid: one dash longer than any plot).
+fn dash_pattern(dash: usize) -> (i32, i32) {
+    match dash {
+        0 => (1_000_000, 1),
+        1 => (10, 6),
+        _ => (3, 4),
+    }
+}
+
+/// Legend glyph for a look: a short line, dashed as drawn, and the marker.
+macro_rules! legend_glyph {
+    ($c:expr, $look:expr) => {{
+        let look: LineLook = $look;
+        let (d, g) = dash_pattern(look.dash);
+        EmptyElement::at($c)
+            + DashedPathElement::new(vec![(0, 0), (24, 0)], d.min(1000), g, look.style())
+            + marker!((12, 0), look.marker, look.color)
+    }};
+}
+
+type Line<C> = DashedPathElement<std::vec::IntoIter<C>, i32>;
+
+/// The line elements of one series (one per run of drawable points).
+fn series_lines(runs: &[Vec<(f64, f64)>], look: LineLook) -> Vec<Line<(f64, f64)>> {
+    let (d, g) = dash_pattern(look.dash);
+    runs.iter()
+        .map(|run| DashedPathElement::new(run.clone(), d, g, look.style()))
+        .collect()
+}
+
+/// Everything needed to draw the lines once the chart's coordinates exist.
+struct LinesToDraw<'p> {
+    plot: &'p LinePlot,
+    runs: &'p [Vec<Vec<(f64, f64)>>],
+    styles: &'p [LineLook],
+    y2: Option<Range<f64>>,
+    corner: Corner,
+}
+
+/// A corner of the plotting area for the legend.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Corner {
+    UpperRight,
+    UpperLeft,
+    LowerRight,
+    LowerLeft,
+}
+
+impl Corner {
+    fn position(self) -> SeriesLabelPosition {
+        match self {
+            Corner::UpperRight => SeriesLabelPosition::UpperRight,
+            Corner::UpperLeft => SeriesLabelPosition::UpperLeft,
+            Corner::LowerRight => SeriesLabelPosition::LowerRight,
+            Corner::LowerLeft => SeriesLabelPosition::LowerLeft,
+        }
+    }
+
+    /// The corner whose legend box (`bw` × `bh`, fractions of the plotting area) covers the
+    /// fewest data points; `pts` are in fractions of the plotting area (y up). Ties go to the
+    /// upper right, then upper left, lower right, lower left.
+    fn emptiest(pts: &[(f64, f64)], bw: f64, bh: f64) -> Corner {
+        let (bw, bh) = (bw.min(1.0), bh.min(1.0));
+        [
+            (Corner::UpperRight, 1.0 - bw, 1.0 - bh),
+            (Corner::UpperLeft, 0.0, 1.0 - bh),
+            (Corner::LowerRight, 1.0 - bw, 0.0),
+            (Corner::LowerLeft, 0.0, 0.0),
+        ]
+        .into_iter()
+        .map(|(c, x0, y0)| {
+            let n = pts
+                .iter()
+                .filter(|(x, y)| *x >= x0 && *x <= x0 + bw && *y >= y0 && *y <= y0 + bh)
+                .count();
+            (n, c)
+        })
+        .fold(None::<(usize, Corner)>, |best, (n, c)| match best {
+            Some((bn, _)) if bn <= n => best,
+            _ => Some((n, c)),
+        })
+        .map(|b| b.1)
+        .unwrap_or(Corner::UpperRight)
+    }
+}
+
+/// Legend box size in px for `labels`, by the same font-less estimate plotters uses
+/// (0.7 em per character, em = size / 1.24²), with the glyph and margins.
+fn legend_box_px<'s>(labels: impl Iterator<Item = &'s str>) -> (f64, f64) {
+    let mut n = 0usize;
+    let mut chars = 0usize;
+    for l in labels {
+        n += 1;
+        chars = chars.max(l.chars().count());
+    }
+    let em = LEGEND_SIZE / 1.24 / 1.24;
+    (
+        30.0 + 0.7 * em * chars as f64 + 30.0,
+        n as f64 * (LEGEND_SIZE / 1.24 + 8.0) + 25.0,
+    )
+}
+
+/// Points of a polyline in plot fractions, with extra points so that no gap exceeds 0.02.
+fn densify(run: &[(f64, f64)], out: &mut Vec<(f64, f64)>) {
+    for w in run.windows(2) {
+        let (a, b) = (w[0], w[1]);
+        let d = ((b.0 - a.0).abs()).max((b.1 - a.1).abs());
+        let k = ((d / 0.02).ceil() as usize).clamp(1, 200);
+        for j in 0..k {
+            let f = j as f64 / k as f64;
+            out.push((a.0 + f * (b.0 - a.0), a.1 + f * (b.1 - a.1)));
+        }
+    }
+    if let Some(l) = run.last() {
+        out.push(*l);
+    }
+}
+
+impl LinesToDraw<'_> {
+    fn draw<'a, DB, Y>(
+        &self,
+        mut chart: ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+        xr: Range<f64>,
+    ) -> Result<(), String>
+    where
+        DB: DrawingBackend + 'a,
+        Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    {
+        let e = |e: plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
+        let tick = |v: &f64| fmt_tick(*v);
+        let Some(y2) = self.y2.clone() else {
+            self.mesh(&mut chart).map_err(e)?;
+            for (i, s) in self.plot.series.iter().enumerate() {
+                let look = self.styles[i];
+                chart
+                    .draw_series(series_lines(&self.runs[i], look))
+                    .map_err(e)?
+                    .label(s.name.as_str())
+                    .legend(move |c| legend_glyph!(c, look));
+                chart
+                    .draw_series(
+                        marker_points(&self.runs[i], look, i)
+                            .into_iter()
+                            .map(|p| marker!(p, look.marker, look.color)),
+                    )
+                    .map_err(e)?;
+            }
+            return legend(&mut chart, self.corner).map_err(e);
+        };
+        // The secondary coordinates take over the right label area, so they must exist
+        // before the primary mesh is drawn (or it would label the right axis too).
+        let mut dual = chart.set_secondary_coord(xr, y2);
+        self.mesh(&mut dual).map_err(e)?;
+        dual.configure_secondary_axes()
+            .y_desc(self.plot.secondary_y_label.as_deref().unwrap_or(""))
+            .y_label_formatter(&tick)
+            .axis_desc_style((FONT, DESC_SIZE))
+            .label_style((FONT, TICK_SIZE))
+            .draw()
+            .map_err(e)?;
+        for (i, s) in self.plot.series.iter().enumerate() {
+            let look = self.styles[i];
+            let lines = series_lines(&self.runs[i], look);
+            let markers = marker_points(&self.runs[i], look, i)
+                .into_iter()
+                .map(|p| marker!(p, look.marker, look.color));
+            if s.secondary {
+                dual.draw_secondary_series(markers).map_err(e)?;
+            } else {
+                dual.draw_series(markers).map_err(e)?;
+            }
+            let anno = if s.secondary {
+                dual.draw_secondary_series(lines).map_err(e)?
+            } else {
+                dual.draw_series(lines).map_err(e)?
+            };
+            let name = if s.secondary {
+                format!("{} (right axis)", s.name)
+            } else {
+                s.name.clone()
+            };
+            anno.label(name).legend(move |c| legend_glyph!(c, look));
+        }
+        legend(&mut dual, self.corner).map_err(e)
+    }
+}
+
+impl LinesToDraw<'_> {
+    fn mesh<'a, DB, Y>(
+        &self,
+        chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+    ) -> Result<(), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>>
+    where
+        DB: DrawingBackend + 'a,
+        Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    {
+        let tick = |v: &f64| fmt_tick(*v);
+        chart
+            .configure_mesh()
+            .x_desc(self.plot.x_label.as_str())
+            .y_desc(self.plot.y_label.as_str())
+            .x_label_formatter(&tick)
+            .y_label_formatter(&tick)
+            .axis_desc_style((FONT, DESC_SIZE))
+            .label_style((FONT, TICK_SIZE))
+            .light_line_style(RGBColor(235, 235, 235))
+            .bold_line_style(RGBColor(205, 205, 205))
+            .draw()
+    }
+}
+
+fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    corner: Corner,
+) -> Result<(), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>> {
+    chart
+        .configure_series_labels()
+        .position(corner.position())
+        .label_font((FONT, LEGEND_SIZE))
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(120, 120, 120))
+        .legend_area_size(30)
+        .draw()
+}
+
+/// Split points into runs of drawable points (finite; y > 0 when `positive_y`).
+fn finite_runs(points: &[(f64, f64)], positive_y: bool) -> Vec<Vec<(f64, f64)>> {
+    let mut runs = Vec::new();
+    let mut cur = Vec::new();
+    for &(x, y) in points {
+        if x.is_finite() && y.is_finite() && (!positive_y || y > 0.0) {
+            cur.push((x, y));
+        } else if !cur.is_empty() {
+            runs.push(std::mem::take(&mut cur));
+        }
+    }
+    if !cur.is_empty() {
+        runs.push(cur);
+    }
+    runs
+}
+
+/// (min, max) of an iterator of finite values, or None if empty.
+fn bounds(it: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
+    it.fold(None, |acc, v| match acc {
+        None => Some((v, v)),
+        Some((a, b)) => Some((a.min(v), b.max(v))),
+    })
+}
+
+/// A linear axis range: degenerate ranges widened; `pad` adds 5 % either side (not below 0
+/// when the data are all ≥ 0).
+fn pad_linear((lo, hi): (f64, f64), pad: bool) -> Range<f64> {
+    let span = hi - lo;
+    if span <= 0.0 || !span.is_finite() {
+        let d = if lo == 0.0 { 1.0 } else { lo.abs() * 0.1 };
+        return (lo - d)..(hi + d);
+    }
+    if !pad {
+        return lo..hi;
+    }
+    let p = 0.05 * span;
+    let l = if lo >= 0.0 && lo - p < 0.0 {
+        0.0
+    } else {
+        lo - p
+    };
+    l..(hi + p)
+}
+
+/// Whole decades enclosing positive (lo, hi).
+fn decades((lo, hi): (f64, f64)) -> (f64, f64) {
+    let a = 10f64.powf(lo.log10().floor());
+    let mut b = 10f64.powf(hi.log10().ceil());
+    if b <= a {
+        b = a * 10.0;
+    }
+    (a, b)
+}
+
+/// A short tick label: up to four significant digits, exponent form outside 1e-3..1e5.
+pub fn fmt_tick(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if !(1e-3..1e5).contains(&a) {
+        let s = format!("{v:.3e}");
+        let (m, e) = s.split_once('e').unwrap_or((&s, "0"));
+        let m = m.trim_end_matches('0').trim_end_matches('.');
+        return format!("{m}e{e}");
+    }
+    let digits = (4 - 1 - a.log10().floor() as i32).max(0) as usize;
+    let s = format!("{v:.digits$}");
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
+}
+
+/// Grouped bar chart: for each category (x axis), one bar per group (colour, legend), e.g.
+/// criteria (categories) × schedules (groups). Non-finite values leave their bar out.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BarChart {
+    /// Title above the chart.
+    pub title: String,
+    /// x-axis label (what the categories are).
+    pub x_label: String,
+    /// y-axis label with unit.
+    pub y_label: String,
+    /// Category names along the x axis.
+    pub categories: Vec<String>,
+    /// Group names (legend).
+    pub groups: Vec<String>,
+    /// `values[category][group]`, in the y-axis unit.
+    pub values: Vec<Vec<f64>>,
+    /// A horizontal reference line (value, legend label), e.g. a limit of 1 when values are
+    /// value/limit ratios.
+    pub reference: Option<(f64, String)>,
+    /// Size in px (width, height).
+    pub size: (u32, u32),
+}
+
+impl BarChart {
+    /// Render to an SVG document.
+    pub fn to_svg(&self) -> Result<String, PlotError> {
+        let invalid = |m: String| PlotError::Invalid {
+            title: self.title.clone(),
+            message: m,
+        };
+        if self.values.len() != self.categories.len() {
+            return Err(invalid(format!(
+                "{} value rows for {} categories",
+                self.values.len(),
+                self.categories.len()
+            )));
+        }
+        if let Some((i, r)) = self
+            .values
+            .iter()
+            .enumerate()
+            .find(|(_, r)| r.len() != self.groups.len())
+        {
+            return Err(invalid(format!(
+                "category '{}' has {} values for {} groups",
+                self.categories[i],
+                r.len(),
+                self.groups.len()
+            )));
+        }
+        let mut ys: Vec<f64> = self
+            .values
+            .iter()
+            .flatten()
+            .copied()
+            .filter(|v| v.is_finite())
+            .collect();
+        if ys.is_empty() {
+            return Err(PlotError::NoData(self.title.clone()));
+        }
+        ys.push(0.0);
+        if let Some((r, _)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
+            ys.push(*r);
+        }
+        let (lo, hi) = bounds(ys.into_iter()).expect("non-empty");
+        let yr = pad_linear((lo, hi), true);
+        let nc = self.categories.len();
+        let ng = self.groups.len();
+        let draw_err = |e: String| PlotError::Draw {
+            title: self.title.clone(),
+            message: e,
+        };
+        let (w, h) = self.size;
+        let mut svg = String::new();
+        {
+            let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+            root.fill(&WHITE).map_err(|e| draw_err(e.to_string()))?;
+            self.draw(&root, nc, ng, yr)
+                .map_err(|e| draw_err(format!("{e:?}")))?;
+            root.present().map_err(|e| draw_err(e.to_string()))?;
+        }
+        Ok(svg)
+    }
+
+    fn draw<DB: DrawingBackend>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        nc: usize,
+        ng: usize,
+        yr: Range<f64>,
+    ) -> Result<(), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>> {
+        let y0 = yr.start.max(0.0).min(yr.end);
+        let mut chart = ChartBuilder::on(root)
+            .caption(&self.title, (FONT, TITLE_SIZE))
+            .margin(18)
+            .x_label_area_size(90)
+            .y_label_area_size(110)
+            .build_cartesian_2d(0.0..nc as f64, yr)?;
+        let tick = |v: &f64| fmt_tick(*v);
+        chart
+            .configure_mesh()
+            .disable_x_mesh()
+            .x_labels(0)
+            .x_desc(self.x_label.as_str())
+            .y_desc(self.y_label.as_str())
+            .y_label_formatter(&tick)
+            .axis_desc_style((FONT, DESC_SIZE))
+            .label_style((FONT, TICK_SIZE))
+            .light_line_style(RGBColor(235, 235, 235))
+            .bold_line_style(RGBColor(205, 205, 205))
+            .draw()?;
+        let width = 0.8 / ng.max(1) as f64;
+        for g in 0..ng {
+            let color = PALETTE[g % PALETTE.len()];
+            let bars: Vec<Rectangle<(f64, f64)>> = (0..nc)
+                .filter(|&c| self.values[c][g].is_finite())
+                .map(|c| {
+                    let x = c as f64 + 0.1 + g as f64 * width;
+                    Rectangle::new(
+                        [(x, y0), (x + width * 0.92, self.values[c][g])],
+                        color.filled(),
+                    )
+                })
+                .collect();
+            chart
+                .draw_series(bars)?
+                .label(self.groups[g].as_str())
+                .legend(move |(x, y)| {
+                    Rectangle::new([(x, y - 7), (x + 16, y + 7)], color.filled())
+                });
+        }
+        if let Some((r, name)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
+            let st = ShapeStyle {
+                color: BLACK.to_rgba(),
+                filled: false,
+                stroke_width: 2,
+            };
+            chart
+                .draw_series(std::iter::once(DashedPathElement::new(
+                    vec![(0.0, *r), (nc as f64, *r)],
+                    10,
+                    6,
+                    st,
+                )))?
+                .label(name.as_str())
+                .legend(move |(x, y)| {
+                    EmptyElement::at((x, y))
+                        + PathElement::new(vec![(0, 0), (9, 0)], st)
+                        + PathElement::new(vec![(15, 0), (24, 0)], st)
+                });
+        }
+        // Category names under their group of bars, on the root area (outside the plot).
+        let style = TextStyle::from((FONT, TICK_SIZE).into_font())
+            .pos(Pos::new(HPos::Center, VPos::Top))
+            .color(&BLACK);
+        let bottom = chart.backend_coord(&(0.0, chart.y_range().start));
+        let slot_px = (chart.backend_coord(&(1.0, 0.0)).0 - chart.backend_coord(&(0.0, 0.0)).0)
+            .max(1) as usize;
+        // The font-less width estimate: 0.7 em per character, em = size / 1.24².
+        let char_px = 0.7 * TICK_SIZE / 1.24 / 1.24;
+        let max_chars = ((slot_px as f64 / char_px) as usize).max(4);
+        for (c, name) in self.categories.iter().enumerate() {
+            let (px, _) = chart.backend_coord(&(c as f64 + 0.5, 0.0));
+            for (k, line) in wrap(name, max_chars).iter().take(3).enumerate() {
+                root.draw(&Text::new(
+                    line.clone(),
+                    (px, bottom.1 + 8 + k as i32 * (TICK_SIZE as i32)),
+                    style.clone(),
+                ))?;
+            }
+        }
+        // Keep the legend off the bars: sample each bar's extent in plot fractions.
+        let yr = chart.y_range();
+        let fy = |v: f64| (v - yr.start) / (yr.end - yr.start);
+        let mut pts = Vec::new();
+        for (c, row) in self.values.iter().enumerate() {
+            for (g, v) in row.iter().enumerate().filter(|(_, v)| v.is_finite()) {
+                let x = (c as f64 + 0.1 + (g as f64 + 0.5) * width) / nc as f64;
+                densify(&[(x, fy(y0)), (x, fy(*v))], &mut pts);
+            }
+        }
+        if let Some((r, _)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
+            densify(&[(0.0, fy(*r)), (1.0, fy(*r))], &mut pts);
+        }
+        let area = chart.plotting_area().dim_in_pixel();
+        let names = self
+            .groups
+            .iter()
+            .map(String::as_str)
+            .chain(self.reference.iter().map(|r| r.1.as_str()));
+        let (bw, bh) = legend_box_px(names);
+        let corner = Corner::emptiest(&pts, bw / area.0.max(1) as f64, bh / area.1.max(1) as f64);
+        chart
+            .configure_series_labels()
+            .position(corner.position())
+            .label_font((FONT, LEGEND_SIZE))
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(120, 120, 120))
+            .draw()?;
+        Ok(())
+    }
+}
+
+/// Wrap text at spaces (or hard-break long words) into lines of at most `n` characters.
+fn wrap(s: &str, n: usize) -> Vec<String> {
+    let mut lines = Vec::new();
+    let mut cur = String::new();
+    for word in s.split_whitespace() {
+        let mut word: Vec<char> = word.chars().collect();
+        while word.len() > n {
+            if !cur.is_empty() {
+                lines.push(std::mem::take(&mut cur));
+            }
+            lines.push(word[..n].iter().collect());
+            word.drain(..n);
+        }
+        let word: String = word.into_iter().collect();
+        if cur.is_empty() {
+            cur = word;
+        } else if cur.chars().count() + 1 + word.chars().count() <= n {
+            cur.push(' ');
+            cur.push_str(&word);
+        } else {
+            lines.push(std::mem::replace(&mut cur, word));
+        }
+    }
+    if !cur.is_empty() {
+        lines.push(cur);
+    }
+    lines
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn tick_labels_are_short() {
+        assert_eq!(fmt_tick(0.0), "0");
+        assert_eq!(fmt_tick(1.5), "1.5");
+        assert_eq!(fmt_tick(250.0), "250");
+        assert_eq!(fmt_tick(12345.0), "12345");
+        assert_eq!(fmt_tick(2e-9), "2e-9");
+        assert_eq!(fmt_tick(1.25e6), "1.25e6");
+        assert_eq!(fmt_tick(-0.5), "-0.5");
+    }
+
+    #[test]
+    fn runs_split_at_bad_points() {
+        let r = finite_runs(
+            &[
+                (0.0, 1.0),
+                (1.0, f64::NAN),
+                (2.0, 2.0),
+                (3.0, -1.0),
+                (4.0, 3.0),
+            ],
+            true,
+        );
+        assert_eq!(
+            r,
+            vec![vec![(0.0, 1.0)], vec![(2.0, 2.0)], vec![(4.0, 3.0)]]
+        );
+    }
+
+    #[test]
+    fn wraps_long_names() {
+        assert_eq!(wrap("peak total volume", 10), vec!["peak total", "volume"]);
+        assert_eq!(wrap("abcdefghijkl", 5), vec!["abcde", "fghij", "kl"]);
+    }
+}
