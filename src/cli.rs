@@ -14,6 +14,77 @@ pub struct Cli {
 pub enum Command {
     /// Plan a dive with a decompression algorithm and print its stop table.
     Plan(PlanArgs),
+    /// Run one pressure profile through one phantom; writes bubbles.csv, summary.toml, radius.svg, volume.svg.
+    Simulate(SimulateArgs),
+    /// Final radius after a pressure change without mass transfer, for every elasticity form (CSV).
+    Elasticity(ElasticityArgs),
+    /// Run the built-in example and write a full report under reports/demo/.
+    Demo(DemoArgs),
+}
+
+/// Arguments of `simulate`.
+#[derive(clap::Args, Debug)]
+pub struct SimulateArgs {
+    /// Pressure profile: TOML (profiles/*.toml), a legacy two-column text file (needs --units), or a dive log.
+    #[arg(long)]
+    pub profile: std::path::PathBuf,
+    /// Phantom TOML (profiles/phantoms/*.toml).
+    #[arg(long)]
+    pub phantom: std::path::PathBuf,
+    /// Output folder (replaced whole; created if missing).
+    #[arg(long)]
+    pub out: std::path::PathBuf,
+    /// Units of a legacy profile as TIME,PRESSURE, e.g. min,psi-gauge or min,msw.
+    #[arg(long)]
+    pub units: Option<String>,
+    /// Chamber or breathing gas of a legacy profile (default air).
+    #[arg(long)]
+    pub gas: Option<String>,
+    /// Water-vapour pressure subtracted at the open faces, Pa (legacy/dive-log profiles; default 0).
+    #[arg(long = "vapour-pa")]
+    pub vapour_pa: Option<f64>,
+    /// Which dive of a dive log (1-based).
+    #[arg(long)]
+    pub dive: Option<usize>,
+}
+
+/// Arguments of `elasticity`.
+#[derive(clap::Args, Debug)]
+pub struct ElasticityArgs {
+    /// Initial ambient pressure, Pa.
+    #[arg(long, default_value_t = 1e6, allow_hyphen_values = true)]
+    pub p0: f64,
+    /// Final ambient pressure, Pa.
+    #[arg(long, default_value_t = 1e4, allow_hyphen_values = true)]
+    pub pf: f64,
+    /// Surface tension γ, N/m.
+    #[arg(long, default_value_t = 0.07, allow_hyphen_values = true)]
+    pub gamma: f64,
+    /// Shear modulus μ, Pa.
+    #[arg(long, default_value_t = 40.0, allow_hyphen_values = true)]
+    pub mu: f64,
+    /// Bulk-modulus coefficient M = K/V_aff, Pa/m³ (5e-2 Pa/µm³ = 5e16 Pa/m³).
+    #[arg(long, default_value_t = 5e16, allow_hyphen_values = true)]
+    pub m: f64,
+    /// Bulk modulus K, Pa.
+    #[arg(long, default_value_t = 2.2e9, allow_hyphen_values = true)]
+    pub k: f64,
+    /// Initial radii, m, comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        allow_hyphen_values = true,
+        default_value = "1e-6,1e-5,1e-4,1e-3"
+    )]
+    pub r0: Vec<f64>,
+}
+
+/// Arguments of `demo`.
+#[derive(clap::Args, Debug)]
+pub struct DemoArgs {
+    /// Output folder.
+    #[arg(long, default_value = "reports/demo")]
+    pub out: std::path::PathBuf,
 }
 
 /// Arguments of `plan`.
@@ -57,6 +128,103 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             };
             print!("{}", decophantom::app::plan::run(&req)?.text);
             Ok(0)
+        }
+        Command::Simulate(a) => {
+            let (time_unit, pressure_unit) = match &a.units {
+                Some(u) => {
+                    let (t, p) = decophantom::profile::legacy::parse_units(u)?;
+                    (Some(t), Some(p))
+                }
+                None => (None, None),
+            };
+            let gas = match &a.gas {
+                Some(g) => Some(
+                    decophantom::gas::GasMix::parse(g)
+                        .map_err(|m| decophantom::error::InputError::new(m).field("--gas"))?,
+                ),
+                None => None,
+            };
+            let req = decophantom::app::simulate::SimulateRequest {
+                profile: a.profile,
+                load: decophantom::profile::LoadOptions {
+                    time_unit,
+                    pressure_unit,
+                    surface_pa: None,
+                    gas,
+                    vapour_pa: a.vapour_pa,
+                    dive: a.dive,
+                },
+                phantom: a.phantom,
+                out: a.out.clone(),
+            };
+            let mut bar = Progress::new();
+            let run = decophantom::app::simulate::run(&req, &mut |t, e| bar.update(t, e));
+            bar.finish();
+            let run = run?;
+            print!("{}", decophantom::app::simulate::describe(&run));
+            println!("wrote {}", a.out.display());
+            Ok(0)
+        }
+        Command::Elasticity(a) => {
+            let req = decophantom::app::elasticity::ElasticityRequest {
+                p0: a.p0,
+                pf: a.pf,
+                gamma: a.gamma,
+                laws: decophantom::phantom::elasticity::AllLawParams {
+                    shear_modulus: a.mu,
+                    bulk_modulus_per_volume: a.m,
+                    bulk_modulus: a.k,
+                },
+                r0: a.r0,
+            };
+            let rows = decophantom::app::elasticity::compare(&req)?;
+            print!("{}", decophantom::app::elasticity::to_csv(&rows));
+            Ok(0)
+        }
+        Command::Demo(a) => {
+            let mut bar = Progress::new();
+            let text = decophantom::app::demo::run(&a.out, &mut |t, e| bar.update(t, e));
+            bar.finish();
+            print!("{}", text?);
+            Ok(0)
+        }
+    }
+}
+
+/// A progress bar on stderr that appears only for runs longer than a second.
+struct Progress {
+    start: std::time::Instant,
+    bar: Option<indicatif::ProgressBar>,
+}
+
+impl Progress {
+    fn new() -> Self {
+        Progress {
+            start: std::time::Instant::now(),
+            bar: None,
+        }
+    }
+    fn update(&mut self, t: f64, end: f64) {
+        if self.bar.is_none() && self.start.elapsed().as_secs_f64() > 1.0 {
+            let b = indicatif::ProgressBar::new(1000);
+            b.set_style(
+                indicatif::ProgressStyle::with_template(
+                    "{elapsed_precise} [{bar:40}] {percent}% simulated ({msg})",
+                )
+                .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+            );
+            self.bar = Some(b);
+        }
+        if let Some(b) = &self.bar {
+            if end > 0.0 {
+                b.set_position(((t / end) * 1000.0).clamp(0.0, 1000.0) as u64);
+                b.set_message(format!("t = {t:.0} of {end:.0} s"));
+            }
+        }
+    }
+    fn finish(&self) {
+        if let Some(b) = &self.bar {
+            b.finish_and_clear();
         }
     }
 }

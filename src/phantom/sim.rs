@@ -405,7 +405,7 @@ impl<'a> Simulation<'a> {
         let ng = self.gases.len();
         let num = self.params.numerics;
         let mut max_radius = (0.0f64, 0.0, 0usize);
-        let mut peak_volume = (0.0f64, 0.0);
+        let mut peak_volume;
         let mut steps = (0usize, 0usize);
         let mut events = Vec::new();
         let mut ending = Ending::Completed;
@@ -426,6 +426,18 @@ impl<'a> Simulation<'a> {
         }
         self.record(profile, &tensions, observer);
         next_record += num.record_interval;
+        for b in self.bubbles.iter().filter(|b| b.active()) {
+            if b.radius > max_radius.0 {
+                max_radius = (b.radius, self.time, b.id);
+            }
+        }
+        let v0: f64 = self
+            .bubbles
+            .iter()
+            .filter(|b| b.active())
+            .map(|b| b.volume())
+            .sum();
+        peak_volume = (v0, self.time);
         while self.time < end - 1e-9 {
             let t = self.time;
             let p = profile.ambient(t);

@@ -1,0 +1,83 @@
+//! `decophantom elasticity`: final radius after a pressure change with no mass transfer, for
+//! every tissue-elasticity form (the paper's Fig. 2a).
+
+use crate::error::{Error, InputError};
+use crate::phantom::bubble::Balance;
+use crate::phantom::elasticity::{law_names, AllLawParams};
+
+/// Inputs of the comparison (SI units).
+#[derive(Debug, Clone)]
+pub struct ElasticityRequest {
+    /// Initial ambient pressure P0, Pa.
+    pub p0: f64,
+    /// Final ambient pressure, Pa.
+    pub pf: f64,
+    /// Surface tension γ, N/m.
+    pub gamma: f64,
+    /// Law parameters (μ, M, K).
+    pub laws: AllLawParams,
+    /// Initial radii R0, m.
+    pub r0: Vec<f64>,
+}
+
+/// One row: R0, form, final radius (None where no physical root exists).
+pub type ElasticityRow = (f64, &'static str, Option<f64>);
+
+/// Final radius for every R0 and every form: the gas content n is fixed by the Laplace
+/// balance at (P0, R0); R_f solves the same balance at P_f.
+pub fn compare(req: &ElasticityRequest) -> Result<Vec<ElasticityRow>, Error> {
+    let bad = |f: &str, m: String| Error::Input(InputError::new(m).field(f));
+    for (f, v) in [("p0", req.p0), ("pf", req.pf)] {
+        if !(v > 0.0 && v.is_finite()) {
+            return Err(bad(
+                f,
+                format!("pressure must be positive absolute Pa (got {v})"),
+            ));
+        }
+    }
+    if !(req.gamma >= 0.0) {
+        return Err(bad(
+            "gamma",
+            format!("surface tension must be ≥ 0 (got {})", req.gamma),
+        ));
+    }
+    if req.r0.is_empty() || req.r0.iter().any(|r| !(*r > 0.0)) {
+        return Err(bad(
+            "r0",
+            "give positive initial radii in m, comma-separated".into(),
+        ));
+    }
+    let mut rows = Vec::new();
+    for &r0 in &req.r0 {
+        for name in law_names() {
+            let law = req.laws.build(name).map_err(|e| bad("form", e))?;
+            let at = |p: f64| Balance {
+                ambient: p,
+                surface_tension: req.gamma,
+                law: law.as_ref(),
+                initial_radius: r0,
+                initial_ambient: req.p0,
+            };
+            let nrt = at(req.p0).pv(r0);
+            let rf = if nrt > 0.0 {
+                at(req.pf).radius_for(nrt, r0)
+            } else {
+                None
+            };
+            rows.push((r0, name, rf));
+        }
+    }
+    Ok(rows)
+}
+
+/// The rows as CSV `r0_m,form,rf_m` (empty `rf_m` where no root exists).
+pub fn to_csv(rows: &[ElasticityRow]) -> String {
+    let mut s = String::from("r0_m,form,rf_m\n");
+    for (r0, form, rf) in rows {
+        match rf {
+            Some(r) => s.push_str(&format!("{r0:.6e},{form},{r:.9e}\n")),
+            None => s.push_str(&format!("{r0:.6e},{form},\n")),
+        }
+    }
+    s
+}

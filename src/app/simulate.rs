@@ -1,0 +1,294 @@
+//! `decophantom simulate`: one pressure profile through one phantom. Writes
+//! `bubbles.csv`, `summary.toml`, `radius.svg` and `volume.svg` into the output folder,
+//! whole or not at all.
+
+use crate::error::Error;
+use crate::gas::Gas;
+use crate::phantom::config::load_phantom;
+use crate::phantom::params::PhantomParams;
+use crate::phantom::sim::{Ending, Event, Frame, Observer, Recorder, RunSummary, Simulation};
+use crate::profile::{load, LoadOptions, PressureHistory};
+use crate::report::output::OutputSet;
+use crate::report::plot::{LinePlot, Series};
+use serde::Serialize;
+use std::path::PathBuf;
+
+/// What `simulate` needs.
+#[derive(Debug, Clone)]
+pub struct SimulateRequest {
+    /// Pressure profile (TOML, legacy two-column text with units, or a dive log).
+    pub profile: PathBuf,
+    /// Units etc. for legacy files.
+    pub load: LoadOptions,
+    /// Phantom TOML.
+    pub phantom: PathBuf,
+    /// Output folder.
+    pub out: PathBuf,
+}
+
+/// A finished run: its summary, frames and wall time.
+#[derive(Debug, Clone)]
+pub struct SimRun {
+    /// The summary.
+    pub summary: RunSummary,
+    /// Recorded frames.
+    pub frames: Vec<Frame>,
+    /// Wall-clock seconds.
+    pub wall_seconds: f64,
+}
+
+struct WithProgress<'a> {
+    rec: Recorder,
+    progress: &'a mut dyn FnMut(f64, f64),
+}
+
+impl Observer for WithProgress<'_> {
+    fn frame(&mut self, frame: &Frame) {
+        self.rec.frame(frame);
+    }
+    fn progress(&mut self, time: f64, end: f64) {
+        (self.progress)(time, end);
+    }
+}
+
+/// Run a profile through a phantom, recording every frame.
+pub fn simulate(
+    params: &PhantomParams,
+    profile: &PressureHistory,
+    progress: &mut dyn FnMut(f64, f64),
+) -> Result<SimRun, Error> {
+    let start = std::time::Instant::now();
+    let mut sim = Simulation::new(params, profile)?;
+    let mut obs = WithProgress {
+        rec: Recorder::default(),
+        progress,
+    };
+    let summary = sim.run(profile, &mut obs)?;
+    Ok(SimRun {
+        summary,
+        frames: obs.rec.frames,
+        wall_seconds: start.elapsed().as_secs_f64(),
+    })
+}
+
+/// `bubbles.csv`: `time_s,bubble,radius_m,volume_m3,area_m2` then `n_<gas>_mol` per gas; one row per
+/// active bubble per recorded frame.
+pub fn bubbles_csv(frames: &[Frame], gases: &[Gas]) -> String {
+    let mut s = String::from("time_s,bubble,radius_m,volume_m3,area_m2");
+    for g in gases {
+        s.push_str(&format!(",n_{}_mol", g.name()));
+    }
+    s.push('\n');
+    for f in frames {
+        for b in &f.bubbles {
+            s.push_str(&format!(
+                "{:.6},{},{:.9e},{:.9e},{:.9e}",
+                f.time, b.id, b.radius, b.volume, b.area
+            ));
+            for n in &b.moles {
+                s.push_str(&format!(",{n:.9e}"));
+            }
+            s.push('\n');
+        }
+    }
+    s
+}
+
+#[derive(Serialize)]
+struct SummaryFile<'a> {
+    profile: &'a str,
+    phantom: &'a str,
+    ending: String,
+    end_time_s: f64,
+    max_radius_m: f64,
+    max_radius_time_s: f64,
+    max_radius_bubble: usize,
+    final_radius_m: Vec<f64>,
+    peak_total_volume_m3: f64,
+    peak_total_volume_time_s: f64,
+    gas_balance_error: f64,
+    steps_explicit: usize,
+    steps_implicit: usize,
+    cells: usize,
+    events: Vec<String>,
+    wall_seconds: f64,
+}
+
+/// A one-line description of how a run ended.
+pub fn ending_text(e: &Ending) -> String {
+    match e {
+        Ending::Completed => "completed".into(),
+        Ending::BubbleReachedFace { bubble, face, time } => {
+            format!(
+                "bubble {bubble} reached the {} face at t = {time:.1} s; the run stopped there",
+                face.name()
+            )
+        }
+    }
+}
+
+fn event_text(e: &Event) -> String {
+    match e {
+        Event::Coalesced {
+            time,
+            into,
+            absorbed,
+        } => format!("t = {time:.1} s: bubble {absorbed} coalesced into {into}"),
+        Event::Dissolved { time, bubble } => format!("t = {time:.1} s: bubble {bubble} dissolved"),
+    }
+}
+
+/// `summary.toml` text.
+pub fn summary_toml(run: &SimRun, profile: &str, phantom: &str) -> String {
+    let s = &run.summary;
+    let f = SummaryFile {
+        profile,
+        phantom,
+        ending: ending_text(&s.ending),
+        end_time_s: s.end_time,
+        max_radius_m: s.max_radius.0,
+        max_radius_time_s: s.max_radius.1,
+        max_radius_bubble: s.max_radius.2,
+        final_radius_m: s.final_radii.clone(),
+        peak_total_volume_m3: s.peak_total_volume.0,
+        peak_total_volume_time_s: s.peak_total_volume.1,
+        gas_balance_error: s.gas_balance_error,
+        steps_explicit: s.steps.0,
+        steps_implicit: s.steps.1,
+        cells: s.cells,
+        events: s.events.iter().map(event_text).collect(),
+        wall_seconds: run.wall_seconds,
+    };
+    toml::to_string(&f).unwrap_or_default()
+}
+
+/// Time axis in s for runs up to an hour, in min beyond.
+pub fn time_axis(frames: &[Frame]) -> (f64, &'static str) {
+    if frames.last().map_or(0.0, |f| f.time) > 3600.0 {
+        (60.0, "time (min)")
+    } else {
+        (1.0, "time (s)")
+    }
+}
+
+/// Radius of every bubble over time, µm.
+pub fn radius_plot(frames: &[Frame], title: &str) -> LinePlot {
+    let (tu, tl) = time_axis(frames);
+    let ids: std::collections::BTreeSet<usize> = frames
+        .iter()
+        .flat_map(|f| f.bubbles.iter().map(|b| b.id))
+        .collect();
+    let mut p = LinePlot::new(title, tl, "radius (µm)");
+    for id in ids {
+        let pts = frames
+            .iter()
+            .filter_map(|f| {
+                f.bubbles
+                    .iter()
+                    .find(|b| b.id == id)
+                    .map(|b| (f.time / tu, b.radius * 1e6))
+            })
+            .collect();
+        p = p.with(Series::new(format!("bubble {id}"), pts));
+    }
+    p
+}
+
+/// Total and per-bubble volume over time, mm³.
+pub fn volume_plot(frames: &[Frame], title: &str) -> LinePlot {
+    let (tu, tl) = time_axis(frames);
+    let ids: std::collections::BTreeSet<usize> = frames
+        .iter()
+        .flat_map(|f| f.bubbles.iter().map(|b| b.id))
+        .collect();
+    let total = frames
+        .iter()
+        .map(|f| {
+            (
+                f.time / tu,
+                f.bubbles.iter().map(|b| b.volume).sum::<f64>() * 1e9,
+            )
+        })
+        .collect();
+    let mut p = LinePlot::new(title, tl, "volume (mm³)").with(Series::new("total", total));
+    for id in ids {
+        let pts = frames
+            .iter()
+            .filter_map(|f| {
+                f.bubbles
+                    .iter()
+                    .find(|b| b.id == id)
+                    .map(|b| (f.time / tu, b.volume * 1e9))
+            })
+            .collect();
+        p = p.with(Series::new(format!("bubble {id}"), pts));
+    }
+    p
+}
+
+fn plot_err(e: impl std::fmt::Display) -> Error {
+    Error::Solver(format!("plot: {e}"))
+}
+
+/// The four files of a simulation, added to `set` under `prefix`.
+pub fn add_run_files(
+    set: &mut OutputSet,
+    prefix: &str,
+    run: &SimRun,
+    profile_name: &str,
+    phantom_name: &str,
+) -> Result<(), Error> {
+    let gases = &run.summary.gases;
+    set.add(
+        format!("{prefix}bubbles.csv"),
+        bubbles_csv(&run.frames, gases),
+    );
+    set.add(
+        format!("{prefix}summary.toml"),
+        summary_toml(run, profile_name, phantom_name),
+    );
+    let title = format!("{profile_name} — {phantom_name}");
+    set.add(
+        format!("{prefix}radius.svg"),
+        radius_plot(&run.frames, &format!("Bubble radius: {title}"))
+            .to_svg()
+            .map_err(plot_err)?,
+    );
+    set.add(
+        format!("{prefix}volume.svg"),
+        volume_plot(&run.frames, &format!("Bubble volume: {title}"))
+            .to_svg()
+            .map_err(plot_err)?,
+    );
+    Ok(())
+}
+
+/// Run `simulate` and write its outputs; returns the run.
+pub fn run(req: &SimulateRequest, progress: &mut dyn FnMut(f64, f64)) -> Result<SimRun, Error> {
+    let profile = load(&req.profile, &req.load)?;
+    let phantom = load_phantom(&req.phantom)?;
+    let run = simulate(&phantom.params, &profile, progress)?;
+    let mut set = OutputSet::new();
+    add_run_files(&mut set, "", &run, &profile.label, &phantom.params.name)?;
+    set.commit(&req.out)?;
+    Ok(run)
+}
+
+/// A short human-readable summary of a run.
+pub fn describe(run: &SimRun) -> String {
+    let s = &run.summary;
+    format!(
+        "{}\nmax radius {:.1} µm (bubble {}, t = {:.1} s); peak total volume {:.4e} m³ (t = {:.1} s)\nsteps {} explicit + {} implicit on {} cells; gas-balance error {:.2e}; wall {:.2} s\n",
+        ending_text(&s.ending),
+        s.max_radius.0 * 1e6,
+        s.max_radius.2,
+        s.max_radius.1,
+        s.peak_total_volume.0,
+        s.peak_total_volume.1,
+        s.steps.0,
+        s.steps.1,
+        s.cells,
+        s.gas_balance_error,
+        run.wall_seconds
+    )
+}

@@ -1,0 +1,376 @@
+//! Phantom TOML files (`profiles/phantoms/*.toml`): raw serde structs that mirror the file
+//! (`deny_unknown_fields`, so a typo is an error naming the field), then validation into
+//! [`PhantomParams`] in SI units with defaults filled. The format is documented in
+//! `profiles/phantoms/README.md`.
+
+use super::elasticity;
+use super::grid::{Face, Shape};
+use super::params::{BubblePlacement, GasProperties, Numerics, PhantomParams};
+use super::surface;
+use crate::error::{line_of_key, toml_error, InputError};
+use crate::gas::Gas;
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPhantom {
+    name: Option<String>,
+    description: Option<String>,
+    geometry: RawGeometry,
+    #[serde(default)]
+    material: RawMaterial,
+    gases: BTreeMap<String, RawGas>,
+    #[serde(default)]
+    nuclei: RawNuclei,
+    #[serde(default)]
+    bubbles: Vec<RawBubble>,
+    population: Option<RawPopulation>,
+    #[serde(default)]
+    numerics: RawNumerics,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGeometry {
+    shape: String,
+    size_m: Option<[f64; 3]>,
+    diameter_m: Option<f64>,
+    depth_m: Option<f64>,
+    grid_step_m: f64,
+    open_faces: Option<Vec<String>>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawMaterial {
+    temperature_k: Option<f64>,
+    surface_tension: Option<f64>,
+    elasticity: Option<toml::Table>,
+    surface: Option<toml::Table>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGas {
+    diffusivity: f64,
+    ostwald: f64,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawNuclei {
+    min_radius_m: Option<f64>,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBubble {
+    position_m: [f64; 3],
+    initial_radius_m: f64,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPopulation {
+    count: usize,
+    initial_radius_m: f64,
+    min_spacing_m: Option<f64>,
+    margin_m: Option<f64>,
+    seed: u64,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawNumerics {
+    max_step_s: Option<f64>,
+    max_pressure_change: Option<f64>,
+    max_content_change: Option<f64>,
+    kernel_min_cells: Option<f64>,
+    coupling_gap_cells: Option<f64>,
+    record_interval_s: Option<f64>,
+}
+
+/// A loaded phantom: the parameters and the description from the file.
+#[derive(Debug, Clone)]
+pub struct LoadedPhantom {
+    /// The validated parameters.
+    pub params: PhantomParams,
+    /// The file's description (may be empty).
+    pub description: String,
+}
+
+/// Read and validate a phantom TOML file.
+pub fn load_phantom(path: &Path) -> Result<LoadedPhantom, InputError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::new(format!("cannot read phantom file: {e}")).in_file(path))?;
+    parse_phantom(&text, path)
+}
+
+/// Parse and validate phantom TOML text (`path` is used in messages).
+pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputError> {
+    let raw: RawPhantom = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+    let err = |key: &str, msg: String| {
+        let leaf = key.rsplit('.').next().unwrap_or(key);
+        let mut e = InputError::new(msg).in_file(path).field(key);
+        if let Some(l) = line_of_key(text, leaf) {
+            e = e.at_line(l);
+        }
+        e
+    };
+    let positive = |key: &str, v: f64| -> Result<f64, InputError> {
+        if v > 0.0 && v.is_finite() {
+            Ok(v)
+        } else {
+            Err(err(key, format!("must be a positive number (got {v})")))
+        }
+    };
+    let g = &raw.geometry;
+    let h = positive("geometry.grid_step_m", g.grid_step_m)?;
+    let shape = match g.shape.as_str() {
+        "box" => {
+            let s = g.size_m.ok_or_else(|| {
+                err(
+                    "geometry.size_m",
+                    "a box needs size_m = [x, y, z] in metres".into(),
+                )
+            })?;
+            for v in s {
+                positive("geometry.size_m", v)?;
+            }
+            if g.diameter_m.is_some() || g.depth_m.is_some() {
+                return Err(err(
+                    "geometry.diameter_m",
+                    "a box takes size_m, not diameter_m/depth_m".into(),
+                ));
+            }
+            Shape::Box { size: s }
+        }
+        "cylinder" => {
+            let d = g
+                .diameter_m
+                .ok_or_else(|| err("geometry.diameter_m", "a cylinder needs diameter_m".into()))?;
+            let z = g
+                .depth_m
+                .ok_or_else(|| err("geometry.depth_m", "a cylinder needs depth_m".into()))?;
+            if g.size_m.is_some() {
+                return Err(err(
+                    "geometry.size_m",
+                    "a cylinder takes diameter_m and depth_m, not size_m".into(),
+                ));
+            }
+            Shape::Cylinder {
+                diameter: positive("geometry.diameter_m", d)?,
+                depth: positive("geometry.depth_m", z)?,
+            }
+        }
+        other => {
+            return Err(err(
+                "geometry.shape",
+                format!("unknown shape '{other}'; use \"box\" or \"cylinder\""),
+            ))
+        }
+    };
+    let open_faces = match &g.open_faces {
+        None => shape
+            .faces()
+            .iter()
+            .copied()
+            .filter(|f| *f != Face::Bottom)
+            .collect(),
+        Some(list) => {
+            let mut out = Vec::new();
+            for name in list {
+                let f = shape
+                    .faces()
+                    .iter()
+                    .copied()
+                    .find(|f| f.name() == name)
+                    .ok_or_else(|| {
+                        err(
+                            "geometry.open_faces",
+                            format!(
+                                "unknown face '{name}' for a {}; faces are {}",
+                                g.shape,
+                                shape
+                                    .faces()
+                                    .iter()
+                                    .map(|f| f.name())
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            ),
+                        )
+                    })?;
+                out.push(f);
+            }
+            out
+        }
+    };
+    let m = &raw.material;
+    let temperature = positive(
+        "material.temperature_k",
+        m.temperature_k.unwrap_or(crate::units::BODY_TEMPERATURE_K),
+    )?;
+    let surface_tension = m.surface_tension.unwrap_or(0.07);
+    if !(surface_tension >= 0.0) {
+        return Err(err(
+            "material.surface_tension",
+            format!("must be ≥ 0 N/m (got {surface_tension})"),
+        ));
+    }
+    let law_of = |t: &Option<toml::Table>, key: &str, default: &str| -> (String, toml::Table) {
+        let mut t = t.clone().unwrap_or_default();
+        let name = t
+            .remove("law")
+            .and_then(|v| v.as_str().map(str::to_string))
+            .unwrap_or_else(|| default.into());
+        let _ = key;
+        (name, t)
+    };
+    let (el_name, el_params) = law_of(&m.elasticity, "material.elasticity", "none");
+    let elasticity = elasticity::build(&el_name, toml::Value::Table(el_params))
+        .map_err(|e| err("material.elasticity", e))?;
+    let (sf_name, mut sf_params) = law_of(&m.surface, "material.surface", "equal");
+    let layer = match sf_params.remove("layer_thickness_m") {
+        Some(v) => {
+            let x = v
+                .as_float()
+                .or(v.as_integer().map(|i| i as f64))
+                .unwrap_or(f64::NAN);
+            positive("material.surface.layer_thickness_m", x)?
+        }
+        None => h,
+    };
+    let surface = surface::build(&sf_name, toml::Value::Table(sf_params))
+        .map_err(|e| err("material.surface", e))?;
+    let mut gases = Vec::new();
+    for (name, gp) in &raw.gases {
+        let gas = Gas::parse(name).ok_or_else(|| {
+            err(
+                &format!("gases.{name}"),
+                format!("unknown gas '{name}'; use n2, o2 or he"),
+            )
+        })?;
+        gases.push(GasProperties {
+            gas,
+            diffusivity: positive(&format!("gases.{name}.diffusivity"), gp.diffusivity)?,
+            ostwald: positive(&format!("gases.{name}.ostwald"), gp.ostwald)?,
+        });
+    }
+    let min_radius = match raw.nuclei.min_radius_m {
+        Some(r) if r >= 0.0 => r,
+        Some(r) => {
+            return Err(err(
+                "nuclei.min_radius_m",
+                format!("must be ≥ 0 m (got {r})"),
+            ))
+        }
+        None => h,
+    };
+    let bubbles = match (&raw.population, raw.bubbles.is_empty()) {
+        (Some(_), false) => {
+            return Err(err(
+                "population",
+                "give either [[bubbles]] or [population], not both".into(),
+            ));
+        }
+        (Some(p), true) => {
+            let r0 = positive("population.initial_radius_m", p.initial_radius_m)?;
+            BubblePlacement::Random {
+                count: p.count,
+                initial_radius: r0,
+                min_spacing: p.min_spacing_m.unwrap_or(4.0 * r0),
+                margin: p.margin_m.unwrap_or(2.0 * r0),
+                seed: p.seed,
+            }
+        }
+        (None, _) => {
+            let mut list = Vec::new();
+            for b in &raw.bubbles {
+                list.push((
+                    b.position_m,
+                    positive("bubbles.initial_radius_m", b.initial_radius_m)?,
+                ));
+            }
+            BubblePlacement::Explicit(list)
+        }
+    };
+    let d = Numerics::default();
+    let n = &raw.numerics;
+    let numerics = Numerics {
+        max_step: positive("numerics.max_step_s", n.max_step_s.unwrap_or(d.max_step))?,
+        max_pressure_change: positive(
+            "numerics.max_pressure_change",
+            n.max_pressure_change.unwrap_or(d.max_pressure_change),
+        )?,
+        max_content_change: positive(
+            "numerics.max_content_change",
+            n.max_content_change.unwrap_or(d.max_content_change),
+        )?,
+        kernel_min_cells: positive(
+            "numerics.kernel_min_cells",
+            n.kernel_min_cells.unwrap_or(d.kernel_min_cells),
+        )?,
+        coupling_gap_cells: positive(
+            "numerics.coupling_gap_cells",
+            n.coupling_gap_cells.unwrap_or(d.coupling_gap_cells),
+        )?,
+        record_interval: match n.record_interval_s {
+            Some(v) if v >= 0.0 => v,
+            Some(v) => {
+                return Err(err(
+                    "numerics.record_interval_s",
+                    format!("must be ≥ 0 s (got {v})"),
+                ))
+            }
+            None => d.record_interval,
+        },
+    };
+    if numerics.max_pressure_change > 0.5 || numerics.max_content_change > 0.5 {
+        return Err(err(
+            "numerics.max_pressure_change",
+            "changes per step above 0.5 (50 %) make the explicit bubble coupling unstable; use ≤ 0.1".into(),
+        ));
+    }
+    let name = raw.name.clone().unwrap_or_else(|| {
+        path.file_stem()
+            .map(|s| s.to_string_lossy().into_owned())
+            .unwrap_or_else(|| "phantom".into())
+    });
+    let params = PhantomParams {
+        name,
+        shape,
+        grid_step: h,
+        open_faces,
+        temperature,
+        surface_tension,
+        elasticity: Arc::from(elasticity),
+        surface: Arc::from(surface),
+        surface_layer_thickness: layer,
+        gases,
+        min_radius,
+        bubbles,
+        numerics,
+    };
+    // geometry checks that need the grid (bubbles inside, cell count) happen here so that the
+    // error points at the file
+    let grid = super::grid::Grid::new(params.shape, params.grid_step, &params.open_faces)
+        .map_err(|e| err("geometry.grid_step_m", e))?;
+    super::sim::place_bubbles(&params, &grid).map_err(|e| match e {
+        crate::error::Error::Input(ie) => {
+            let key = if raw.population.is_some() {
+                "population"
+            } else {
+                "bubbles"
+            };
+            err(key, ie.message)
+        }
+        other => err("bubbles", other.to_string()),
+    })?;
+    Ok(LoadedPhantom {
+        params,
+        description: raw.description.unwrap_or_default(),
+    })
+}
