@@ -3,6 +3,8 @@
 mod algorithms;
 #[path = "integration/analytic.rs"]
 mod analytic;
+#[path = "integration/convergence.rs"]
+mod convergence;
 #[path = "integration/common.rs"]
 mod common;
 #[path = "integration/profiles.rs"]

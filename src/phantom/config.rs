@@ -241,7 +241,7 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
                 .unwrap_or(f64::NAN);
             positive("material.surface.layer_thickness_m", x)?
         }
-        None => h,
+        None => super::params::DEFAULT_SURFACE_LAYER,
     };
     let surface = surface::build(&sf_name, toml::Value::Table(sf_params))
         .map_err(|e| err("material.surface", e))?;

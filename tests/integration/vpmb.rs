@@ -28,6 +28,8 @@ fn baker_msw(descent: f64, ascent: f64) -> Conventions {
         stop_rounding: StopRounding::WholeMinutesOfRuntime,
         gf_low_anchor: GfLowAnchor::FirstStop,
         min_stop_min: 1.0,
+        // Baker's VPMDECO starts the tissues at 0.79 × (surface − water vapour)
+        surface_tissue_n2_fraction: 0.79,
     }
 }
 

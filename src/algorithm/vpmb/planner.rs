@@ -17,7 +17,6 @@ use crate::error::InputError;
 use crate::gas::GasMix;
 
 /// Fraction of N2 in surface air as Baker's program takes it.
-const AIR_N2: f64 = 0.79;
 /// Longest single stop before the planner gives up, min.
 const MAX_STOP_MIN: f64 = 100_000.0;
 /// Most critical-volume iterations before the planner gives up.
@@ -111,7 +110,7 @@ impl<'a> Planner<'a> {
     }
 
     fn surface_tissues(&self) -> Tissues {
-        let n2 = (self.alg.conventions.surface_pressure_pa - self.wv()) * AIR_N2;
+        let n2 = (self.alg.conventions.surface_pressure_pa - self.wv()) * self.alg.conventions.surface_tissue_n2_fraction;
         Tissues {
             he: [0.0; N],
             n2: [n2; N],
@@ -616,7 +615,7 @@ impl<'a> Planner<'a> {
                 c.ascent_rate_m_min,
                 self.plan.bottom_gas,
             );
-        let n2_surf = (c.surface_pressure_pa - self.wv()) * AIR_N2;
+        let n2_surf = (c.surface_pressure_pa - self.wv()) * self.alg.conventions.surface_tissue_n2_fraction;
         let mut allowable = g0;
         let mut last_pvt = [0.0; N];
         for _ in 0..MAX_CVA_ITERATIONS {
