@@ -5,6 +5,8 @@ mod algorithms;
 mod analytic;
 #[path = "integration/convergence.rs"]
 mod convergence;
+#[path = "integration/cli_simulate.rs"]
+mod cli_simulate;
 #[path = "integration/common.rs"]
 mod common;
 #[path = "integration/profiles.rs"]

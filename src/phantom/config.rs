@@ -328,11 +328,16 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
             None => d.record_interval,
         },
     };
-    if numerics.max_pressure_change > 0.5 || numerics.max_content_change > 0.5 {
-        return Err(err(
-            "numerics.max_pressure_change",
-            "changes per step above 0.5 (50 %) make the explicit bubble coupling unstable; use ≤ 0.1".into(),
-        ));
+    for (key, v) in [
+        ("numerics.max_pressure_change", numerics.max_pressure_change),
+        ("numerics.max_content_change", numerics.max_content_change),
+    ] {
+        if v > 0.5 {
+            return Err(err(
+                key,
+                format!("{v} per step is unstable for the explicit bubble coupling; use at most 0.1 (default {})", if key.ends_with("pressure_change") { d.max_pressure_change } else { d.max_content_change }),
+            ));
+        }
     }
     let name = raw.name.clone().unwrap_or_else(|| {
         path.file_stem()

@@ -1,7 +1,5 @@
-//! Verification item 5 (grid and time-step convergence) and item 7 (determinism), plus the
-//! simulate command's bad-input behaviour.
+//! Verification item 5: grid and time-step convergence on the paper's dive profile.
 
-use crate::common::{bin, tempdir};
 use decophantom::gas::GasMix;
 use decophantom::phantom::elasticity::Hyperelastic;
 use decophantom::phantom::params::{BubblePlacement, PhantomParams};
@@ -9,7 +7,6 @@ use decophantom::phantom::sim::{Recorder, Simulation};
 use decophantom::phantom::surface::AreaLaw;
 use decophantom::profile::PressureHistory;
 use decophantom::units::{ATM_PA, PSI_PA};
-use std::process::Command;
 use std::sync::Arc;
 
 /// The paper's dive profile (§4.2, Fig. 6a): compression at 6.9e4 Pa/s to 130 psi gauge, a hold

@@ -1,0 +1,168 @@
+//! The `simulate` and `elasticity` commands through the binary: determinism (verification
+//! item 7) and bad input (exit code 2, a message naming file/line/field, no output files).
+
+use crate::common::{bin, root, tempdir};
+use std::path::Path;
+use std::process::Command;
+
+const SMALL_PHANTOM: &str = r#"
+name = "small"
+[geometry]
+shape = "box"
+size_m = [1.5e-3, 1.5e-3, 1.0e-3]
+grid_step_m = 100e-6
+[material]
+surface_tension = 0.07
+[material.elasticity]
+law = "hyperelastic"
+shear_modulus = 40.0
+[material.surface]
+law = "area"
+fold = 30.0
+[gases.n2]
+diffusivity = 2.5e-9
+ostwald = 0.014
+[gases.o2]
+diffusivity = 2.5e-9
+ostwald = 0.027
+[nuclei]
+min_radius_m = 50e-6
+[population]
+count = 2
+initial_radius_m = 60e-6
+min_spacing_m = 400e-6
+margin_m = 300e-6
+seed = 11
+[numerics]
+record_interval_s = 5.0
+"#;
+
+const SHORT_DIVE: &str = r#"
+name = "short dive"
+time_unit = "s"
+pressure_unit = "psi-gauge"
+gas = "air"
+points = [[0, 0], [130, 130], [1330, 130], [1356, 0], [2500, 0]]
+"#;
+
+fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn simulate(profile: &Path, phantom: &Path, out: &Path) -> std::process::Output {
+    Command::new(bin())
+        .args(["simulate", "--profile"])
+        .arg(profile)
+        .arg("--phantom")
+        .arg(phantom)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn same_inputs_and_seed_give_byte_identical_outputs() {
+    let d = tempdir("determinism");
+    let ph = write(&d, "phantom.toml", SMALL_PHANTOM);
+    let pr = write(&d, "dive.toml", SHORT_DIVE);
+    let (a, b) = (d.join("a"), d.join("b"));
+    for out in [&a, &b] {
+        let o = simulate(&pr, &ph, out);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    }
+    for f in ["bubbles.csv", "radius.svg", "volume.svg"] {
+        let x = std::fs::read(a.join(f)).unwrap();
+        let y = std::fs::read(b.join(f)).unwrap();
+        assert!(!x.is_empty());
+        assert!(x == y, "{f} differs between two identical runs");
+    }
+    // summary.toml: identical apart from the timing field
+    let strip = |p: &Path| -> String {
+        std::fs::read_to_string(p).unwrap().lines().filter(|l| !l.starts_with("wall_seconds")).collect::<Vec<_>>().join("\n")
+    };
+    assert_eq!(strip(&a.join("summary.toml")), strip(&b.join("summary.toml")));
+    // the header the issue specifies
+    let csv = std::fs::read_to_string(a.join("bubbles.csv")).unwrap();
+    assert_eq!(csv.lines().next().unwrap(), "time_s,bubble,radius_m,volume_m3,area_m2,n_n2_mol,n_o2_mol");
+    // the bubbles grew after the decompression (the run means something)
+    let summary: toml::Table = std::fs::read_to_string(a.join("summary.toml")).unwrap().parse().unwrap();
+    let rmax = summary["max_radius_m"].as_float().unwrap();
+    assert!(rmax > 1.5 * 60e-6, "max radius {rmax}");
+    assert!(summary["gas_balance_error"].as_float().unwrap() < 1e-9);
+}
+
+fn expect_input_error(args: &[&str], must_mention: &[&str], out: &Path) {
+    let o = Command::new(bin()).args(args).output().unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "args {args:?}: stderr {err}");
+    for m in must_mention {
+        assert!(err.contains(m), "error for {args:?} should mention '{m}': {err}");
+    }
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(!out.exists(), "no output folder may be left after bad input: {}", out.display());
+}
+
+#[test]
+fn bad_input_exits_2_names_the_place_and_writes_nothing() {
+    let d = tempdir("badinput");
+    let ph = write(&d, "phantom.toml", SMALL_PHANTOM);
+    let pr = write(&d, "dive.toml", SHORT_DIVE);
+    let out = d.join("out");
+    let o = out.to_str().unwrap();
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    // unknown field in the phantom
+    let typo = write(&d, "typo.toml", &SMALL_PHANTOM.replace("surface_tension = 0.07", "surface_tensoin = 0.07"));
+    expect_input_error(&["simulate", "--profile", &s(&pr), "--phantom", &s(&typo), "--out", o], &["typo.toml", "surface_tensoin"], &out);
+    // a bubble outside the phantom
+    let outside = write(
+        &d,
+        "outside.toml",
+        &SMALL_PHANTOM.replace(
+            "[population]\ncount = 2\ninitial_radius_m = 60e-6\nmin_spacing_m = 400e-6\nmargin_m = 300e-6\nseed = 11",
+            "[[bubbles]]\nposition_m = [2.0e-3, 0.5e-3, 0.5e-3]\ninitial_radius_m = 60e-6",
+        ),
+    );
+    expect_input_error(&["simulate", "--profile", &s(&pr), "--phantom", &s(&outside), "--out", o], &["outside.toml", "bubbles", "outside the phantom"], &out);
+    // non-monotone profile
+    let back = write(&d, "back.toml", &SHORT_DIVE.replace("[1356, 0]", "[1200, 0]"));
+    expect_input_error(&["simulate", "--profile", &s(&back), "--phantom", &s(&ph), "--out", o], &["back.toml"], &out);
+    // negative time in a legacy file
+    let neg = write(&d, "neg.txt", "0 0\n-1 10\n");
+    expect_input_error(&["simulate", "--profile", &s(&neg), "--units", "min,psi-gauge", "--phantom", &s(&ph), "--out", o], &["neg.txt"], &out);
+    // unstable settings
+    let unstable = write(&d, "unstable.toml", &SMALL_PHANTOM.replace("record_interval_s = 5.0", "record_interval_s = 5.0\nmax_content_change = 0.9"));
+    expect_input_error(&["simulate", "--profile", &s(&pr), "--phantom", &s(&unstable), "--out", o], &["unstable.toml", "max_content_change"], &out);
+    // a legacy file without units
+    let legacy = root().join("../shared/legacy-profiles/30sec_oscill.txt");
+    expect_input_error(&["simulate", "--profile", &s(&legacy), "--phantom", &s(&ph), "--out", o], &["units"], &out);
+}
+
+#[test]
+fn elasticity_command_prints_every_form() {
+    let o = Command::new(bin()).args(["elasticity", "--r0", "1e-6,1e-4"]).output().unwrap();
+    assert!(o.status.success());
+    let text = String::from_utf8_lossy(&o.stdout);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines[0], "r0_m,form,rf_m");
+    assert_eq!(lines.len(), 1 + 2 * 5);
+    for form in ["none", "bulk-modulus", "continuity-of-displacement", "reference-configuration", "hyperelastic"] {
+        assert_eq!(lines.iter().filter(|l| l.contains(&format!(",{form},"))).count(), 2, "{form}");
+    }
+    // Ω = 0 and γ = 0.07 N/m at R0 = 100 µm: Boyle with a small Laplace term. Independent check
+    // by fixed-point iteration of (Pf + 2γ/R)R³ = (P0 + 2γ/R0)R0³.
+    let (p0, pf, g, r0) = (1e6f64, 1e4f64, 0.07f64, 1e-4f64);
+    let c = (p0 + 2.0 * g / r0) * r0.powi(3);
+    let mut r = r0 * 4.0;
+    for _ in 0..200 {
+        r = (c / (pf + 2.0 * g / r)).cbrt();
+    }
+    let line = lines.iter().find(|l| l.starts_with("1.000000e-4,none,")).unwrap();
+    let rf: f64 = line.rsplit(',').next().unwrap().parse().unwrap();
+    assert!((rf / r - 1.0).abs() < 1e-9, "{rf} vs {r}");
+    // bad input
+    let o = Command::new(bin()).args(["elasticity", "--p0", "-5"]).output().unwrap();
+    assert_eq!(o.status.code(), Some(2));
+}
