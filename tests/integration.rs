@@ -3,12 +3,12 @@
 mod algorithms;
 #[path = "integration/analytic.rs"]
 mod analytic;
-#[path = "integration/convergence.rs"]
-mod convergence;
 #[path = "integration/cli_simulate.rs"]
 mod cli_simulate;
 #[path = "integration/common.rs"]
 mod common;
+#[path = "integration/convergence.rs"]
+mod convergence;
 #[path = "integration/profiles.rs"]
 mod profiles;
 #[path = "integration/report.rs"]

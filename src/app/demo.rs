@@ -52,7 +52,7 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         .enumerate()
         .map(|(i, name)| {
             let mut p = base.clone();
-            p.elasticity = Arc::from(laws.build(name).map_err(|e| Error::Solver(e))?);
+            p.elasticity = Arc::from(laws.build(name).map_err(Error::Solver)?);
             p.name = format!("{} ({name})", base.name);
             let mut cb = |t: f64, e: f64| {
                 if i == 0 {

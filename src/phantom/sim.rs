@@ -709,22 +709,49 @@ impl<'a> Simulation<'a> {
         }
     }
 
+    /// One parallel pass over the grid: the largest supersaturation Σ_g C_g·R_u·T/L_g − P_amb (Pa)
+    /// and the gas dissolved in the grid per gas (mol).
+    fn gel_state(&self, ambient: f64) -> (f64, Vec<f64>) {
+        use rayon::prelude::*;
+        let ng = self.fields.len();
+        let k: Vec<f64> = self.ostwald.iter().map(|l| self.rt / l).collect();
+        let plane = self.grid.n[0] * self.grid.n[1];
+        let inside = &self.grid.codes[0];
+        let (max_t, sums) = (0..self.grid.n[2])
+            .into_par_iter()
+            .map(|kz| {
+                let mut m = f64::NEG_INFINITY;
+                let mut s = vec![0.0; ng];
+                for idx in kz * plane..(kz + 1) * plane {
+                    if inside[idx] & super::grid::INSIDE_BIT == 0 {
+                        continue;
+                    }
+                    let mut t = 0.0;
+                    for g in 0..ng {
+                        let c = self.fields[g][idx];
+                        s[g] += c;
+                        t += c * k[g];
+                    }
+                    m = m.max(t);
+                }
+                (m, s)
+            })
+            .reduce(
+                || (f64::NEG_INFINITY, vec![0.0; ng]),
+                |a, b| {
+                    (
+                        a.0.max(b.0),
+                        a.1.iter().zip(&b.1).map(|(x, y)| x + y).collect(),
+                    )
+                },
+            );
+        let v = self.grid.cell_volume();
+        (max_t - ambient, sums.into_iter().map(|x| x * v).collect())
+    }
+
     fn record(&self, profile: &PressureHistory, tensions: &[f64], observer: &mut dyn Observer) {
         let p = profile.ambient(self.time);
-        let mut max_ss = f64::NEG_INFINITY;
-        let len = self.grid.len();
-        let mut tension = vec![0.0; len];
-        for (g, f) in self.fields.iter().enumerate() {
-            let k = self.rt / self.ostwald[g];
-            for (t, c) in tension.iter_mut().zip(f) {
-                *t += c * k;
-            }
-        }
-        for (idx, t) in tension.iter().enumerate() {
-            if self.grid.inside(idx) && *t - p > max_ss {
-                max_ss = *t - p;
-            }
-        }
+        let (max_ss, grid_moles) = self.gel_state(p);
         let frame = Frame {
             time: self.time,
             ambient: p,
@@ -743,7 +770,7 @@ impl<'a> Simulation<'a> {
                 })
                 .collect(),
             max_supersaturation: max_ss,
-            grid_moles: self.fields.iter().map(|f| self.grid.integrate(f)).collect(),
+            grid_moles,
         };
         observer.frame(&frame);
     }

@@ -131,7 +131,16 @@ fn epstein_plesset_dissolution() {
     );
     // converging: both grids within 2 % over the first half, and the dissolution time moves
     // towards EP as h halves (at R0 = 2h: +3.3 %, at 4h: +2.6 % when written)
-    assert!(coarse.0 < 0.02, "radius error over the first half at R0 = 2h: {:.4}", coarse.0);
+    assert!(
+        coarse.0 < 0.02,
+        "radius error over the first half at R0 = 2h: {:.4}",
+        coarse.0
+    );
     let dev = |t: f64| (t / t_ep - 1.0).abs();
-    assert!(dev(fine.1) <= dev(coarse.1) + 1e-3, "dissolution time moved away from EP with refinement: {:?} -> {:?}", coarse, fine);
+    assert!(
+        dev(fine.1) <= dev(coarse.1) + 1e-3,
+        "dissolution time moved away from EP with refinement: {:?} -> {:?}",
+        coarse,
+        fine
+    );
 }

@@ -81,14 +81,28 @@ fn same_inputs_and_seed_give_byte_identical_outputs() {
     }
     // summary.toml: identical apart from the timing field
     let strip = |p: &Path| -> String {
-        std::fs::read_to_string(p).unwrap().lines().filter(|l| !l.starts_with("wall_seconds")).collect::<Vec<_>>().join("\n")
+        std::fs::read_to_string(p)
+            .unwrap()
+            .lines()
+            .filter(|l| !l.starts_with("wall_seconds"))
+            .collect::<Vec<_>>()
+            .join("\n")
     };
-    assert_eq!(strip(&a.join("summary.toml")), strip(&b.join("summary.toml")));
+    assert_eq!(
+        strip(&a.join("summary.toml")),
+        strip(&b.join("summary.toml"))
+    );
     // the header the issue specifies
     let csv = std::fs::read_to_string(a.join("bubbles.csv")).unwrap();
-    assert_eq!(csv.lines().next().unwrap(), "time_s,bubble,radius_m,volume_m3,area_m2,n_n2_mol,n_o2_mol");
+    assert_eq!(
+        csv.lines().next().unwrap(),
+        "time_s,bubble,radius_m,volume_m3,area_m2,n_n2_mol,n_o2_mol"
+    );
     // the bubbles grew after the decompression (the run means something)
-    let summary: toml::Table = std::fs::read_to_string(a.join("summary.toml")).unwrap().parse().unwrap();
+    let summary: toml::Table = std::fs::read_to_string(a.join("summary.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
     let rmax = summary["max_radius_m"].as_float().unwrap();
     assert!(rmax > 1.5 * 60e-6, "max radius {rmax}");
     assert!(summary["gas_balance_error"].as_float().unwrap() < 1e-9);
@@ -99,10 +113,17 @@ fn expect_input_error(args: &[&str], must_mention: &[&str], out: &Path) {
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "args {args:?}: stderr {err}");
     for m in must_mention {
-        assert!(err.contains(m), "error for {args:?} should mention '{m}': {err}");
+        assert!(
+            err.contains(m),
+            "error for {args:?} should mention '{m}': {err}"
+        );
     }
     assert!(!err.contains("panicked"), "{err}");
-    assert!(!out.exists(), "no output folder may be left after bad input: {}", out.display());
+    assert!(
+        !out.exists(),
+        "no output folder may be left after bad input: {}",
+        out.display()
+    );
 }
 
 #[test]
@@ -114,8 +135,24 @@ fn bad_input_exits_2_names_the_place_and_writes_nothing() {
     let o = out.to_str().unwrap();
     let s = |p: &Path| p.to_str().unwrap().to_string();
     // unknown field in the phantom
-    let typo = write(&d, "typo.toml", &SMALL_PHANTOM.replace("surface_tension = 0.07", "surface_tensoin = 0.07"));
-    expect_input_error(&["simulate", "--profile", &s(&pr), "--phantom", &s(&typo), "--out", o], &["typo.toml", "surface_tensoin"], &out);
+    let typo = write(
+        &d,
+        "typo.toml",
+        &SMALL_PHANTOM.replace("surface_tension = 0.07", "surface_tensoin = 0.07"),
+    );
+    expect_input_error(
+        &[
+            "simulate",
+            "--profile",
+            &s(&pr),
+            "--phantom",
+            &s(&typo),
+            "--out",
+            o,
+        ],
+        &["typo.toml", "surface_tensoin"],
+        &out,
+    );
     // a bubble outside the phantom
     let outside = write(
         &d,
@@ -125,31 +162,120 @@ fn bad_input_exits_2_names_the_place_and_writes_nothing() {
             "[[bubbles]]\nposition_m = [2.0e-3, 0.5e-3, 0.5e-3]\ninitial_radius_m = 60e-6",
         ),
     );
-    expect_input_error(&["simulate", "--profile", &s(&pr), "--phantom", &s(&outside), "--out", o], &["outside.toml", "bubbles", "outside the phantom"], &out);
+    expect_input_error(
+        &[
+            "simulate",
+            "--profile",
+            &s(&pr),
+            "--phantom",
+            &s(&outside),
+            "--out",
+            o,
+        ],
+        &["outside.toml", "bubbles", "outside the phantom"],
+        &out,
+    );
     // non-monotone profile
-    let back = write(&d, "back.toml", &SHORT_DIVE.replace("[1356, 0]", "[1200, 0]"));
-    expect_input_error(&["simulate", "--profile", &s(&back), "--phantom", &s(&ph), "--out", o], &["back.toml"], &out);
+    let back = write(
+        &d,
+        "back.toml",
+        &SHORT_DIVE.replace("[1356, 0]", "[1200, 0]"),
+    );
+    expect_input_error(
+        &[
+            "simulate",
+            "--profile",
+            &s(&back),
+            "--phantom",
+            &s(&ph),
+            "--out",
+            o,
+        ],
+        &["back.toml"],
+        &out,
+    );
     // negative time in a legacy file
     let neg = write(&d, "neg.txt", "0 0\n-1 10\n");
-    expect_input_error(&["simulate", "--profile", &s(&neg), "--units", "min,psi-gauge", "--phantom", &s(&ph), "--out", o], &["neg.txt"], &out);
+    expect_input_error(
+        &[
+            "simulate",
+            "--profile",
+            &s(&neg),
+            "--units",
+            "min,psi-gauge",
+            "--phantom",
+            &s(&ph),
+            "--out",
+            o,
+        ],
+        &["neg.txt"],
+        &out,
+    );
     // unstable settings
-    let unstable = write(&d, "unstable.toml", &SMALL_PHANTOM.replace("record_interval_s = 5.0", "record_interval_s = 5.0\nmax_content_change = 0.9"));
-    expect_input_error(&["simulate", "--profile", &s(&pr), "--phantom", &s(&unstable), "--out", o], &["unstable.toml", "max_content_change"], &out);
+    let unstable = write(
+        &d,
+        "unstable.toml",
+        &SMALL_PHANTOM.replace(
+            "record_interval_s = 5.0",
+            "record_interval_s = 5.0\nmax_content_change = 0.9",
+        ),
+    );
+    expect_input_error(
+        &[
+            "simulate",
+            "--profile",
+            &s(&pr),
+            "--phantom",
+            &s(&unstable),
+            "--out",
+            o,
+        ],
+        &["unstable.toml", "max_content_change"],
+        &out,
+    );
     // a legacy file without units
     let legacy = root().join("../shared/legacy-profiles/30sec_oscill.txt");
-    expect_input_error(&["simulate", "--profile", &s(&legacy), "--phantom", &s(&ph), "--out", o], &["units"], &out);
+    expect_input_error(
+        &[
+            "simulate",
+            "--profile",
+            &s(&legacy),
+            "--phantom",
+            &s(&ph),
+            "--out",
+            o,
+        ],
+        &["units"],
+        &out,
+    );
 }
 
 #[test]
 fn elasticity_command_prints_every_form() {
-    let o = Command::new(bin()).args(["elasticity", "--r0", "1e-6,1e-4"]).output().unwrap();
+    let o = Command::new(bin())
+        .args(["elasticity", "--r0", "1e-6,1e-4"])
+        .output()
+        .unwrap();
     assert!(o.status.success());
     let text = String::from_utf8_lossy(&o.stdout);
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines[0], "r0_m,form,rf_m");
     assert_eq!(lines.len(), 1 + 2 * 5);
-    for form in ["none", "bulk-modulus", "continuity-of-displacement", "reference-configuration", "hyperelastic"] {
-        assert_eq!(lines.iter().filter(|l| l.contains(&format!(",{form},"))).count(), 2, "{form}");
+    for form in [
+        "none",
+        "bulk-modulus",
+        "continuity-of-displacement",
+        "reference-configuration",
+        "hyperelastic",
+    ] {
+        assert_eq!(
+            lines
+                .iter()
+                .filter(|l| l.contains(&format!(",{form},")))
+                .count(),
+            2,
+            "{form}"
+        );
     }
     // Ω = 0 and γ = 0.07 N/m at R0 = 100 µm: Boyle with a small Laplace term. Independent check
     // by fixed-point iteration of (Pf + 2γ/R)R³ = (P0 + 2γ/R0)R0³.
@@ -159,10 +285,16 @@ fn elasticity_command_prints_every_form() {
     for _ in 0..200 {
         r = (c / (pf + 2.0 * g / r)).cbrt();
     }
-    let line = lines.iter().find(|l| l.starts_with("1.000000e-4,none,")).unwrap();
+    let line = lines
+        .iter()
+        .find(|l| l.starts_with("1.000000e-4,none,"))
+        .unwrap();
     let rf: f64 = line.rsplit(',').next().unwrap().parse().unwrap();
     assert!((rf / r - 1.0).abs() < 1e-9, "{rf} vs {r}");
     // bad input
-    let o = Command::new(bin()).args(["elasticity", "--p0", "-5"]).output().unwrap();
+    let o = Command::new(bin())
+        .args(["elasticity", "--p0", "-5"])
+        .output()
+        .unwrap();
     assert_eq!(o.status.code(), Some(2));
 }

@@ -15,8 +15,21 @@ fn paper_dive() -> PressureHistory {
     let top = ATM_PA + 130.0 * PSI_PA;
     let down = (top - ATM_PA) / 6.9e4;
     let up = (top - ATM_PA) / 8.9e4;
-    let t = vec![0.0, down, down + 1200.0, down + 1200.0 + up, down + 1200.0 + up + 2400.0];
-    PressureHistory::with_gas("fig6a", t, vec![ATM_PA, top, top, ATM_PA, ATM_PA], GasMix::AIR, 0.0).unwrap()
+    let t = vec![
+        0.0,
+        down,
+        down + 1200.0,
+        down + 1200.0 + up,
+        down + 1200.0 + up + 2400.0,
+    ];
+    PressureHistory::with_gas(
+        "fig6a",
+        t,
+        vec![ATM_PA, top, top, ATM_PA, ATM_PA],
+        GasMix::AIR,
+        0.0,
+    )
+    .unwrap()
 }
 
 /// One centred bubble in a 2.4 mm hydrogel cube (the hydrogel's material: D = 2.5e-9 m²/s,
@@ -24,7 +37,9 @@ fn paper_dive() -> PressureHistory {
 /// so that they do not move with h.
 fn phantom(h: f64, step_scale: f64) -> PhantomParams {
     let mut p = PhantomParams::box_phantom([2.4e-3; 3], h);
-    p.elasticity = Arc::new(Hyperelastic { shear_modulus: 40.0 });
+    p.elasticity = Arc::new(Hyperelastic {
+        shear_modulus: 40.0,
+    });
     p.surface = Arc::new(AreaLaw { fold: 30.0 });
     p.min_radius = 55e-6;
     p.bubbles = BubblePlacement::Explicit(vec![([1.2e-3; 3], 60e-6)]);
@@ -52,7 +67,18 @@ fn halving_grid_and_step_changes_plateau_radius_by_less_than_two_percent() {
     let step_only = plateau(100e-6, 0.5);
 
     eprintln!("plateau radius: h = 100 µm {:.2} µm; h = 50 µm, half step {:.2} µm; h = 100 µm, half step {:.2} µm", coarse * 1e6, fine * 1e6, step_only * 1e6);
-    assert!(coarse > 2.0 * 60e-6, "the bubble must grow well beyond R0 for the test to mean anything: {coarse}");
-    assert!((fine / coarse - 1.0).abs() < 0.02, "grid+step halving moved the plateau radius by {:+.3} %", 100.0 * (fine / coarse - 1.0));
-    assert!((step_only / coarse - 1.0).abs() < 0.02, "step halving moved the plateau radius by {:+.3} %", 100.0 * (step_only / coarse - 1.0));
+    assert!(
+        coarse > 2.0 * 60e-6,
+        "the bubble must grow well beyond R0 for the test to mean anything: {coarse}"
+    );
+    assert!(
+        (fine / coarse - 1.0).abs() < 0.02,
+        "grid+step halving moved the plateau radius by {:+.3} %",
+        100.0 * (fine / coarse - 1.0)
+    );
+    assert!(
+        (step_only / coarse - 1.0).abs() < 0.02,
+        "step halving moved the plateau radius by {:+.3} %",
+        100.0 * (step_only / coarse - 1.0)
+    );
 }

@@ -110,7 +110,8 @@ impl<'a> Planner<'a> {
     }
 
     fn surface_tissues(&self) -> Tissues {
-        let n2 = (self.alg.conventions.surface_pressure_pa - self.wv()) * self.alg.conventions.surface_tissue_n2_fraction;
+        let n2 = (self.alg.conventions.surface_pressure_pa - self.wv())
+            * self.alg.conventions.surface_tissue_n2_fraction;
         Tissues {
             he: [0.0; N],
             n2: [n2; N],
@@ -615,7 +616,8 @@ impl<'a> Planner<'a> {
                 c.ascent_rate_m_min,
                 self.plan.bottom_gas,
             );
-        let n2_surf = (c.surface_pressure_pa - self.wv()) * self.alg.conventions.surface_tissue_n2_fraction;
+        let n2_surf =
+            (c.surface_pressure_pa - self.wv()) * self.alg.conventions.surface_tissue_n2_fraction;
         let mut allowable = g0;
         let mut last_pvt = [0.0; N];
         for _ in 0..MAX_CVA_ITERATIONS {
