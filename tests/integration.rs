@@ -5,6 +5,8 @@ mod algorithms;
 mod analytic;
 #[path = "integration/cli_simulate.rs"]
 mod cli_simulate;
+#[path = "integration/events.rs"]
+mod events;
 #[path = "integration/common.rs"]
 mod common;
 #[path = "integration/convergence.rs"]
