@@ -13,5 +13,7 @@ mod convergence;
 mod profiles;
 #[path = "integration/report.rs"]
 mod report;
+#[path = "integration/verification.rs"]
+mod verification;
 #[path = "integration/vpmb.rs"]
 mod vpmb;
