@@ -1,1 +1,82 @@
-fn main() {}
+//! Diffusion-kernel throughput (cell-updates per second) and one short end-to-end run.
+//! `cargo bench --bench kernel -- --warm-up-time 1 --measurement-time 5`
+
+use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
+use decophantom::gas::GasMix;
+use decophantom::phantom::diffusion;
+use decophantom::phantom::grid::{Face, Grid, Shape};
+use decophantom::phantom::params::{BubblePlacement, PhantomParams};
+use decophantom::phantom::sim::{Recorder, Simulation};
+use decophantom::profile::PressureHistory;
+use decophantom::units::PSI_PA;
+
+const H: f64 = 1e-4;
+const D: f64 = 2.5e-9;
+
+fn grid(n: [usize; 3]) -> Grid {
+    let size = [n[0] as f64 * H, n[1] as f64 * H, n[2] as f64 * H];
+    let open = [
+        Face::XMinus,
+        Face::XPlus,
+        Face::YMinus,
+        Face::YPlus,
+        Face::Top,
+    ];
+    Grid::new(Shape::Box { size }, H, &open).unwrap()
+}
+
+fn kernels(c: &mut Criterion) {
+    let mut group = c.benchmark_group("diffusion");
+    for n in [[128, 128, 32], [128, 128, 128]] {
+        let g = grid(n);
+        let cells = g.len() as u64;
+        let label = format!("{}x{}x{}", n[0], n[1], n[2]);
+        group.throughput(Throughput::Elements(cells));
+        let u0: Vec<f64> = (0..g.len()).map(|i| 1.0 + (i % 17) as f64 * 0.01).collect();
+        let dt_explicit = 0.9 * diffusion::explicit_limit(&g, D);
+        group.bench_with_input(BenchmarkId::new("explicit_step", &label), &g, |b, g| {
+            let u = u0.clone();
+            let mut out = vec![0.0; g.len()];
+            b.iter(|| diffusion::explicit_step(g, &u, &mut out, D, dt_explicit, 0.5))
+        });
+        group.bench_with_input(BenchmarkId::new("implicit_step", &label), &g, |b, g| {
+            let mut u = u0.clone();
+            let mut scratch = vec![0.0; g.len()];
+            b.iter(|| diffusion::implicit_step(g, &mut u, &mut scratch, D, 20.0, 0.5))
+        });
+    }
+    group.finish();
+}
+
+/// The oscillation experiment's set-up, shortened: 12.8 × 12.8 × 3.2 mm, h = 100 µm, three
+/// bubbles, one 0–20 psi gauge cycle (30 s half-period).
+fn end_to_end(c: &mut Criterion) {
+    let mut params = PhantomParams::box_phantom([12.8e-3, 12.8e-3, 3.2e-3], H);
+    params.bubbles = BubblePlacement::Explicit(vec![
+        ([4e-3, 4e-3, 1.6e-3], 150e-6),
+        ([8e-3, 6e-3, 1.6e-3], 150e-6),
+        ([6e-3, 9e-3, 1.6e-3], 150e-6),
+    ]);
+    params.numerics.record_interval = 1.0;
+    let s = 101_325.0;
+    let profile = PressureHistory::with_gas(
+        "oscillation",
+        vec![0.0, 30.0, 60.0],
+        vec![s, s + 20.0 * PSI_PA, s],
+        GasMix::AIR,
+        0.0,
+    )
+    .unwrap();
+    let mut group = c.benchmark_group("end_to_end");
+    group.sample_size(10);
+    group.bench_function("oscillation_60s_128x128x32", |b| {
+        b.iter(|| {
+            let mut sim = Simulation::new(&params, &profile).unwrap();
+            sim.run(&profile, &mut Recorder::default()).unwrap()
+        })
+    });
+    group.finish();
+}
+
+criterion_group!(benches, kernels, end_to_end);
+criterion_main!(benches);

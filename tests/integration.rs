@@ -15,5 +15,7 @@ mod convergence;
 mod profiles;
 #[path = "integration/report.rs"]
 mod report;
+#[path = "integration/verification.rs"]
+mod verification;
 #[path = "integration/vpmb.rs"]
 mod vpmb;

@@ -105,11 +105,16 @@ unsafe impl Sync for SyncPtr {}
 /// wherever a cell's minus side is not an interior face.
 fn sweep(grid: &Grid, dir: usize, u: &mut [f64], cp: &mut [f64], r: f64, cb: f64) -> f64 {
     let [nx, ny, nz] = grid.n;
-    // layout: [block][along][inner]
-    let (n_blocks, n_along, n_inner) = match dir {
-        0 => (ny * nz, nx, 1),
-        1 => (nz, ny, nx),
-        _ => (1, nz, nx * ny),
+    let plane = nx * ny;
+    // cell = block·block_stride + along·along_stride + inner·inner_stride. Each work item
+    // solves the lines of a range of `inner` together, stepping along them in lock-step, so
+    // the elimination's serial chain (one division per cell) is interleaved over many lines.
+    // For x the lines are contiguous: interleaving the ny lines of a z-plane (stride nx, the
+    // plane stays in cache) is ~4× faster than solving one line after the other.
+    let (n_blocks, n_along, n_inner, block_stride, along_stride, inner_stride) = match dir {
+        0 => (nz, nx, ny, plane, 1, nx),
+        1 => (nz, ny, nx, plane, nx, 1),
+        _ => (1, nz, plane, 0, plane, 1),
     };
     let codes = &grid.codes[dir];
     let threads = rayon::current_num_threads().max(1);
@@ -131,14 +136,14 @@ fn sweep(grid: &Grid, dir: usize, u: &mut [f64], cp: &mut [f64], r: f64, cb: f64
     let cpp = SyncPtr(cp.as_mut_ptr());
     items.par_iter().for_each(|&(b, lo, hi)| {
         let (up, cpp) = (up, cpp);
-        let base = b * n_along * n_inner;
+        let base = b * block_stride;
         // SAFETY: work items cover disjoint cell sets (distinct blocks, or distinct inner
         // ranges of the same block), and each item only touches its own cells.
         unsafe {
             for a in 0..n_along {
-                let row = base + a * n_inner;
+                let row = base + a * along_stride;
                 for i in lo..hi {
-                    let idx = row + i;
+                    let idx = row + i * inner_stride;
                     let c = *codes.get_unchecked(idx);
                     if c & INSIDE_BIT == 0 {
                         *cpp.0.add(idx) = 0.0;
@@ -156,7 +161,7 @@ fn sweep(grid: &Grid, dir: usize, u: &mut [f64], cp: &mut [f64], r: f64, cb: f64
                     }
                     let cm = if p == SIDE_INTERIOR { -r } else { 0.0 };
                     let denom = if m == SIDE_INTERIOR {
-                        let prev = idx - n_inner;
+                        let prev = idx - along_stride;
                         rhs += r * *up.0.add(prev);
                         bdiag + r * *cpp.0.add(prev)
                     } else {
@@ -168,12 +173,12 @@ fn sweep(grid: &Grid, dir: usize, u: &mut [f64], cp: &mut [f64], r: f64, cb: f64
                 }
             }
             for a in (0..n_along.saturating_sub(1)).rev() {
-                let row = base + a * n_inner;
+                let row = base + a * along_stride;
                 for i in lo..hi {
-                    let idx = row + i;
+                    let idx = row + i * inner_stride;
                     let cpi = *cpp.0.add(idx);
                     if cpi != 0.0 {
-                        *up.0.add(idx) -= cpi * *up.0.add(idx + n_inner);
+                        *up.0.add(idx) -= cpi * *up.0.add(idx + along_stride);
                     }
                 }
             }

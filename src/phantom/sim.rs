@@ -613,8 +613,14 @@ impl<'a> Simulation<'a> {
                     }
                 }
                 self.record(profile, &tensions, observer);
-                while next_record <= self.time + 1e-9 {
-                    next_record += num.record_interval.max(1e-9);
+                if num.record_interval > 0.0 {
+                    while next_record <= self.time + 1e-9 {
+                        next_record += num.record_interval;
+                    }
+                } else {
+                    // 0 = every step (stepping `next_record` by a tiny interval up to the
+                    // current time would take ~time/1e-9 iterations)
+                    next_record = self.time;
                 }
             }
             if done {
