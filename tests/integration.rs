@@ -5,12 +5,12 @@ mod algorithms;
 mod analytic;
 #[path = "integration/cli_simulate.rs"]
 mod cli_simulate;
-#[path = "integration/events.rs"]
-mod events;
 #[path = "integration/common.rs"]
 mod common;
 #[path = "integration/convergence.rs"]
 mod convergence;
+#[path = "integration/events.rs"]
+mod events;
 #[path = "integration/profiles.rs"]
 mod profiles;
 #[path = "integration/report.rs"]

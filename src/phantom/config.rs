@@ -317,6 +317,7 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
             "numerics.coupling_gap_cells",
             n.coupling_gap_cells.unwrap_or(d.coupling_gap_cells),
         )?,
+        implicit_cost_ratio: d.implicit_cost_ratio,
         record_interval: match n.record_interval_s {
             Some(v) if v >= 0.0 => v,
             Some(v) => {

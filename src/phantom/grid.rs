@@ -103,6 +103,9 @@ pub struct Grid {
     pub open_cells: [Vec<(u32, u8)>; 3],
     /// Number of inside cells.
     pub n_inside: usize,
+    /// Per x-row (index j + ny·k): the range [i0, i1) of cells whose six sides are all interior
+    /// faces (empty when i0 ≥ i1). The explicit kernel runs a branch-free stencil there.
+    pub interior_spans: Vec<(u32, u32)>,
 }
 
 impl Grid {
@@ -208,7 +211,21 @@ impl Grid {
                 }
             }
         }
+        let full = SIDE_INTERIOR | (SIDE_INTERIOR << 2) | INSIDE_BIT;
+        let mut interior_spans = vec![(0u32, 0u32); n[1] * n[2]];
+        for (row, span) in interior_spans.iter_mut().enumerate() {
+            let base = row * n[0];
+            let is_full = |i: usize| (0..3).all(|d| codes[d][base + i] == full);
+            if let Some(i0) = (0..n[0]).find(|&i| is_full(i)) {
+                let mut i1 = i0;
+                while i1 < n[0] && is_full(i1) {
+                    i1 += 1;
+                }
+                *span = (i0 as u32, i1 as u32);
+            }
+        }
         Ok(Grid {
+            interior_spans,
             n,
             h,
             shape,

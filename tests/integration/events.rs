@@ -10,7 +10,14 @@ use decophantom::units::ATM_PA;
 
 /// Saturated at 10 atm, then a fast decompression to 1 atm and a hold: strong growth.
 fn decompression() -> PressureHistory {
-    PressureHistory::with_gas("decomp", vec![0.0, 10.0, 1800.0], vec![10.0 * ATM_PA, ATM_PA, ATM_PA], GasMix::AIR, 0.0).unwrap()
+    PressureHistory::with_gas(
+        "decomp",
+        vec![0.0, 10.0, 1800.0],
+        vec![10.0 * ATM_PA, ATM_PA, ATM_PA],
+        GasMix::AIR,
+        0.0,
+    )
+    .unwrap()
 }
 
 fn base() -> PhantomParams {
@@ -24,7 +31,10 @@ fn base() -> PhantomParams {
 #[test]
 fn touching_bubbles_coalesce_with_summed_gas_at_the_content_weighted_centre() {
     let mut p = base();
-    p.bubbles = BubblePlacement::Explicit(vec![([0.8e-3, 1.0e-3, 1.0e-3], 60e-6), ([1.2e-3, 1.0e-3, 1.0e-3], 40e-6)]);
+    p.bubbles = BubblePlacement::Explicit(vec![
+        ([0.8e-3, 1.0e-3, 1.0e-3], 60e-6),
+        ([1.2e-3, 1.0e-3, 1.0e-3], 40e-6),
+    ]);
     let prof = decompression();
     let mut sim = Simulation::new(&p, &prof).unwrap();
     let mut rec = Recorder::default();
@@ -33,7 +43,11 @@ fn touching_bubbles_coalesce_with_summed_gas_at_the_content_weighted_centre() {
         .events
         .iter()
         .find_map(|e| match e {
-            Event::Coalesced { time, into, absorbed } => Some((*time, *into, *absorbed)),
+            Event::Coalesced {
+                time,
+                into,
+                absorbed,
+            } => Some((*time, *into, *absorbed)),
             _ => None,
         })
         .expect("the two bubbles must meet");
@@ -49,7 +63,11 @@ fn touching_bubbles_coalesce_with_summed_gas_at_the_content_weighted_centre() {
     // independent expectation: content-weighted centre of the two bubbles one frame earlier
     // (they exchange a little gas in that last step, so compare to 1 % of the separation)
     let x = (a.position[0] * na + b.position[0] * nb) / (na + nb);
-    assert!((after.bubbles[0].position[0] - x).abs() < 0.01 * 0.4e-3, "{} vs {x}", after.bubbles[0].position[0]);
+    assert!(
+        (after.bubbles[0].position[0] - x).abs() < 0.01 * 0.4e-3,
+        "{} vs {x}",
+        after.bubbles[0].position[0]
+    );
     assert!(na >= nb, "the bubble with more gas survives");
     // gas is conserved through the merge (sealed phantom)
     assert!(s.gas_balance_error < 1e-9, "{}", s.gas_balance_error);
