@@ -2,14 +2,21 @@
 //! the paper's surface-area-dependent growth (its D_surf scales with area). dA/dt is the
 //! forward difference between consecutive recorded frames in which the bubble exists; the
 //! value is the largest over bubbles and frame pairs, 0 when no bubble ever grows.
+//! `window = "after-surfacing"` looks only from the moment the dive reaches the surface, so
+//! the Boyle expansion of the ascent is left out and only diffusive growth counts
+//! (default `"whole-run"`).
 
-use super::{params, series, RiskCriterion, RunData};
+use super::{params, series, RiskCriterion, RunData, Window};
 use serde::Deserialize;
 
 /// Peak per-bubble dA/dt, µm²/s.
-#[derive(Debug, Clone, Copy, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct PeakAreaGrowthRate {}
+pub struct PeakAreaGrowthRate {
+    /// Which frames (default the whole run).
+    #[serde(default)]
+    pub window: Window,
+}
 
 impl RiskCriterion for PeakAreaGrowthRate {
     fn name(&self) -> &'static str {
@@ -19,7 +26,7 @@ impl RiskCriterion for PeakAreaGrowthRate {
         "µm²/s"
     }
     fn evaluate(&self, run: &RunData) -> f64 {
-        series::per_bubble(run.frames, |b| b.area)
+        series::per_bubble(run.window(self.window), |b| b.area)
             .values()
             .flat_map(|pts| series::rate(pts))
             .map(|(_, r)| r)
@@ -27,7 +34,13 @@ impl RiskCriterion for PeakAreaGrowthRate {
             * 1e12
     }
     fn describe(&self) -> String {
-        "peak single-bubble surface-area growth rate dA/dt (between recorded frames)".into()
+        format!(
+            "peak single-bubble surface-area growth rate dA/dt (between recorded frames){}",
+            match self.window {
+                Window::WholeRun => "",
+                Window::AfterSurfacing => ", after surfacing",
+            }
+        )
     }
 }
 
@@ -55,13 +68,24 @@ mod tests {
             frame(30.0, 1e5, 0.0, vec![bubble(0, 115e-6, 0.0)]),
         ];
         let want = 4.0 * PI * 240.0;
-        let got = PeakAreaGrowthRate {}.evaluate(&RunData { frames: &f });
+        let got = PeakAreaGrowthRate::default().evaluate(&RunData::new(&f));
         assert!((got - want).abs() < 1e-9 * want, "{got} vs {want}");
         // shrinking only → 0
         let g = vec![
             frame(0.0, 1e5, 0.0, vec![bubble(0, 100e-6, 0.0)]),
             frame(1.0, 1e5, 0.0, vec![bubble(0, 90e-6, 0.0)]),
         ];
-        assert_eq!(PeakAreaGrowthRate {}.evaluate(&RunData { frames: &g }), 0.0);
+        assert_eq!(PeakAreaGrowthRate::default().evaluate(&RunData::new(&g)), 0.0);
+        // Pairs need both frames in the window. Surfacing at 12 s leaves b1 at 15 s and b0 at
+        // 30 s, one frame each → 0; surfacing at 8 s keeps b0's 10→30 s pair, 4π·56.25 µm²/s.
+        let after = PeakAreaGrowthRate {
+            window: Window::AfterSurfacing,
+        };
+        let at = |t| RunData {
+            frames: &f,
+            surfaced_s: Some(t),
+        };
+        assert_eq!(after.evaluate(&at(12.0)), 0.0);
+        assert!((after.evaluate(&at(8.0)) - 4.0 * PI * 56.25).abs() < 1e-9);
     }
 }

@@ -80,7 +80,7 @@ mod tests {
             gain_per_mm3_min: 0.5,
             threshold_mm3: 0.02,
         };
-        let got = h.evaluate(&RunData { frames: &f });
+        let got = h.evaluate(&RunData::new(&f));
         let want = 100.0 * (1.0 - (-0.8f64).exp());
         assert!((got - want).abs() < 1e-6, "{got} vs {want}");
         assert!((want - 55.0671).abs() < 1e-3);

@@ -30,6 +30,42 @@ pub use config::{load_criteria, parse_criteria, CriteriaSet, ConfiguredCriterion
 pub struct RunData<'a> {
     /// The recorded frames, in time order (times in s, SI units throughout).
     pub frames: &'a [Frame],
+    /// When the (last) dive reached the surface, s; `None` if unknown (e.g. a laboratory
+    /// profile). Criteria with `window = "after-surfacing"` look only at frames from then on.
+    pub surfaced_s: Option<f64>,
+}
+
+impl<'a> RunData<'a> {
+    /// Run data without a known surfacing time.
+    pub fn new(frames: &'a [Frame]) -> Self {
+        RunData {
+            frames,
+            surfaced_s: None,
+        }
+    }
+
+    /// The frames of a window: all of them, or those at or after surfacing.
+    pub fn window(&self, w: Window) -> &'a [Frame] {
+        match (w, self.surfaced_s) {
+            (Window::AfterSurfacing, Some(t)) => {
+                let k = self.frames.partition_point(|f| f.time < t - 1e-9);
+                &self.frames[k..]
+            }
+            _ => self.frames,
+        }
+    }
+}
+
+/// Which part of a run a criterion looks at.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Window {
+    /// The whole run (default).
+    #[default]
+    WholeRun,
+    /// From the moment the (last) dive reaches the surface: growth at constant ambient
+    /// pressure, i.e. by diffusion only, without the Boyle expansion of the ascent.
+    AfterSurfacing,
 }
 
 /// A risk criterion: one number from a run's bubble history, in [`RiskCriterion::unit`].

@@ -46,7 +46,7 @@ mod tests {
             frame(3.0, 1e5, 0.0, vec![]),
         ];
         // 130 µm (bubble 3 at t = 1)
-        assert!((PeakRadius {}.evaluate(&RunData { frames: &f }) - 130.0).abs() < 1e-9);
-        assert_eq!(PeakRadius {}.evaluate(&RunData { frames: &[] }), 0.0);
+        assert!((PeakRadius {}.evaluate(&RunData::new(&f)) - 130.0).abs() < 1e-9);
+        assert_eq!(PeakRadius {}.evaluate(&RunData::new(&[])), 0.0);
     }
 }

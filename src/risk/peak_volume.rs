@@ -50,7 +50,7 @@ mod tests {
             frame(2.0, 1e5, 0.0, vec![bubble(0, 90e-6, 0.0), bubble(1, 120e-6, 0.0)]),
         ];
         let want = 4.0 / 3.0 * PI * (90f64.powi(3) + 120f64.powi(3)) * 1e-9;
-        let got = PeakTotalVolume {}.evaluate(&RunData { frames: &f });
+        let got = PeakTotalVolume {}.evaluate(&RunData::new(&f));
         assert!((got - want).abs() < 1e-12 * want, "{got} vs {want}");
         assert!(build(toml::Table::new()).is_ok());
         let mut bad = toml::Table::new();

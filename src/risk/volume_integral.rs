@@ -82,7 +82,7 @@ mod tests {
         let c = VolumeTimeAboveThreshold {
             threshold_mm3: 0.05,
         };
-        let got = c.evaluate(&RunData { frames: &f });
+        let got = c.evaluate(&RunData::new(&f));
         assert!((got - 1.6).abs() < 1e-9, "{got}");
     }
 
@@ -98,7 +98,7 @@ mod tests {
         for w in times.windows(2) {
             trap += 0.5 * (v(w[0]) + v(w[1])) * (w[1] - w[0]) / 60.0;
         }
-        let got = VolumeTimeAboveThreshold { threshold_mm3: 0.0 }.evaluate(&RunData { frames: &f });
+        let got = VolumeTimeAboveThreshold { threshold_mm3: 0.0 }.evaluate(&RunData::new(&f));
         assert!((got - trap).abs() < 1e-9 * trap, "{got} vs {trap}");
         assert!((got - (9.0 + 0.02)).abs() < 1e-9, "{got}");
     }
