@@ -35,7 +35,7 @@ pub struct CheckArgs {
     /// Criteria TOML (algorithms/criteria/*.toml).
     #[arg(long)]
     pub criteria: std::path::PathBuf,
-    /// Phantom TOML (default: the built-in hydrogel).
+    /// Phantom TOML (default: the built-in profiles/phantoms/hydrogel-dive.toml).
     #[arg(long)]
     pub phantom: Option<std::path::PathBuf>,
     /// Override the phantom's grid step, m (coarser = faster; nuclei keep their radii).
@@ -70,7 +70,7 @@ pub struct EvaluateArgs {
     /// Elasticity laws: all, or names (comma-separated or repeated); default the phantom's own.
     #[arg(long)]
     pub elasticity: Vec<String>,
-    /// Phantom TOML (default: the built-in hydrogel).
+    /// Phantom TOML (default: the built-in profiles/phantoms/hydrogel-dive.toml).
     #[arg(long)]
     pub phantom: Option<std::path::PathBuf>,
     /// Override the phantom's grid step, m (coarser = faster; nuclei keep their radii).
@@ -247,7 +247,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             Ok(0)
         }
         Command::Demo(a) => {
-            let mut bar = Progress::new();
+            let mut bar = Progress::runs();
             let text = decophantom::app::demo::run(&a.out, &mut |t, e| bar.update(t, e));
             bar.finish();
             print!("{}", text?);

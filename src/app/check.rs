@@ -24,7 +24,7 @@ pub struct CheckRequest {
     pub schedule: PathBuf,
     /// Criteria file.
     pub criteria: PathBuf,
-    /// Phantom file (built-in hydrogel if absent).
+    /// Phantom file (built-in hydrogel-dive if absent).
     pub phantom: Option<PathBuf>,
     /// Grid step override, m.
     pub grid_step_m: Option<f64>,

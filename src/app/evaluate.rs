@@ -34,8 +34,10 @@ use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex};
 
-/// The built-in phantom (`profiles/phantoms/hydrogel.toml`), used when none is given.
-pub const HYDROGEL_PHANTOM: &str = include_str!("../../profiles/phantoms/hydrogel.toml");
+/// The built-in phantom (`profiles/phantoms/hydrogel-dive.toml`), used when none is given.
+pub const HYDROGEL_PHANTOM: &str = include_str!("../../profiles/phantoms/hydrogel-dive.toml");
+/// Where [`HYDROGEL_PHANTOM`] comes from.
+pub const HYDROGEL_PHANTOM_PATH: &str = "profiles/phantoms/hydrogel-dive.toml";
 
 /// Default M = K/V_aff of the Bulk-Modulus law when the phantom does not give one, Pa/m³
 /// (5e-2 Pa/µm³, the paper's Fig. 2a).
@@ -116,8 +118,8 @@ impl PhantomSpec {
             }
             None => PhantomSpec::from_text(
                 HYDROGEL_PHANTOM,
-                Path::new("profiles/phantoms/hydrogel.toml"),
-                "built-in hydrogel (profiles/phantoms/hydrogel.toml)",
+                Path::new(HYDROGEL_PHANTOM_PATH),
+                "built-in hydrogel-dive (profiles/phantoms/hydrogel-dive.toml)",
                 grid_step_m,
             ),
         }
@@ -367,7 +369,7 @@ pub struct EvaluateRequest {
     pub algorithms: Vec<PathBuf>,
     /// Elasticity laws (`all`, names; empty → the phantom's own).
     pub elasticity: Vec<String>,
-    /// Phantom file (built-in hydrogel if absent).
+    /// Phantom file (built-in hydrogel-dive if absent).
     pub phantom: Option<PathBuf>,
     /// Grid step override, m.
     pub grid_step_m: Option<f64>,
