@@ -11,6 +11,8 @@ mod events;
 mod common;
 #[path = "integration/convergence.rs"]
 mod convergence;
+#[path = "integration/evaluate.rs"]
+mod evaluate;
 #[path = "integration/profiles.rs"]
 mod profiles;
 #[path = "integration/report.rs"]
