@@ -11,7 +11,6 @@ use super::evaluate::{
     PhantomSpec, ReportContext, HYDROGEL_PHANTOM, HYDROGEL_PHANTOM_PATH,
 };
 use super::simulate::{add_run_files, describe, radius_plot, simulate, SimRun};
-use crate::risk::parse_criteria;
 use crate::error::Error;
 use crate::phantom::config::parse_phantom;
 use crate::phantom::elasticity::{law_names, AllLawParams};
@@ -20,6 +19,7 @@ use crate::report::html::Page;
 use crate::report::output::OutputSet;
 use crate::report::plot::{LinePlot, Series};
 use crate::report::table::{Cell, Column, Table};
+use crate::risk::parse_criteria;
 use rayon::prelude::*;
 use std::path::Path;
 use std::sync::Arc;
@@ -86,7 +86,7 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         "decophantom demo: a {dive} dive through the hydrogel phantom, and the oscillation experiment"
     ));
     let mut set = OutputSet::new();
-    page.text("This report is produced by `cargo run --release -- demo`. Part 1 evaluates one dive planned by three algorithms through the hydrogel phantom under every tissue-elasticity law, exactly as `decophantom evaluate --depth 45 --time 25 --algorithm algorithms/zhl16c-gf30-85.toml --algorithm algorithms/zhl16c-gf50-80.toml --algorithm algorithms/vpmb-2-baker.toml --elasticity all --criteria algorithms/criteria/default.toml` does. The phantom is `profiles/phantoms/hydrogel-dive.toml`: the Fig. 5 hydrogel at a grid step of 125 µm instead of 86.5 µm (about 3× fewer cells, so the 15 runs finish in about a minute on two cores) with nuclei of 100 µm just above R_min = 86.5 µm. Part 2 is the paper's oscillation experiment (§4.1).");
+    page.text("This report is produced by `cargo run --release -- demo`. Part 1 evaluates one dive planned by three algorithms through the hydrogel phantom under every tissue-elasticity law, exactly as `decophantom evaluate --depth 45 --time 25 --algorithm algorithms/zhl16c-gf30-85.toml --algorithm algorithms/zhl16c-gf50-80.toml --algorithm algorithms/vpmb-2-baker.toml --elasticity all --criteria algorithms/criteria/default.toml` does. The phantom is `profiles/phantoms/hydrogel-dive.toml`: the Fig. 5 hydrogel at a grid step of 125 µm instead of 86.5 µm (about 3× fewer cells, so the 15 runs finish in about a minute on two cores) with the nuclei unchanged (R0 = 86.5 µm, R_min = 80 µm). Part 2 is the paper's oscillation experiment (§4.1).");
     page.section(format!("Part 1 — the dive: {dive}"));
     add_report(
         &mut page,
@@ -131,7 +131,11 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
             let mut cb = |t: f64, e: f64| {
                 if let Ok(mut g) = progress.lock() {
                     let (fr, cb) = &mut *g;
-                    fr[i] = if e > 0.0 { (t / e).clamp(0.0, 1.0) } else { 1.0 };
+                    fr[i] = if e > 0.0 {
+                        (t / e).clamp(0.0, 1.0)
+                    } else {
+                        1.0
+                    };
                     let done: f64 = fr.iter().sum();
                     (*cb)(dive_runs + done, total_runs)
                 }
@@ -141,7 +145,6 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         .collect();
     let runs: Vec<SimRun> = runs.into_iter().collect::<Result<_, _>>()?;
     let main_idx = names.iter().position(|n| *n == "hyperelastic").unwrap_or(0);
-    let mut set = OutputSet::new();
     add_run_files(
         &mut set,
         "oscillation/",

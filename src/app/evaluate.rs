@@ -16,8 +16,8 @@
 
 use super::plan::plan_dive;
 use super::simulate::{ending_text, simulate, SimRun};
-use crate::algorithm::schedule::gas_text;
 use crate::algorithm::config::parse_algorithm;
+use crate::algorithm::schedule::gas_text;
 use crate::algorithm::{load_algorithm, LoadedAlgorithm, Schedule};
 use crate::error::{Error, InputError};
 use crate::gas::GasMix;
@@ -76,9 +76,11 @@ impl PhantomSpec {
         let mut params = loaded.params;
         if let Some(h) = grid_step_m {
             if !(h.is_finite() && h > 0.0) {
-                return Err(InputError::new(format!("grid step must be positive m (got {h})"))
-                    .in_file("<command line>")
-                    .field("--grid-step"));
+                return Err(
+                    InputError::new(format!("grid step must be positive m (got {h})"))
+                        .in_file("<command line>")
+                        .field("--grid-step"),
+                );
             }
             params.grid_step = h;
         }
@@ -88,10 +90,8 @@ impl PhantomSpec {
             .and_then(|m| m.get("elasticity"))
             .and_then(|e| e.as_table());
         let num = |k: &str| {
-            el.and_then(|e| e.get(k)).and_then(|v| {
-                v.as_float()
-                    .or_else(|| v.as_integer().map(|i| i as f64))
-            })
+            el.and_then(|e| e.get(k))
+                .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
         };
         let laws = AllLawParams {
             shear_modulus: num("shear_modulus").unwrap_or(DEFAULT_SHEAR_MODULUS),
@@ -156,14 +156,17 @@ impl PhantomSpec {
                 }
                 continue;
             }
-            let n = names.iter().find(|n| n.eq_ignore_ascii_case(r)).ok_or_else(|| {
-                InputError::new(format!(
-                    "unknown elasticity law '{r}'; use all or one of {}",
-                    names.join(", ")
-                ))
-                .in_file("<command line>")
-                .field("--elasticity")
-            })?;
+            let n = names
+                .iter()
+                .find(|n| n.eq_ignore_ascii_case(r))
+                .ok_or_else(|| {
+                    InputError::new(format!(
+                        "unknown elasticity law '{r}'; use all or one of {}",
+                        names.join(", ")
+                    ))
+                    .in_file("<command line>")
+                    .field("--elasticity")
+                })?;
             if !out.contains(n) {
                 out.push(n);
             }
@@ -319,16 +322,19 @@ pub fn run_matrix(
             let mut cb = |t: f64, end: f64| {
                 if let Ok(mut g) = shared.lock() {
                     let (fr, cb) = &mut *g;
-                    fr[j] = if end > 0.0 { (t / end).clamp(0.0, 1.0) } else { 1.0 };
+                    fr[j] = if end > 0.0 {
+                        (t / end).clamp(0.0, 1.0)
+                    } else {
+                        1.0
+                    };
                     let done: f64 = fr.iter().sum();
                     (*cb)(done, total);
                 }
             };
             let run = simulate(&params, &candidates[c].history, &mut cb).map_err(|e| match e {
-                Error::Solver(m) => Error::Solver(format!(
-                    "{} under {law}: {m}",
-                    candidates[c].label
-                )),
+                Error::Solver(m) => {
+                    Error::Solver(format!("{} under {law}: {m}", candidates[c].label))
+                }
                 other => other,
             })?;
             let h = &candidates[c].history;
@@ -597,17 +603,16 @@ pub fn ranking(ev: &Evaluation) -> Vec<Ranked> {
             .iter()
             .filter(|r| r.law == *law)
             .map(|r| {
-                let worst = r
-                    .scores
-                    .iter()
-                    .map(|s| (s.ratio(), s.label.clone()))
-                    .fold((f64::NEG_INFINITY, String::new()), |a, b| {
+                let worst = r.scores.iter().map(|s| (s.ratio(), s.label.clone())).fold(
+                    (f64::NEG_INFINITY, String::new()),
+                    |a, b| {
                         if b.0 > a.0 {
                             b
                         } else {
                             a
                         }
-                    });
+                    },
+                );
                 let n = r.scores.len().max(1) as f64;
                 Ranked {
                     law,
@@ -712,10 +717,10 @@ pub fn add_report(
     let proto = &ev.criteria.protocol;
     let primary = ev.laws[0];
     let add_svg = |page: &mut Page,
-                       set: &mut OutputSet,
-                       name: &str,
-                       svg: String,
-                       caption: &str|
+                   set: &mut OutputSet,
+                   name: &str,
+                   svg: String,
+                   caption: &str|
      -> Result<(), Error> {
         let file = format!("{prefix}{name}");
         page.figure(&svg, Some(&file), caption)
@@ -835,7 +840,12 @@ pub fn add_report(
         title: "Each criterion as a fraction of its limit".into(),
         x_label: "criterion".into(),
         y_label: "value / limit (1 = limit)".into(),
-        categories: ev.criteria.criteria.iter().map(|c| c.label.clone()).collect(),
+        categories: ev
+            .criteria
+            .criteria
+            .iter()
+            .map(|c| c.label.clone())
+            .collect(),
         groups,
         values: (0..ev.criteria.criteria.len())
             .map(|k| ev.runs.iter().map(|r| r.scores[k].ratio()).collect())
@@ -877,7 +887,10 @@ pub fn add_report(
             continue;
         };
         let f = &r.run.frames;
-        vol = vol.with(Series::new(&cand.label, minutes(series::total_volume(f), 1e9)));
+        vol = vol.with(Series::new(
+            &cand.label,
+            minutes(series::total_volume(f), 1e9),
+        ));
         let a = series::total_area(f);
         rate = rate.with(Series::new(
             &cand.label,
@@ -963,7 +976,10 @@ pub fn add_report(
                 set,
                 &format!("elasticity-{}.svg", c + 1),
                 el.to_svg().map_err(plot_err)?,
-                &format!("Total bubble volume of {} under each elasticity law.", cand.label),
+                &format!(
+                    "Total bubble volume of {} under each elasticity law.",
+                    cand.label
+                ),
             )?;
         }
     }
@@ -995,19 +1011,16 @@ pub fn summary_text(ev: &Evaluation) -> String {
     for r in ranking(ev) {
         s.push_str(&format!(
             "{:<26} {:>2}. {:<28} failures {}  worst {} ({:.3} of limit)\n",
-            r.law,
-            r.rank,
-            ev.candidates[r.candidate].label,
-            r.failures,
-            r.worst.1,
-            r.worst.0
+            r.law, r.rank, ev.candidates[r.candidate].label, r.failures, r.worst.1, r.worst.0
         ));
     }
     s
 }
 
 /// Load algorithms embedded as text (the demo): (text, path used in messages).
-pub fn algorithms_from_text(list: &[(&str, &str)]) -> Result<Vec<(LoadedAlgorithm, String)>, InputError> {
+pub fn algorithms_from_text(
+    list: &[(&str, &str)],
+) -> Result<Vec<(LoadedAlgorithm, String)>, InputError> {
     list.iter()
         .map(|(text, path)| parse_algorithm(text, Path::new(path)).map(|a| (a, path.to_string())))
         .collect()

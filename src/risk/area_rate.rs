@@ -75,7 +75,10 @@ mod tests {
             frame(0.0, 1e5, 0.0, vec![bubble(0, 100e-6, 0.0)]),
             frame(1.0, 1e5, 0.0, vec![bubble(0, 90e-6, 0.0)]),
         ];
-        assert_eq!(PeakAreaGrowthRate::default().evaluate(&RunData::new(&g)), 0.0);
+        assert_eq!(
+            PeakAreaGrowthRate::default().evaluate(&RunData::new(&g)),
+            0.0
+        );
         // Pairs need both frames in the window. Surfacing at 12 s leaves b1 at 15 s and b0 at
         // 30 s, one frame each → 0; surfacing at 8 s keeps b0's 10→30 s pair, 4π·56.25 µm²/s.
         let after = PeakAreaGrowthRate {

@@ -103,8 +103,9 @@ impl CriteriaSet {
 
 /// Read and validate a criteria file.
 pub fn load_criteria(path: &Path) -> Result<CriteriaSet, InputError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::new(format!("cannot read the criteria file: {e}")).in_file(path))?;
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        InputError::new(format!("cannot read the criteria file: {e}")).in_file(path)
+    })?;
     parse_criteria(&text, path)
 }
 
@@ -286,15 +287,33 @@ mod tests {
     fn errors_name_line_and_field() {
         let e = parse("[[criterion]]\nkind = \"peak-radius\"\nlimit = 1\n[[criterion]]\nkind = \"bogus\"\nlimit = 1\n")
             .unwrap_err();
-        assert_eq!((e.line, e.field.as_deref()), (Some(5), Some("criterion.kind")), "{e}");
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(5), Some("criterion.kind")),
+            "{e}"
+        );
         assert!(e.message.contains("peak-total-volume"), "{e}");
         let e = parse("[[criterion]]\nkind = \"peak-radius\"\nlimit = -3\n").unwrap_err();
-        assert_eq!((e.line, e.field.as_deref()), (Some(3), Some("criterion.limit")), "{e}");
-        let e = parse("[[criterion]]\nkind = \"hazard\"\nlimit = 3\ngain_per_mm3_min = 1\nthreshold = 2\n")
-            .unwrap_err();
-        assert_eq!((e.line, e.field.as_deref()), (Some(5), Some("criterion.threshold")), "{e}");
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(3), Some("criterion.limit")),
+            "{e}"
+        );
+        let e = parse(
+            "[[criterion]]\nkind = \"hazard\"\nlimit = 3\ngain_per_mm3_min = 1\nthreshold = 2\n",
+        )
+        .unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(5), Some("criterion.threshold")),
+            "{e}"
+        );
         let e = parse("[[criterion]]\nkind = \"hazard\"\nlimit = 3\n").unwrap_err();
-        assert_eq!(e.field.as_deref(), Some("criterion.gain_per_mm3_min"), "{e}");
+        assert_eq!(
+            e.field.as_deref(),
+            Some("criterion.gain_per_mm3_min"),
+            "{e}"
+        );
         let e = parse("[protocol]\nobserve_after_surfacing_min = -1\n[[criterion]]\nkind = \"peak-radius\"\nlimit = 1\n")
             .unwrap_err();
         assert_eq!(e.line, Some(2), "{e}");
@@ -302,7 +321,11 @@ mod tests {
             .unwrap_err();
         assert_eq!(e.field.as_deref(), Some("criterion.label"), "{e}");
         let e = parse("descripton = \"x\"\n").unwrap_err();
-        assert_eq!((e.line, e.field.as_deref()), (Some(1), Some("descripton")), "{e}");
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(1), Some("descripton")),
+            "{e}"
+        );
         assert!(parse("description = \"x\"\n").is_err());
     }
 }

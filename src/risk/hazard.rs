@@ -88,7 +88,9 @@ mod tests {
 
     #[test]
     fn gain_is_required_and_positive() {
-        assert!(build(toml::Table::new()).unwrap_err().contains("gain_per_mm3_min"));
+        assert!(build(toml::Table::new())
+            .unwrap_err()
+            .contains("gain_per_mm3_min"));
         let mut t = toml::Table::new();
         t.insert("gain_per_mm3_min".into(), 0.0.into());
         assert!(build(t).unwrap_err().starts_with("gain_per_mm3_min"));

@@ -23,7 +23,7 @@ pub mod series;
 pub mod supersaturation;
 pub mod volume_integral;
 
-pub use config::{load_criteria, parse_criteria, CriteriaSet, ConfiguredCriterion, Protocol};
+pub use config::{load_criteria, parse_criteria, ConfiguredCriterion, CriteriaSet, Protocol};
 
 /// What a criterion sees of one phantom run.
 #[derive(Debug, Clone, Copy)]

@@ -41,7 +41,12 @@ mod tests {
     fn largest_radius_of_any_bubble() {
         let f = vec![
             frame(0.0, 1e5, 0.0, vec![bubble(0, 50e-6, 0.0)]),
-            frame(1.0, 1e5, 0.0, vec![bubble(0, 80e-6, 0.0), bubble(3, 130e-6, 0.0)]),
+            frame(
+                1.0,
+                1e5,
+                0.0,
+                vec![bubble(0, 80e-6, 0.0), bubble(3, 130e-6, 0.0)],
+            ),
             frame(2.0, 1e5, 0.0, vec![bubble(0, 90e-6, 0.0)]),
             frame(3.0, 1e5, 0.0, vec![]),
         ];

@@ -45,9 +45,24 @@ mod tests {
         // bubble 0 peaks at t = 1 (R = 100 µm), bubble 1 at t = 2 (R = 120 µm); the sum peaks
         // at t = 2: (4/3)π(90³ + 120³) µm³ = (4/3)π·2 457 000 µm³, in mm³ ×1e-9.
         let f = vec![
-            frame(0.0, 1e5, 0.0, vec![bubble(0, 50e-6, 0.0), bubble(1, 50e-6, 0.0)]),
-            frame(1.0, 1e5, 0.0, vec![bubble(0, 100e-6, 0.0), bubble(1, 60e-6, 0.0)]),
-            frame(2.0, 1e5, 0.0, vec![bubble(0, 90e-6, 0.0), bubble(1, 120e-6, 0.0)]),
+            frame(
+                0.0,
+                1e5,
+                0.0,
+                vec![bubble(0, 50e-6, 0.0), bubble(1, 50e-6, 0.0)],
+            ),
+            frame(
+                1.0,
+                1e5,
+                0.0,
+                vec![bubble(0, 100e-6, 0.0), bubble(1, 60e-6, 0.0)],
+            ),
+            frame(
+                2.0,
+                1e5,
+                0.0,
+                vec![bubble(0, 90e-6, 0.0), bubble(1, 120e-6, 0.0)],
+            ),
         ];
         let want = 4.0 / 3.0 * PI * (90f64.powi(3) + 120f64.powi(3)) * 1e-9;
         let got = PeakTotalVolume {}.evaluate(&RunData::new(&f));

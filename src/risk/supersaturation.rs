@@ -72,13 +72,21 @@ mod tests {
         // (= 60, the peak), 90−110 kPa.
         let f = vec![
             frame(0.0, 100e3, -5e3, vec![bubble(0, 1e-4, 150e3)]),
-            frame(1.0, 120e3, 30e3, vec![bubble(0, 1e-4, 180e3), bubble(1, 1e-4, 100e3)]),
+            frame(
+                1.0,
+                120e3,
+                30e3,
+                vec![bubble(0, 1e-4, 180e3), bubble(1, 1e-4, 100e3)],
+            ),
             frame(2.0, 110e3, 12e3, vec![bubble(0, 1e-4, 90e3)]),
         ];
         let run = RunData::new(&f);
         let gel = PeakSupersaturation { at: Where::Gel }.evaluate(&run);
         let bub = PeakSupersaturation { at: Where::Bubbles }.evaluate(&run);
-        assert!((gel - 30.0).abs() < 1e-12 && (bub - 60.0).abs() < 1e-12, "{gel} {bub}");
+        assert!(
+            (gel - 30.0).abs() < 1e-12 && (bub - 60.0).abs() < 1e-12,
+            "{gel} {bub}"
+        );
         let mut t = toml::Table::new();
         t.insert("at".into(), "surface".into());
         assert!(build(t).is_err());

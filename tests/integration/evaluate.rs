@@ -171,7 +171,12 @@ fn evaluate_writes_a_consistent_well_formed_report() {
     }
     // HTML and every SVG are well-formed XML; the HTML inlines its figures and has no script
     let html = std::fs::read_to_string(out.join("report.html")).unwrap();
-    let doc = roxmltree::Document::parse(&html).expect("report.html is well-formed XML");
+    let opt = roxmltree::ParsingOptions {
+        allow_dtd: true,
+        ..Default::default()
+    };
+    let doc = roxmltree::Document::parse_with_options(&html, opt)
+        .expect("report.html is well-formed XML");
     assert!(doc.descendants().any(|n| n.has_tag_name("svg")));
     assert!(!doc.descendants().any(|n| n.has_tag_name("script")));
     for e in std::fs::read_dir(&out).unwrap() {
@@ -179,6 +184,17 @@ fn evaluate_writes_a_consistent_well_formed_report() {
         if p.extension().is_some_and(|x| x == "svg") {
             let t = std::fs::read_to_string(&p).unwrap();
             roxmltree::Document::parse(&t).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        }
+    }
+    // every figure the Markdown links to is in the folder
+    let md_text = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for link in md_text.split("](").skip(1) {
+        let file = link.split(')').next().unwrap();
+        if file.ends_with(".svg") {
+            assert!(
+                out.join(file).is_file(),
+                "report.md links to missing {file}"
+            );
         }
     }
     // every row of scores.csv appears, cell for cell, in report.md's criteria table
@@ -248,7 +264,10 @@ fn fast_ascent_scores_worse_than_stops_and_check_exit_codes() {
         "peak-supersaturation",
     ] {
         let (f, st) = (value(&got[0], c), value(&got[1], c));
-        assert!(f > st, "{c}: fast ascent {f} should exceed the schedule with stops {st}");
+        assert!(
+            f > st,
+            "{c}: fast ascent {f} should exceed the schedule with stops {st}"
+        );
     }
     // bubbles grew at all (peak radius above R0 = 100 µm) in the fast ascent
     assert!(value(&got[0], "peak-radius") > 100.0);
