@@ -20,6 +20,71 @@ pub enum Command {
     Elasticity(ElasticityArgs),
     /// Run the built-in example and write a full report under reports/demo/.
     Demo(DemoArgs),
+    /// Run a schedule through the phantom and score it: exit 0 all pass, 1 some fail, 2 bad input.
+    Check(CheckArgs),
+    /// Plan a dive with several algorithms, run each schedule (× elasticity law) through the phantom, rank, report.
+    Evaluate(EvaluateArgs),
+}
+
+/// Arguments of `check`.
+#[derive(clap::Args, Debug)]
+pub struct CheckArgs {
+    /// Schedule: TOML from `plan --out`, or CSV `time_min,depth_m[,gas]`.
+    #[arg(long)]
+    pub schedule: std::path::PathBuf,
+    /// Criteria TOML (algorithms/criteria/*.toml).
+    #[arg(long)]
+    pub criteria: std::path::PathBuf,
+    /// Phantom TOML (default: the built-in profiles/phantoms/hydrogel-dive.toml).
+    #[arg(long)]
+    pub phantom: Option<std::path::PathBuf>,
+    /// Override the phantom's grid step, m (coarser = faster; nuclei keep their radii).
+    #[arg(long = "grid-step")]
+    pub grid_step: Option<f64>,
+    /// Repeat the dive after this surface interval, min (the phantom's state carries over).
+    #[arg(long = "repeat-after", allow_hyphen_values = true)]
+    pub repeat_after: Option<f64>,
+    /// Write the report folder here (replaced whole).
+    #[arg(long)]
+    pub out: Option<std::path::PathBuf>,
+}
+
+/// Arguments of `evaluate`.
+#[derive(clap::Args, Debug)]
+pub struct EvaluateArgs {
+    /// Maximum depth, m.
+    #[arg(long, allow_hyphen_values = true)]
+    pub depth: f64,
+    /// Bottom time, min.
+    #[arg(long, allow_hyphen_values = true)]
+    pub time: f64,
+    /// Bottom gas: air, 32 (nitrox), 18/45 (trimix O2/He).
+    #[arg(long)]
+    pub gas: Option<String>,
+    /// Deco gas, MIX@SWITCH_DEPTH_M or MIX; repeatable.
+    #[arg(long = "deco-gas")]
+    pub deco_gas: Vec<String>,
+    /// Algorithm TOML; repeat for each algorithm to compare.
+    #[arg(long, required = true)]
+    pub algorithm: Vec<std::path::PathBuf>,
+    /// Elasticity laws: all, or names (comma-separated or repeated); default the phantom's own.
+    #[arg(long)]
+    pub elasticity: Vec<String>,
+    /// Phantom TOML (default: the built-in profiles/phantoms/hydrogel-dive.toml).
+    #[arg(long)]
+    pub phantom: Option<std::path::PathBuf>,
+    /// Override the phantom's grid step, m (coarser = faster; nuclei keep their radii).
+    #[arg(long = "grid-step")]
+    pub grid_step: Option<f64>,
+    /// Criteria TOML (algorithms/criteria/*.toml).
+    #[arg(long)]
+    pub criteria: std::path::PathBuf,
+    /// Repeat the dive after this surface interval, min (the phantom's state carries over).
+    #[arg(long = "repeat-after", allow_hyphen_values = true)]
+    pub repeat_after: Option<f64>,
+    /// Output folder (replaced whole; created if missing).
+    #[arg(long)]
+    pub out: std::path::PathBuf,
 }
 
 /// Arguments of `simulate`.
@@ -182,10 +247,50 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             Ok(0)
         }
         Command::Demo(a) => {
-            let mut bar = Progress::new();
+            let mut bar = Progress::runs();
             let text = decophantom::app::demo::run(&a.out, &mut |t, e| bar.update(t, e));
             bar.finish();
             print!("{}", text?);
+            Ok(0)
+        }
+        Command::Check(a) => {
+            let req = decophantom::app::check::CheckRequest {
+                schedule: a.schedule,
+                criteria: a.criteria,
+                phantom: a.phantom,
+                grid_step_m: a.grid_step,
+                repeat_after_min: a.repeat_after,
+                out: a.out.clone(),
+            };
+            let mut bar = Progress::runs();
+            let outcome = decophantom::app::check::run(&req, &mut |t, e| bar.update(t, e));
+            bar.finish();
+            let outcome = outcome?;
+            print!("{}", outcome.text);
+            if let Some(out) = &a.out {
+                println!("wrote {}", out.display());
+            }
+            Ok(if outcome.all_pass { 0 } else { 1 })
+        }
+        Command::Evaluate(a) => {
+            let req = decophantom::app::evaluate::EvaluateRequest {
+                depth_m: a.depth,
+                time_min: a.time,
+                gas: a.gas,
+                deco_gases: a.deco_gas,
+                algorithms: a.algorithm,
+                elasticity: a.elasticity,
+                phantom: a.phantom,
+                grid_step_m: a.grid_step,
+                criteria: a.criteria,
+                repeat_after_min: a.repeat_after,
+                out: a.out.clone(),
+            };
+            let mut bar = Progress::runs();
+            let ev = decophantom::app::evaluate::run(&req, &mut |t, e| bar.update(t, e));
+            bar.finish();
+            print!("{}", decophantom::app::evaluate::summary_text(&ev?));
+            println!("wrote {}", a.out.display());
             Ok(0)
         }
     }
@@ -195,6 +300,8 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
 struct Progress {
     start: std::time::Instant,
     bar: Option<indicatif::ProgressBar>,
+    /// Counting phantom runs (evaluate, check) rather than simulated seconds.
+    runs: bool,
 }
 
 impl Progress {
@@ -202,6 +309,13 @@ impl Progress {
         Progress {
             start: std::time::Instant::now(),
             bar: None,
+            runs: false,
+        }
+    }
+    fn runs() -> Self {
+        Progress {
+            runs: true,
+            ..Progress::new()
         }
     }
     fn update(&mut self, t: f64, end: f64) {
@@ -218,7 +332,11 @@ impl Progress {
         if let Some(b) = &self.bar {
             if end > 0.0 {
                 b.set_position(((t / end) * 1000.0).clamp(0.0, 1000.0) as u64);
-                b.set_message(format!("t = {t:.0} of {end:.0} s"));
+                if self.runs {
+                    b.set_message(format!("{t:.1} of {end:.0} phantom runs"));
+                } else {
+                    b.set_message(format!("t = {t:.0} of {end:.0} s"));
+                }
             }
         }
     }

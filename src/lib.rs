@@ -16,4 +16,5 @@ pub mod gas;
 pub mod phantom;
 pub mod profile;
 pub mod report;
+pub mod risk;
 pub mod units;

@@ -9,6 +9,8 @@ mod cli_simulate;
 mod common;
 #[path = "integration/convergence.rs"]
 mod convergence;
+#[path = "integration/evaluate.rs"]
+mod evaluate;
 #[path = "integration/events.rs"]
 mod events;
 #[path = "integration/profiles.rs"]

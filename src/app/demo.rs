@@ -1,8 +1,15 @@
-//! `decophantom demo`: the built-in example. Runs the paper's oscillation experiment (§4.1)
-//! through the hydrogel phantom, compares the tissue-elasticity laws on the same run and
-//! without mass transfer (the paper's Fig. 2a), and writes a report folder.
+//! `decophantom demo`: the built-in example, written as one report. First a dive: 45 m for
+//! 25 min on air planned by ZH-L16C GF 30/85, GF 50/80 and VPM-B +2, each schedule run
+//! through the hydrogel-dive phantom under every tissue-elasticity law and scored with
+//! `algorithms/criteria/default.toml` (the `evaluate` path). Then the paper's oscillation
+//! experiment (§4.1) under each law, and the laws without mass transfer (the paper's Fig. 2a).
+//! Every input is compiled in, so the demo runs from any folder.
 
 use super::elasticity::{compare, ElasticityRequest};
+use super::evaluate::{
+    add_report, algorithms_from_text, finish_page, plan_candidates, run_matrix, summary_text,
+    PhantomSpec, ReportContext, HYDROGEL_PHANTOM, HYDROGEL_PHANTOM_PATH,
+};
 use super::simulate::{add_run_files, describe, radius_plot, simulate, SimRun};
 use crate::error::Error;
 use crate::phantom::config::parse_phantom;
@@ -12,6 +19,7 @@ use crate::report::html::Page;
 use crate::report::output::OutputSet;
 use crate::report::plot::{LinePlot, Series};
 use crate::report::table::{Cell, Column, Table};
+use crate::risk::parse_criteria;
 use rayon::prelude::*;
 use std::path::Path;
 use std::sync::Arc;
@@ -21,13 +29,79 @@ use std::sync::Arc;
 pub const OSCILLATION_PROFILE: &str = include_str!("../../profiles/oscillation-30s.toml");
 /// The built-in phantom (`profiles/phantoms/oscillation.toml`).
 pub const OSCILLATION_PHANTOM: &str = include_str!("../../profiles/phantoms/oscillation.toml");
+/// The demo's algorithms (text, path named in messages and tables).
+pub const DEMO_ALGORITHMS: [(&str, &str); 3] = [
+    (
+        include_str!("../../algorithms/zhl16c-gf30-85.toml"),
+        "algorithms/zhl16c-gf30-85.toml",
+    ),
+    (
+        include_str!("../../algorithms/zhl16c-gf50-80.toml"),
+        "algorithms/zhl16c-gf50-80.toml",
+    ),
+    (
+        include_str!("../../algorithms/vpmb-2-baker.toml"),
+        "algorithms/vpmb-2-baker.toml",
+    ),
+];
+/// The demo's criteria (`algorithms/criteria/default.toml`).
+pub const DEMO_CRITERIA: &str = include_str!("../../algorithms/criteria/default.toml");
+/// The demo dive: depth m, bottom time min.
+pub const DEMO_DIVE: (f64, f64) = (45.0, 25.0);
 
 fn plot_err(e: impl std::fmt::Display) -> Error {
     Error::Solver(format!("plot: {e}"))
 }
 
-/// Run the demo and write `out`; returns a short text summary.
+/// Run the demo and write `out`; returns a short text summary. `progress(done, total)` counts
+/// phantom runs (dive schedules × laws, then one oscillation run per law).
 pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<String, Error> {
+    // 1. the dive
+    let criteria = parse_criteria(DEMO_CRITERIA, Path::new("algorithms/criteria/default.toml"))?;
+    let spec = PhantomSpec::from_text(
+        HYDROGEL_PHANTOM,
+        Path::new(HYDROGEL_PHANTOM_PATH),
+        HYDROGEL_PHANTOM_PATH,
+        None,
+    )?;
+    let laws = spec.resolve_laws(&["all".to_string()])?;
+    let algs = algorithms_from_text(&DEMO_ALGORITHMS)?;
+    let candidates = plan_candidates(
+        &algs,
+        DEMO_DIVE.0,
+        DEMO_DIVE.1,
+        None,
+        &[],
+        &criteria.protocol,
+        None,
+    )?;
+    let dive_runs = laws.len() as f64 * candidates.len() as f64;
+    let total_runs = dive_runs + law_names().len() as f64;
+    let ev = {
+        let mut cb = |d: f64, _: f64| progress(d, total_runs);
+        run_matrix(candidates, spec, laws, criteria, &mut cb)?
+    };
+    let dive = format!("{} m for {} min on air", DEMO_DIVE.0, DEMO_DIVE.1);
+    let mut page = Page::new(format!(
+        "decophantom demo: a {dive} dive through the hydrogel phantom, and the oscillation experiment"
+    ));
+    let mut set = OutputSet::new();
+    page.text("This report is produced by `cargo run --release -- demo`. Part 1 evaluates one dive planned by three algorithms through the hydrogel phantom under every tissue-elasticity law, exactly as `decophantom evaluate --depth 45 --time 25 --algorithm algorithms/zhl16c-gf30-85.toml --algorithm algorithms/zhl16c-gf50-80.toml --algorithm algorithms/vpmb-2-baker.toml --elasticity all --criteria algorithms/criteria/default.toml` does. The phantom is `profiles/phantoms/hydrogel-dive.toml`: the Fig. 5 hydrogel at a grid step of 125 µm instead of 86.5 µm (about 3× fewer cells, so the 15 runs finish in about a minute on two cores) with the nuclei unchanged (R0 = 86.5 µm, R_min = 80 µm). Part 2 is the paper's oscillation experiment (§4.1).");
+    page.section(format!("Part 1 — the dive: {dive}"));
+    add_report(
+        &mut page,
+        &mut set,
+        "",
+        &ev,
+        &ReportContext {
+            dive: format!("{dive}, planned by each algorithm"),
+            criteria_source: "algorithms/criteria/default.toml".into(),
+            repeat_after_min: None,
+            command: None,
+        },
+    )?;
+
+    // 2. the oscillation experiment
     let profile = profile_toml::parse(
         OSCILLATION_PROFILE,
         Path::new("profiles/oscillation-30s.toml"),
@@ -44,9 +118,9 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         bulk_modulus_per_volume: 5e16,
         bulk_modulus: 2.2e9,
     };
-    // one run per elasticity law, in parallel; progress is reported for the first
+    // one run per elasticity law, in parallel; progress counts runs
     let names = law_names();
-    let progress = std::sync::Mutex::new(progress);
+    let progress = std::sync::Mutex::new((vec![0.0f64; names.len()], progress));
     let runs: Vec<Result<SimRun, Error>> = names
         .par_iter()
         .enumerate()
@@ -55,10 +129,15 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
             p.elasticity = Arc::from(laws.build(name).map_err(Error::Solver)?);
             p.name = format!("{} ({name})", base.name);
             let mut cb = |t: f64, e: f64| {
-                if i == 0 {
-                    if let Ok(mut g) = progress.lock() {
-                        (*g)(t, e)
-                    }
+                if let Ok(mut g) = progress.lock() {
+                    let (fr, cb) = &mut *g;
+                    fr[i] = if e > 0.0 {
+                        (t / e).clamp(0.0, 1.0)
+                    } else {
+                        1.0
+                    };
+                    let done: f64 = fr.iter().sum();
+                    (*cb)(dive_runs + done, total_runs)
                 }
             };
             simulate(&p, &profile, &mut cb)
@@ -66,7 +145,6 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         .collect();
     let runs: Vec<SimRun> = runs.into_iter().collect::<Result<_, _>>()?;
     let main_idx = names.iter().position(|n| *n == "hyperelastic").unwrap_or(0);
-    let mut set = OutputSet::new();
     add_run_files(
         &mut set,
         "oscillation/",
@@ -161,8 +239,7 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
 
     // report
     let main = &runs[main_idx];
-    let mut page =
-        Page::new("decophantom demo: the oscillation experiment of Walsh et al. 2017 (§4.1)");
+    page.section("Part 2 — the oscillation experiment of Walsh et al. 2017 (§4.1)");
     page.text(format!(
         "Profile: **{}** ({}). Phantom: **{}**. {}",
         profile.label,
@@ -170,7 +247,7 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         base.name,
         phantom.description.replace('\n', " ")
     ));
-    page.section("Run (hyperelastic law)");
+    page.heading(3, "Run (hyperelastic law)");
     page.pre(describe(main));
     page.figure(
         &radius_plot(&main.frames, "Bubble radius (hyperelastic)")
@@ -180,7 +257,7 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         "Radius of each bubble over the five pressure cycles.",
     )
     .map_err(Error::Solver)?;
-    page.section("Elasticity laws compared on the same run");
+    page.heading(3, "Elasticity laws compared on the same run");
     page.table(&table);
     page.figure(
         &overlay.to_svg().map_err(plot_err)?,
@@ -188,7 +265,7 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         "Bubble 0 under each tissue-elasticity law.",
     )
     .map_err(Error::Solver)?;
-    page.section("Elasticity laws without mass transfer (Fig. 2a)");
+    page.heading(3, "Elasticity laws without mass transfer (Fig. 2a)");
     page.figure(
         &fig2a.to_svg().map_err(plot_err)?,
         Some("elasticity-fig2a.svg"),
@@ -196,8 +273,12 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
     )
     .map_err(Error::Solver)?;
     page.text("Every number and figure here was produced by `cargo run --release -- demo`.");
-    set.add("report.html", page.to_html().map_err(Error::Solver)?);
-    set.add("report.md", page.to_markdown().map_err(Error::Solver)?);
+    finish_page(&mut page, &mut set, "")?;
     set.commit(out)?;
-    Ok(format!("{}wrote {}\n", describe(main), out.display()))
+    Ok(format!(
+        "dive {dive}, ranking per elasticity law:\n{}oscillation experiment (hyperelastic):\n{}wrote {}\n",
+        summary_text(&ev),
+        describe(main),
+        out.display()
+    ))
 }

@@ -1,7 +1,9 @@
 //! One library function per subcommand; the CLI only parses arguments and prints what these
 //! return. Nothing here touches the terminal.
 
+pub mod check;
 pub mod demo;
 pub mod elasticity;
+pub mod evaluate;
 pub mod plan;
 pub mod simulate;

@@ -2,7 +2,7 @@
 
 use crate::algorithm::oxygen::{self, OxygenExposure};
 use crate::algorithm::schedule::{gas_text, ScheduleSummary};
-use crate::algorithm::{load_algorithm, DecoGas, DivePlan, Schedule};
+use crate::algorithm::{load_algorithm, DecoGas, DivePlan, LoadedAlgorithm, Schedule};
 use crate::error::InputError;
 use crate::gas::GasMix;
 use std::fmt::Write as _;
@@ -63,23 +63,28 @@ pub struct PlanOutcome {
     pub text: String,
 }
 
-/// Plan the dive; write `--out` if asked. Bad input → [`InputError`] (exit code 2).
-pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
-    let alg = load_algorithm(&req.algorithm)?;
+/// Plan a dive with a loaded algorithm from command-line strings (bottom gas, deco gases
+/// `50@21` or `50`); errors point at the command-line option. Used by `plan` and `evaluate`.
+pub fn plan_dive(
+    alg: &LoadedAlgorithm,
+    depth_m: f64,
+    time_min: f64,
+    gas: Option<&str>,
+    deco_gases: &[String],
+) -> Result<(DivePlan, Schedule), InputError> {
     let cmd =
         |field: &str, msg: String| InputError::new(msg).in_file("<command line>").field(field);
-    let bottom_gas = match &req.gas {
+    let bottom_gas = match gas {
         Some(g) => GasMix::parse(g).map_err(|m| cmd("--gas", m))?,
         None => GasMix::AIR,
     };
-    let deco_gases = req
-        .deco_gases
+    let deco_gases = deco_gases
         .iter()
         .map(|s| DecoGas::parse(s, &alg.conventions).map_err(|m| cmd("--deco-gas", m)))
         .collect::<Result<Vec<_>, _>>()?;
     let plan = DivePlan {
-        depth_m: req.depth_m,
-        bottom_time_min: req.time_min,
+        depth_m,
+        bottom_time_min: time_min,
         bottom_gas,
         deco_gases,
     };
@@ -99,6 +104,19 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
             e
         }
     })?;
+    Ok((plan, schedule))
+}
+
+/// Plan the dive; write `--out` if asked. Bad input → [`InputError`] (exit code 2).
+pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
+    let alg = load_algorithm(&req.algorithm)?;
+    let (plan, schedule) = plan_dive(
+        &alg,
+        req.depth_m,
+        req.time_min,
+        req.gas.as_deref(),
+        &req.deco_gases,
+    )?;
     let oxygen = oxygen::exposure(&schedule);
     let summary = ScheduleSummary {
         runtime_min: Some(schedule.runtime_min()),

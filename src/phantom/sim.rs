@@ -481,7 +481,7 @@ impl<'a> Simulation<'a> {
                 .iter()
                 .cloned()
                 .fold(f64::INFINITY, f64::min);
-            if dt > lim && dt < IMPLICIT_COST_RATIO * lim {
+            if dt > lim && dt < num.implicit_cost_ratio * lim {
                 dt = lim;
             }
             let t1 = t + dt;

@@ -149,6 +149,10 @@ pub struct PressureHistory {
     pub vapour_pa: f64,
     /// Human-readable name (profile file stem or schedule label).
     pub label: String,
+    /// Open faces see only the inert gases (N2, He) of the gas in force: its O2 is left out of
+    /// the phantom (for a breathed dive gas; living tissue metabolises oxygen). False (the
+    /// default) for chamber gas, which reaches the gel as it is.
+    pub inert_only: bool,
 }
 
 impl PressureHistory {
@@ -206,6 +210,7 @@ impl PressureHistory {
             gas,
             vapour_pa,
             label: label.into(),
+            inert_only: false,
         })
     }
 
@@ -265,7 +270,11 @@ impl PressureHistory {
 
     /// Partial pressure of `gas` that the open faces are in equilibrium with at `t`, Pa:
     /// fraction × (ambient − water vapour).
+    /// With [`PressureHistory::inert_only`], O2 gives 0.
     pub fn inspired_partial_pressure(&self, gas: Gas, t: f64) -> f64 {
+        if self.inert_only && gas == Gas::O2 {
+            return 0.0;
+        }
         self.gas_at(t).fraction(gas) * (self.ambient(t) - self.vapour_pa).max(0.0)
     }
 
@@ -279,10 +288,12 @@ impl PressureHistory {
         }
     }
 
-    /// Every gas that appears on any segment, in [`Gas::ALL`] order.
+    /// Every gas that appears on any segment, in [`Gas::ALL`] order (without O2 when
+    /// [`PressureHistory::inert_only`]).
     pub fn gases(&self) -> Vec<Gas> {
         Gas::ALL
             .into_iter()
+            .filter(|g| !(self.inert_only && *g == Gas::O2))
             .filter(|g| self.gas.iter().any(|m| m.fraction(*g) > 0.0))
             .collect()
     }

@@ -1,0 +1,1088 @@
+//! `decophantom evaluate`: plan one dive with several algorithms, run every schedule (under
+//! every requested tissue-elasticity law) through the same phantom, score the runs with a
+//! criteria file, rank them, and write the decompression report (`report.md`, a
+//! self-contained `report.html`, `scores.csv`, the SVG plots). The pieces (linking a
+//! schedule to the phantom, running the matrix in parallel, building the report) are public
+//! so `check` and `demo` use the same path.
+//!
+//! Linking a dive to the phantom ([`dive_history`]): the ambient pressure of the schedule acts
+//! on the gel; its open faces are held in equilibrium with the inspired inert-gas partial
+//! pressures, fraction × (ambient − water vapour), with the water vapour of the schedule (its
+//! algorithm's conventions) or the criteria file's `protocol.water_vapour_pa`; O2 is left out
+//! unless the protocol sets `oxygen_at_faces`. The phantom starts saturated at the surface
+//! with the first leg's gas; the schedule is followed by `protocol.observe_after_surfacing_min`
+//! at the surface on air. A repetitive dive (`repeat_after_min`) appends a surface interval
+//! on air and the same schedule again, so the gel and the bubbles carry over.
+
+use super::plan::plan_dive;
+use super::simulate::{ending_text, simulate, SimRun};
+use crate::algorithm::config::parse_algorithm;
+use crate::algorithm::schedule::gas_text;
+use crate::algorithm::{load_algorithm, LoadedAlgorithm, Schedule};
+use crate::error::{Error, InputError};
+use crate::gas::GasMix;
+use crate::phantom::config::parse_phantom;
+use crate::phantom::elasticity::{law_names, AllLawParams, ElasticityLaw};
+use crate::phantom::params::PhantomParams;
+use crate::profile::PressureHistory;
+use crate::report::html::Page;
+use crate::report::output::OutputSet;
+use crate::report::plot::{BarChart, LinePlot, Series, DEFAULT_SIZE};
+use crate::report::table::{Cell, Column, Table};
+use crate::risk::{load_criteria, series, CriteriaSet, Protocol, RunData, Score};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex};
+
+/// The built-in phantom (`profiles/phantoms/hydrogel-dive.toml`), used when none is given.
+pub const HYDROGEL_PHANTOM: &str = include_str!("../../profiles/phantoms/hydrogel-dive.toml");
+/// Where [`HYDROGEL_PHANTOM`] comes from.
+pub const HYDROGEL_PHANTOM_PATH: &str = "profiles/phantoms/hydrogel-dive.toml";
+
+/// Default M = K/V_aff of the Bulk-Modulus law when the phantom does not give one, Pa/m³
+/// (5e-2 Pa/µm³, the paper's Fig. 2a).
+pub const DEFAULT_BULK_MODULUS_PER_VOLUME: f64 = 5e16;
+/// Default bulk modulus K of the Reference-Configuration law, Pa (2.2 GPa, the paper's Fig. 2a).
+pub const DEFAULT_BULK_MODULUS: f64 = 2.2e9;
+/// Default shear modulus μ when the phantom's own law has none, Pa (40 Pa, the hydrogel of
+/// the paper's Figs. 4–5).
+pub const DEFAULT_SHEAR_MODULUS: f64 = 40.0;
+
+/// A phantom ready for evaluation: parameters, where they came from, and the parameters
+/// from which the other elasticity laws are built.
+#[derive(Debug, Clone)]
+pub struct PhantomSpec {
+    /// Validated parameters (the phantom's own elasticity law).
+    pub params: PhantomParams,
+    /// The file's description.
+    pub description: String,
+    /// The file it came from (or `built-in hydrogel`).
+    pub source: String,
+    /// μ from the phantom's `[material.elasticity]` (else 40 Pa), M and K from it if given
+    /// (else 5e-2 Pa/µm³ and 2.2 GPa, the paper's Fig. 2a).
+    pub laws: AllLawParams,
+}
+
+impl PhantomSpec {
+    /// Parse phantom TOML text; `grid_step_m` overrides the grid step (the nuclei radii, R_min
+    /// and the surface-layer thickness keep the file's values).
+    pub fn from_text(
+        text: &str,
+        path: &Path,
+        source: &str,
+        grid_step_m: Option<f64>,
+    ) -> Result<PhantomSpec, InputError> {
+        let loaded = parse_phantom(text, path)?;
+        let mut params = loaded.params;
+        if let Some(h) = grid_step_m {
+            if !(h.is_finite() && h > 0.0) {
+                return Err(
+                    InputError::new(format!("grid step must be positive m (got {h})"))
+                        .in_file("<command line>")
+                        .field("--grid-step"),
+                );
+            }
+            params.grid_step = h;
+        }
+        let table: toml::Table = toml::from_str(text).unwrap_or_default();
+        let el = table
+            .get("material")
+            .and_then(|m| m.get("elasticity"))
+            .and_then(|e| e.as_table());
+        let num = |k: &str| {
+            el.and_then(|e| e.get(k))
+                .and_then(|v| v.as_float().or_else(|| v.as_integer().map(|i| i as f64)))
+        };
+        let laws = AllLawParams {
+            shear_modulus: num("shear_modulus").unwrap_or(DEFAULT_SHEAR_MODULUS),
+            bulk_modulus_per_volume: num("bulk_modulus_per_volume")
+                .unwrap_or(DEFAULT_BULK_MODULUS_PER_VOLUME),
+            bulk_modulus: num("bulk_modulus").unwrap_or(DEFAULT_BULK_MODULUS),
+        };
+        Ok(PhantomSpec {
+            params,
+            description: loaded.description,
+            source: source.to_string(),
+            laws,
+        })
+    }
+
+    /// Read a phantom file, or the built-in hydrogel when `path` is `None`.
+    pub fn load(path: Option<&Path>, grid_step_m: Option<f64>) -> Result<PhantomSpec, InputError> {
+        match path {
+            Some(p) => {
+                let text = std::fs::read_to_string(p).map_err(|e| {
+                    InputError::new(format!("cannot read phantom file: {e}")).in_file(p)
+                })?;
+                PhantomSpec::from_text(&text, p, &p.display().to_string(), grid_step_m)
+            }
+            None => PhantomSpec::from_text(
+                HYDROGEL_PHANTOM,
+                Path::new(HYDROGEL_PHANTOM_PATH),
+                "built-in hydrogel-dive (profiles/phantoms/hydrogel-dive.toml)",
+                grid_step_m,
+            ),
+        }
+    }
+
+    /// The phantom's own law name.
+    pub fn own_law(&self) -> &'static str {
+        self.params.elasticity.name()
+    }
+
+    /// The parameters with law `name`: the phantom's own law object for its own name, else
+    /// built from [`PhantomSpec::laws`].
+    pub fn with_law(&self, name: &str) -> Result<PhantomParams, Error> {
+        let mut p = self.params.clone();
+        if name != self.own_law() {
+            let law: Box<dyn ElasticityLaw> = self.laws.build(name).map_err(Error::Solver)?;
+            p.elasticity = Arc::from(law);
+        }
+        Ok(p)
+    }
+
+    /// Resolve `--elasticity` values: empty → the phantom's own law; `all` → every law;
+    /// otherwise names (comma-separated allowed), each registered.
+    pub fn resolve_laws(&self, requested: &[String]) -> Result<Vec<&'static str>, InputError> {
+        let names = law_names();
+        let mut out: Vec<&'static str> = Vec::new();
+        for r in requested.iter().flat_map(|s| s.split(',')) {
+            let r = r.trim();
+            if r.eq_ignore_ascii_case("all") {
+                for n in &names {
+                    if !out.contains(n) {
+                        out.push(n);
+                    }
+                }
+                continue;
+            }
+            let n = names
+                .iter()
+                .find(|n| n.eq_ignore_ascii_case(r))
+                .ok_or_else(|| {
+                    InputError::new(format!(
+                        "unknown elasticity law '{r}'; use all or one of {}",
+                        names.join(", ")
+                    ))
+                    .in_file("<command line>")
+                    .field("--elasticity")
+                })?;
+            if !out.contains(n) {
+                out.push(n);
+            }
+        }
+        if out.is_empty() {
+            out.push(self.own_law());
+        }
+        Ok(out)
+    }
+}
+
+/// A schedule to evaluate.
+#[derive(Debug, Clone)]
+pub struct Candidate {
+    /// Label (tables, legends); unique within an evaluation.
+    pub label: String,
+    /// Where it came from (algorithm or schedule file).
+    pub source: String,
+    /// The schedule.
+    pub schedule: Schedule,
+    /// The pressure history that drives the phantom ([`dive_history`]).
+    pub history: PressureHistory,
+}
+
+/// The pressure history a schedule drives the phantom with (see the module documentation);
+/// `repeat_after_min` repeats the dive after that surface interval.
+pub fn dive_history(
+    schedule: &Schedule,
+    protocol: &Protocol,
+    repeat_after_min: Option<f64>,
+) -> Result<PressureHistory, InputError> {
+    let bad = |m: String| InputError::new(m).field("schedule");
+    let last = schedule.legs.last().map_or(0.0, |l| l.end_depth_m);
+    if last.abs() > 1e-9 {
+        return Err(bad(format!(
+            "schedule '{}' never surfaces: its last leg ends at {last} m",
+            schedule.label
+        )));
+    }
+    let mut dive = schedule.to_pressure_history().map_err(bad)?;
+    if let Some(v) = protocol.water_vapour_pa {
+        dive.vapour_pa = v;
+    }
+    let surface = schedule.surface_pressure_pa;
+    let at_surface = |s: f64| {
+        PressureHistory::with_gas(
+            "surface",
+            vec![0.0, s],
+            vec![surface, surface],
+            GasMix::AIR,
+            dive.vapour_pa,
+        )
+        .map_err(bad)
+    };
+    let mut h = dive.clone();
+    if let Some(si) = repeat_after_min {
+        if !(si.is_finite() && si > 0.0) {
+            return Err(InputError::new(format!(
+                "surface interval must be a positive number of minutes (got {si})"
+            ))
+            .in_file("<command line>")
+            .field("--repeat-after"));
+        }
+        h = h
+            .then(&at_surface(si * 60.0)?)
+            .and_then(|h| h.then(&dive))
+            .map_err(bad)?;
+    }
+    if protocol.observe_after_surfacing_s > 0.0 {
+        h = h
+            .then(&at_surface(protocol.observe_after_surfacing_s)?)
+            .map_err(bad)?;
+    }
+    h.inert_only = !protocol.oxygen_at_faces;
+    h.label = schedule.label.clone();
+    if h.gases().is_empty() {
+        return Err(bad(
+            "no inert gas (N2 or He) is ever breathed; nothing reaches the phantom".into(),
+        ));
+    }
+    Ok(h)
+}
+
+/// One run of the matrix: a candidate under one elasticity law.
+#[derive(Debug, Clone)]
+pub struct RunOutcome {
+    /// Index into [`Evaluation::candidates`].
+    pub candidate: usize,
+    /// Elasticity law name.
+    pub law: &'static str,
+    /// The simulation.
+    pub run: SimRun,
+    /// Scores, in criteria-file order.
+    pub scores: Vec<Score>,
+}
+
+/// A finished evaluation.
+#[derive(Debug)]
+pub struct Evaluation {
+    /// The schedules.
+    pub candidates: Vec<Candidate>,
+    /// The laws, in request order; the first is the "primary" one of the per-schedule plots.
+    pub laws: Vec<&'static str>,
+    /// Every run, candidate-major (candidate 0 under every law, then candidate 1 ...).
+    pub runs: Vec<RunOutcome>,
+    /// The phantom.
+    pub phantom: PhantomSpec,
+    /// The criteria.
+    pub criteria: CriteriaSet,
+}
+
+impl Evaluation {
+    /// The run of candidate `c` under `law`.
+    pub fn run(&self, c: usize, law: &str) -> Option<&RunOutcome> {
+        self.runs.iter().find(|r| r.candidate == c && r.law == law)
+    }
+
+    /// The name of a run in tables and legends: the schedule label, with the law when
+    /// several laws were run.
+    pub fn run_name(&self, r: &RunOutcome) -> String {
+        if self.laws.len() > 1 {
+            format!("{} · {}", self.candidates[r.candidate].label, r.law)
+        } else {
+            self.candidates[r.candidate].label.clone()
+        }
+    }
+
+    /// True when every criterion passes on every run.
+    pub fn all_pass(&self) -> bool {
+        self.runs.iter().all(|r| r.scores.iter().all(|s| s.pass))
+    }
+}
+
+/// Run every candidate under every law through the phantom, in parallel (rayon), and score
+/// them. `progress(done, total)` reports overall progress in runs (fractions count).
+pub fn run_matrix(
+    candidates: Vec<Candidate>,
+    phantom: PhantomSpec,
+    laws: Vec<&'static str>,
+    criteria: CriteriaSet,
+    progress: &mut (dyn FnMut(f64, f64) + Send),
+) -> Result<Evaluation, Error> {
+    let jobs: Vec<(usize, &'static str)> = (0..candidates.len())
+        .flat_map(|c| laws.iter().map(move |l| (c, *l)))
+        .collect();
+    let total = jobs.len() as f64;
+    let shared = Mutex::new((vec![0.0f64; jobs.len()], progress));
+    let results: Vec<Result<RunOutcome, Error>> = jobs
+        .par_iter()
+        .enumerate()
+        .map(|(j, &(c, law))| {
+            let params = phantom.with_law(law)?;
+            let mut cb = |t: f64, end: f64| {
+                if let Ok(mut g) = shared.lock() {
+                    let (fr, cb) = &mut *g;
+                    fr[j] = if end > 0.0 {
+                        (t / end).clamp(0.0, 1.0)
+                    } else {
+                        1.0
+                    };
+                    let done: f64 = fr.iter().sum();
+                    (*cb)(done, total);
+                }
+            };
+            let run = simulate(&params, &candidates[c].history, &mut cb).map_err(|e| match e {
+                Error::Solver(m) => {
+                    Error::Solver(format!("{} under {law}: {m}", candidates[c].label))
+                }
+                other => other,
+            })?;
+            let h = &candidates[c].history;
+            let scores = criteria.score(&RunData {
+                frames: &run.frames,
+                surfaced_s: Some(h.duration_s() - criteria.protocol.observe_after_surfacing_s),
+            });
+            Ok(RunOutcome {
+                candidate: c,
+                law,
+                run,
+                scores,
+            })
+        })
+        .collect();
+    let runs = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    Ok(Evaluation {
+        candidates,
+        laws,
+        runs,
+        phantom,
+        criteria,
+    })
+}
+
+/// What `evaluate` needs.
+#[derive(Debug, Clone)]
+pub struct EvaluateRequest {
+    /// Maximum depth, m.
+    pub depth_m: f64,
+    /// Bottom time, min.
+    pub time_min: f64,
+    /// Bottom gas (air if absent).
+    pub gas: Option<String>,
+    /// Deco gases (`50@21`, `O2`).
+    pub deco_gases: Vec<String>,
+    /// Algorithm files (at least one).
+    pub algorithms: Vec<PathBuf>,
+    /// Elasticity laws (`all`, names; empty → the phantom's own).
+    pub elasticity: Vec<String>,
+    /// Phantom file (built-in hydrogel-dive if absent).
+    pub phantom: Option<PathBuf>,
+    /// Grid step override, m.
+    pub grid_step_m: Option<f64>,
+    /// Criteria file.
+    pub criteria: PathBuf,
+    /// Repeat the dive after this surface interval, min.
+    pub repeat_after_min: Option<f64>,
+    /// Output folder.
+    pub out: PathBuf,
+}
+
+/// Plan with each algorithm: the candidates (labels made unique with the file stem).
+pub fn plan_candidates(
+    algorithms: &[(LoadedAlgorithm, String)],
+    depth_m: f64,
+    time_min: f64,
+    gas: Option<&str>,
+    deco_gases: &[String],
+    protocol: &Protocol,
+    repeat_after_min: Option<f64>,
+) -> Result<Vec<Candidate>, InputError> {
+    let mut out: Vec<Candidate> = Vec::new();
+    for (alg, source) in algorithms {
+        let (_, schedule) = plan_dive(alg, depth_m, time_min, gas, deco_gases)?;
+        let mut label = alg.label.clone();
+        if out.iter().any(|c| c.label == label) {
+            let stem = Path::new(source)
+                .file_stem()
+                .map_or_else(|| source.clone(), |s| s.to_string_lossy().into_owned());
+            label = format!("{label} ({stem})");
+        }
+        let history = dive_history(&schedule, protocol, repeat_after_min)?;
+        out.push(Candidate {
+            label,
+            source: source.clone(),
+            schedule,
+            history,
+        });
+    }
+    Ok(out)
+}
+
+/// Run `evaluate`: plan, simulate, score, write the report. Returns the evaluation.
+pub fn run(
+    req: &EvaluateRequest,
+    progress: &mut (dyn FnMut(f64, f64) + Send),
+) -> Result<Evaluation, Error> {
+    if req.algorithms.is_empty() {
+        return Err(InputError::new("give at least one --algorithm FILE")
+            .in_file("<command line>")
+            .field("--algorithm")
+            .into());
+    }
+    let criteria = load_criteria(&req.criteria)?;
+    let phantom = PhantomSpec::load(req.phantom.as_deref(), req.grid_step_m)?;
+    let laws = phantom.resolve_laws(&req.elasticity)?;
+    let algs = req
+        .algorithms
+        .iter()
+        .map(|p| load_algorithm(p).map(|a| (a, p.display().to_string())))
+        .collect::<Result<Vec<_>, _>>()?;
+    let candidates = plan_candidates(
+        &algs,
+        req.depth_m,
+        req.time_min,
+        req.gas.as_deref(),
+        &req.deco_gases,
+        &criteria.protocol,
+        req.repeat_after_min,
+    )?;
+    let ev = run_matrix(candidates, phantom, laws, criteria, progress)?;
+    let dive = format!(
+        "{} m for {} min on {}{}",
+        req.depth_m,
+        req.time_min,
+        req.gas.as_deref().unwrap_or("air"),
+        if req.deco_gases.is_empty() {
+            String::new()
+        } else {
+            format!(", deco gases {}", req.deco_gases.join(", "))
+        }
+    );
+    let mut page = Page::new(format!("Decompression report: {dive}"));
+    let mut set = OutputSet::new();
+    let ctx = ReportContext {
+        dive,
+        criteria_source: req.criteria.display().to_string(),
+        repeat_after_min: req.repeat_after_min,
+        command: None,
+    };
+    add_report(&mut page, &mut set, "", &ev, &ctx)?;
+    finish_page(&mut page, &mut set, "")?;
+    set.commit(&req.out)?;
+    Ok(ev)
+}
+
+/// What the report says about where its inputs came from.
+#[derive(Debug, Clone, Default)]
+pub struct ReportContext {
+    /// The dive in words.
+    pub dive: String,
+    /// The criteria file.
+    pub criteria_source: String,
+    /// Surface interval of a repetitive dive, min.
+    pub repeat_after_min: Option<f64>,
+    /// The command that produced the report, if it should be quoted.
+    pub command: Option<String>,
+}
+
+fn plot_err(e: impl std::fmt::Display) -> Error {
+    Error::Solver(format!("plot: {e}"))
+}
+
+fn fmt_min(x: f64) -> String {
+    if (x - x.round()).abs() < 1e-9 {
+        format!("{}", x.round())
+    } else {
+        format!("{x:.1}")
+    }
+}
+
+/// The schedule table: stops, gases, runtime.
+pub fn schedule_table(ev: &Evaluation) -> Result<Table, Error> {
+    let mut t = Table::new(
+        "Schedules",
+        vec![
+            Column::plain("schedule"),
+            Column::plain("source"),
+            Column::plain("stops (depth m × min)"),
+            Column::plain("gases"),
+            Column::new("stop_time", "min"),
+            Column::new("runtime", "min"),
+        ],
+    );
+    for c in &ev.candidates {
+        let s = &c.schedule;
+        let stops = if s.stops.is_empty() {
+            "none".to_string()
+        } else {
+            s.stops
+                .iter()
+                .map(|st| format!("{}×{}", fmt_min(st.depth_m), fmt_min(st.stop_min)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        };
+        let mut gases: Vec<String> = Vec::new();
+        for l in &s.legs {
+            let g = gas_text(l.gas);
+            if !gases.contains(&g) {
+                gases.push(g);
+            }
+        }
+        t.push(vec![
+            Cell::text(&c.label),
+            Cell::text(&c.source),
+            Cell::text(stops),
+            Cell::text(gases.join(", ")),
+            Cell::fixed(s.stops.iter().map(|st| st.stop_min).sum::<f64>(), 1),
+            Cell::fixed(s.runtime_min(), 1),
+        ])
+        .map_err(Error::Solver)?;
+    }
+    Ok(t)
+}
+
+/// The scores, one row per run and criterion (also written as `scores.csv`).
+pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
+    let mut t = Table::new(
+        "Criteria per schedule",
+        vec![
+            Column::plain("schedule"),
+            Column::plain("elasticity"),
+            Column::plain("criterion"),
+            Column::plain("unit"),
+            Column::plain("value"),
+            Column::plain("limit"),
+            Column::plain("margin"),
+            Column::plain("value/limit"),
+            Column::plain("result"),
+        ],
+    );
+    for r in &ev.runs {
+        for s in &r.scores {
+            t.push(vec![
+                Cell::text(&ev.candidates[r.candidate].label),
+                Cell::text(r.law),
+                Cell::text(&s.label),
+                Cell::text(s.unit),
+                Cell::sci(s.value, 4),
+                Cell::sci(s.limit, 4),
+                Cell::sci(s.margin, 4),
+                Cell::fixed(s.ratio(), 3),
+                Cell::text(if s.pass { "pass" } else { "FAIL" }),
+            ])
+            .map_err(Error::Solver)?;
+        }
+    }
+    Ok(t)
+}
+
+/// One ranked run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Ranked {
+    /// Elasticity law.
+    pub law: &'static str,
+    /// 1-based rank within the law.
+    pub rank: usize,
+    /// Candidate index.
+    pub candidate: usize,
+    /// Failed criteria.
+    pub failures: usize,
+    /// Largest value/limit and its criterion label.
+    pub worst: (f64, String),
+    /// Mean value/limit.
+    pub mean_ratio: f64,
+}
+
+/// Rank the schedules under each law: fewest failed criteria first, then the smallest
+/// worst value/limit, then the smallest mean value/limit.
+pub fn ranking(ev: &Evaluation) -> Vec<Ranked> {
+    let mut out = Vec::new();
+    for law in &ev.laws {
+        let mut rows: Vec<Ranked> = ev
+            .runs
+            .iter()
+            .filter(|r| r.law == *law)
+            .map(|r| {
+                let worst = r.scores.iter().map(|s| (s.ratio(), s.label.clone())).fold(
+                    (f64::NEG_INFINITY, String::new()),
+                    |a, b| {
+                        if b.0 > a.0 {
+                            b
+                        } else {
+                            a
+                        }
+                    },
+                );
+                let n = r.scores.len().max(1) as f64;
+                Ranked {
+                    law,
+                    rank: 0,
+                    candidate: r.candidate,
+                    failures: r.scores.iter().filter(|s| !s.pass).count(),
+                    worst,
+                    mean_ratio: r.scores.iter().map(|s| s.ratio()).sum::<f64>() / n,
+                }
+            })
+            .collect();
+        rows.sort_by(|a, b| {
+            a.failures
+                .cmp(&b.failures)
+                .then(a.worst.0.total_cmp(&b.worst.0))
+                .then(a.mean_ratio.total_cmp(&b.mean_ratio))
+        });
+        for (i, r) in rows.iter_mut().enumerate() {
+            r.rank = i + 1;
+        }
+        out.extend(rows);
+    }
+    out
+}
+
+fn ranking_table(ev: &Evaluation) -> Result<Table, Error> {
+    let mut t = Table::new(
+        "Ranking (per elasticity law: fewest failures, then smallest worst value/limit, then smallest mean)",
+        vec![
+            Column::plain("elasticity"),
+            Column::plain("rank"),
+            Column::plain("schedule"),
+            Column::plain("failures"),
+            Column::plain("worst criterion"),
+            Column::plain("worst value/limit"),
+            Column::plain("mean value/limit"),
+        ],
+    );
+    for r in ranking(ev) {
+        t.push(vec![
+            Cell::text(r.law),
+            Cell::text(r.rank.to_string()),
+            Cell::text(&ev.candidates[r.candidate].label),
+            Cell::text(r.failures.to_string()),
+            Cell::text(&r.worst.1),
+            Cell::fixed(r.worst.0, 3),
+            Cell::fixed(r.mean_ratio, 3),
+        ])
+        .map_err(Error::Solver)?;
+    }
+    Ok(t)
+}
+
+fn runs_table(ev: &Evaluation) -> Result<Table, Error> {
+    let mut t = Table::new(
+        "Phantom runs",
+        vec![
+            Column::plain("schedule"),
+            Column::plain("elasticity"),
+            Column::plain("ending"),
+            Column::new("simulated", "min"),
+            Column::plain("steps (explicit + implicit)"),
+            Column::plain("gas-balance error"),
+            Column::new("wall", "s"),
+        ],
+    );
+    for r in &ev.runs {
+        let s = &r.run.summary;
+        t.push(vec![
+            Cell::text(&ev.candidates[r.candidate].label),
+            Cell::text(r.law),
+            Cell::text(ending_text(&s.ending)),
+            Cell::fixed(s.end_time / 60.0, 1),
+            Cell::text(format!("{} + {}", s.steps.0, s.steps.1)),
+            Cell::sci(s.gas_balance_error, 2),
+            Cell::fixed(r.run.wall_seconds, 2),
+        ])
+        .map_err(Error::Solver)?;
+    }
+    Ok(t)
+}
+
+fn minutes(points: Vec<(f64, f64)>, scale: f64) -> Vec<(f64, f64)> {
+    points
+        .into_iter()
+        .map(|(t, v)| (t / 60.0, v * scale))
+        .collect()
+}
+
+/// Add the evaluation's sections to `page` and its files to `set` under `prefix` (e.g. `""`
+/// or `"dive/"`). Writes `<prefix>scores.csv` and the SVGs.
+pub fn add_report(
+    page: &mut Page,
+    set: &mut OutputSet,
+    prefix: &str,
+    ev: &Evaluation,
+    ctx: &ReportContext,
+) -> Result<(), Error> {
+    let ph = &ev.phantom;
+    let p = &ph.params;
+    let cells = ev.runs.first().map_or(0, |r| r.run.summary.cells);
+    let proto = &ev.criteria.protocol;
+    let primary = ev.laws[0];
+    let add_svg = |page: &mut Page,
+                   set: &mut OutputSet,
+                   name: &str,
+                   svg: String,
+                   caption: &str|
+     -> Result<(), Error> {
+        let file = format!("{prefix}{name}");
+        page.figure(&svg, Some(&file), caption)
+            .map_err(Error::Solver)?;
+        set.add(file, svg);
+        Ok(())
+    };
+
+    page.section("Inputs");
+    let vapour = match proto.water_vapour_pa {
+        Some(v) => format!("{v} Pa for every schedule (criteria file)"),
+        None => "each schedule's own (its algorithm's conventions)".into(),
+    };
+    let mut inputs = format!(
+        "- Dive: **{}**{}\n- Phantom: **{}** from {} — grid step {:.1} µm, {} cells inside; {}\n- Criteria: `{}`{}\n- Linking: ambient pressure of the schedule at the gel; open faces in equilibrium with the inspired {} partial pressures, fraction × (ambient − water vapour), water vapour {}; saturated at the surface at t = 0; watched {} min at the surface on air after the schedule ends.\n- Elasticity laws: {} (μ = {} Pa; M = {:e} Pa/m³ and K = {:e} Pa where the phantom gives none: the paper's Fig. 2a values 5e-2 Pa/µm³ and 2.2 GPa).",
+        ctx.dive,
+        ctx.repeat_after_min
+            .map(|s| format!(", repeated after a {s} min surface interval"))
+            .unwrap_or_default(),
+        p.name,
+        ph.source,
+        p.grid_step * 1e6,
+        cells,
+        ph.description.replace('\n', " "),
+        ctx.criteria_source,
+        if ev.criteria.description.is_empty() {
+            String::new()
+        } else {
+            format!(" — {}", ev.criteria.description.replace('\n', " "))
+        },
+        if proto.oxygen_at_faces {
+            "gas (O2 included)"
+        } else {
+            "inert-gas (N2, He; O2 left out)"
+        },
+        vapour,
+        fmt_min(proto.observe_after_surfacing_s / 60.0),
+        ev.laws.join(", "),
+        ph.laws.shear_modulus,
+        ph.laws.bulk_modulus_per_volume,
+        ph.laws.bulk_modulus,
+    );
+    if let Some(cmd) = &ctx.command {
+        inputs.push_str(&format!("\n- Produced by: `{cmd}`"));
+    }
+    page.text(inputs);
+
+    page.section("Schedules");
+    page.table(&schedule_table(ev)?);
+    let mut prof = LinePlot::new(
+        "Dive profiles as applied to the phantom",
+        "time (min)",
+        "depth (m)",
+    );
+    let mut press = LinePlot::new(
+        "Ambient pressure at the gel",
+        "time (min)",
+        "ambient pressure (kPa, absolute)",
+    );
+    for c in &ev.candidates {
+        let h = &c.history;
+        let pts = |f: &dyn Fn(f64) -> f64| -> Vec<(f64, f64)> {
+            h.times_s
+                .iter()
+                .zip(&h.ambient_pa)
+                .map(|(t, pa)| (t / 60.0, f(*pa)))
+                .collect()
+        };
+        let s = &c.schedule;
+        prof = prof.with(Series::new(
+            &c.label,
+            pts(&|pa| (pa - s.surface_pressure_pa) / s.pa_per_m),
+        ));
+        press = press.with(Series::new(&c.label, pts(&|pa| pa * 1e-3)));
+    }
+    add_svg(
+        page,
+        set,
+        "profiles.svg",
+        prof.to_svg().map_err(plot_err)?,
+        "Depth against time for each schedule, including the time watched at the surface.",
+    )?;
+    add_svg(
+        page,
+        set,
+        "pressure.svg",
+        press.to_svg().map_err(plot_err)?,
+        "The ambient pressure that acts on the gel.",
+    )?;
+
+    page.section("Scores");
+    let scores = scores_table(ev)?;
+    set.add(
+        format!("{prefix}scores.csv"),
+        scores.to_csv().map_err(Error::Solver)?,
+    );
+    let mut crit = String::from("Criteria (value ≤ limit passes; margin = limit − value):\n");
+    for c in &ev.criteria.criteria {
+        crit.push_str(&format!(
+            "\n- **{}** (`{}`, {}): {}; limit {}",
+            c.label,
+            c.criterion.name(),
+            if c.criterion.unit().is_empty() {
+                "dimensionless"
+            } else {
+                c.criterion.unit()
+            },
+            c.criterion.describe(),
+            c.limit
+        ));
+    }
+    page.text(crit);
+    page.table(&ranking_table(ev)?);
+    page.table(&scores);
+    let groups: Vec<String> = ev.runs.iter().map(|r| ev.run_name(r)).collect();
+    let bars = BarChart {
+        title: "Each criterion as a fraction of its limit".into(),
+        x_label: "criterion".into(),
+        y_label: "value / limit (1 = limit)".into(),
+        categories: ev
+            .criteria
+            .criteria
+            .iter()
+            .map(|c| c.label.clone())
+            .collect(),
+        groups,
+        values: (0..ev.criteria.criteria.len())
+            .map(|k| ev.runs.iter().map(|r| r.scores[k].ratio()).collect())
+            .collect(),
+        reference: Some((1.0, "limit".into())),
+        size: DEFAULT_SIZE,
+    };
+    add_svg(
+        page,
+        set,
+        "criteria.svg",
+        bars.to_svg().map_err(plot_err)?,
+        "value/limit of every criterion for every run; bars above the limit line fail.",
+    )?;
+
+    page.section(format!("Bubbles ({primary} elasticity)"));
+    let mut vol = LinePlot::new(
+        format!("Total bubble volume ({primary})"),
+        "time (min)",
+        "total bubble volume (mm³)",
+    );
+    let mut area = LinePlot::new(
+        format!("Total bubble surface area ({primary})"),
+        "time (min)",
+        "total surface area (mm²)",
+    );
+    let mut rate = LinePlot::new(
+        format!("Growth rate of the total surface area ({primary})"),
+        "time (min)",
+        "dA/dt (µm²/s)",
+    );
+    let mut ss = LinePlot::new(
+        format!("Gel supersaturation at the bubbles ({primary})"),
+        "time (min)",
+        "max over bubbles of gel tension − ambient (kPa)",
+    );
+    for (c, cand) in ev.candidates.iter().enumerate() {
+        let Some(r) = ev.run(c, primary) else {
+            continue;
+        };
+        let f = &r.run.frames;
+        vol = vol.with(Series::new(
+            &cand.label,
+            minutes(series::total_volume(f), 1e9),
+        ));
+        let a = series::total_area(f);
+        rate = rate.with(Series::new(
+            &cand.label,
+            series::rate(&a)
+                .into_iter()
+                .map(|(t, v)| (t / 60.0, v * 1e12))
+                .collect(),
+        ));
+        area = area.with(Series::new(&cand.label, minutes(a, 1e6)));
+        ss = ss.with(Series::new(
+            &cand.label,
+            minutes(series::supersaturation_at_bubbles(f), 1e-3),
+        ));
+    }
+    add_svg(
+        page,
+        set,
+        "volume.svg",
+        vol.to_svg().map_err(plot_err)?,
+        "Total volume of all bubbles in the phantom for each schedule.",
+    )?;
+    for (c, cand) in ev.candidates.iter().enumerate() {
+        let Some(r) = ev.run(c, primary) else {
+            continue;
+        };
+        let mut rad = LinePlot::new(
+            format!("Bubble radius: {} ({primary})", cand.label),
+            "time (min)",
+            "radius (µm)",
+        );
+        for (id, pts) in series::per_bubble(&r.run.frames, |b| b.radius) {
+            rad = rad.with(Series::new(format!("bubble {id}"), minutes(pts, 1e6)));
+        }
+        add_svg(
+            page,
+            set,
+            &format!("radius-{}.svg", c + 1),
+            rad.to_svg().map_err(plot_err)?,
+            &format!("Radius of each bubble under {}.", cand.label),
+        )?;
+    }
+    add_svg(
+        page,
+        set,
+        "area.svg",
+        area.to_svg().map_err(plot_err)?,
+        "Total surface area of all bubbles.",
+    )?;
+    add_svg(
+        page,
+        set,
+        "area-rate.svg",
+        rate.to_svg().map_err(plot_err)?,
+        "Growth rate of the total surface area between recorded frames (the peak-area-growth-rate criterion takes it per bubble).",
+    )?;
+    add_svg(
+        page,
+        set,
+        "supersaturation.svg",
+        ss.to_svg().map_err(plot_err)?,
+        "Dissolved-gas tension of the gel around the bubbles minus ambient pressure: positive drives growth.",
+    )?;
+
+    if ev.laws.len() > 1 {
+        page.section("Elasticity laws compared");
+        page.text("The same schedules through the same phantom under each tissue-elasticity law (the paper's eqs. 2.6–2.9; `none` is Ω = 0).");
+        for (c, cand) in ev.candidates.iter().enumerate() {
+            let mut el = LinePlot::new(
+                format!("Total bubble volume under each law: {}", cand.label),
+                "time (min)",
+                "total bubble volume (mm³)",
+            );
+            for law in &ev.laws {
+                if let Some(r) = ev.run(c, law) {
+                    el = el.with(Series::new(
+                        *law,
+                        minutes(series::total_volume(&r.run.frames), 1e9),
+                    ));
+                }
+            }
+            add_svg(
+                page,
+                set,
+                &format!("elasticity-{}.svg", c + 1),
+                el.to_svg().map_err(plot_err)?,
+                &format!(
+                    "Total bubble volume of {} under each elasticity law.",
+                    cand.label
+                ),
+            )?;
+        }
+    }
+
+    page.section("Phantom runs");
+    page.table(&runs_table(ev)?);
+    Ok(())
+}
+
+/// Close a page: the caveat on the hazard and model, then `report.html` and `report.md`
+/// under `prefix`.
+pub fn finish_page(page: &mut Page, set: &mut OutputSet, prefix: &str) -> Result<(), Error> {
+    page.section("Reading this report");
+    page.text("The phantom is a gel, not a diver: its bubbles rank schedules by how much gas they leave to come out of solution, under explicit and adjustable assumptions. The `hazard` criterion has the form of the BVM(3) family, P = 1 − exp(−∫ g·max(0, V − V_thr) dt), but its gain g and threshold V_thr are user parameters that this tool has **not** calibrated to human (or any) decompression-sickness data: it is a monotone score, not a probability of DCS.");
+    set.add(
+        format!("{prefix}report.html"),
+        page.to_html().map_err(Error::Solver)?,
+    );
+    set.add(
+        format!("{prefix}report.md"),
+        page.to_markdown().map_err(Error::Solver)?,
+    );
+    Ok(())
+}
+
+/// A short text summary: the ranking under each law with failures and worst criterion.
+pub fn summary_text(ev: &Evaluation) -> String {
+    let mut s = String::new();
+    for r in ranking(ev) {
+        s.push_str(&format!(
+            "{:<26} {:>2}. {:<28} failures {}  worst {} ({:.3} of limit)\n",
+            r.law, r.rank, ev.candidates[r.candidate].label, r.failures, r.worst.1, r.worst.0
+        ));
+    }
+    s
+}
+
+/// Load algorithms embedded as text (the demo): (text, path used in messages).
+pub fn algorithms_from_text(
+    list: &[(&str, &str)],
+) -> Result<Vec<(LoadedAlgorithm, String)>, InputError> {
+    list.iter()
+        .map(|(text, path)| parse_algorithm(text, Path::new(path)).map(|a| (a, path.to_string())))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::algorithm::{Leg, LegKind};
+    use crate::gas::Gas;
+
+    fn schedule(vapour: f64) -> Schedule {
+        let leg = |kind, a: f64, b: f64, s: f64, gas| Leg {
+            kind,
+            start_depth_m: a,
+            end_depth_m: b,
+            duration_s: s,
+            gas,
+        };
+        let tx = GasMix::new(0.18, 0.45).unwrap();
+        Schedule {
+            label: "t".into(),
+            surface_pressure_pa: 101_325.0,
+            pa_per_m: 10_000.0,
+            water_vapour_pa: vapour,
+            legs: vec![
+                leg(LegKind::Descent, 0.0, 40.0, 200.0, tx),
+                leg(LegKind::Bottom, 40.0, 40.0, 600.0, tx),
+                leg(LegKind::Ascent, 40.0, 0.0, 400.0, tx),
+            ],
+            stops: vec![],
+        }
+    }
+
+    #[test]
+    fn linking_subtracts_vapour_keeps_helium_and_drops_oxygen() {
+        let p = Protocol {
+            observe_after_surfacing_s: 600.0,
+            water_vapour_pa: None,
+            oxygen_at_faces: false,
+        };
+        let h = dive_history(&schedule(6270.0), &p, None).unwrap();
+        // at the bottom (t = 500 s): ambient 101325 + 40·10000 = 501325 Pa; He 0.45 and N2 0.37
+        // of (501325 − 6270) = 495055 Pa → 222774.75 and 183170.35 Pa; O2 left out.
+        assert!((h.ambient(500.0) - 501_325.0).abs() < 1e-6);
+        assert!((h.inspired_partial_pressure(Gas::He, 500.0) - 222_774.75).abs() < 1e-6);
+        assert!((h.inspired_partial_pressure(Gas::N2, 500.0) - 183_170.35).abs() < 1e-6);
+        assert_eq!(h.inspired_partial_pressure(Gas::O2, 500.0), 0.0);
+        assert_eq!(h.gases(), vec![Gas::N2, Gas::He]);
+        // observation at the surface on air: N2 0.79·(101325 − 6270) = 75093.45 Pa
+        assert!((h.duration_s() - 1800.0).abs() < 1e-9);
+        assert!((h.inspired_partial_pressure(Gas::N2, 1700.0) - 75_093.45).abs() < 1e-6);
+        // the protocol's vapour replaces the schedule's; O2 kept when asked
+        let p2 = Protocol {
+            water_vapour_pa: Some(0.0),
+            oxygen_at_faces: true,
+            ..p
+        };
+        let h2 = dive_history(&schedule(6270.0), &p2, Some(30.0)).unwrap();
+        assert!((h2.inspired_partial_pressure(Gas::O2, 500.0) - 0.18 * 501_325.0).abs() < 1e-6);
+        // repetitive: dive (1200 s) + 30 min + dive + 10 min
+        assert!((h2.duration_s() - (1200.0 + 1800.0 + 1200.0 + 600.0)).abs() < 1e-9);
+        assert!((h2.ambient(1200.0 + 1800.0 + 500.0) - 501_325.0).abs() < 1e-6);
+    }
+}

@@ -1,0 +1,331 @@
+//! Criteria files (`algorithms/criteria/*.toml`): raw serde structs mirroring the file
+//! (`deny_unknown_fields`), then a validated [`CriteriaSet`].
+//!
+//! ```toml
+//! description = "what these limits are for"
+//! [protocol]
+//! observe_after_surfacing_min = 60   # watch the phantom this long at the surface (default 60)
+//! water_vapour_pa = 6270             # optional: same vapour for every schedule (default: each
+//!                                    # schedule's own, from its algorithm's conventions)
+//! oxygen_at_faces = false            # default false: only N2 and He reach the open faces
+//! [[criterion]]
+//! kind = "peak-total-volume"         # registry key (risk::REGISTRY)
+//! label = "peak volume"              # optional, unique; default the kind
+//! limit = 0.05                       # in the criterion's unit (> 0)
+//! # further fields: the criterion's parameters (e.g. threshold_mm3 = 0.02)
+//! ```
+
+use super::{build, kinds, score, RiskCriterion, RunData, Score};
+use crate::error::{line_of_key, toml_error, InputError};
+use serde::Deserialize;
+use std::path::Path;
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCriteriaFile {
+    description: Option<String>,
+    protocol: Option<RawProtocol>,
+    #[serde(default)]
+    criterion: Vec<toml::Table>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawProtocol {
+    observe_after_surfacing_min: Option<f64>,
+    water_vapour_pa: Option<f64>,
+    oxygen_at_faces: Option<bool>,
+}
+
+/// How a dive schedule drives the phantom.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Protocol {
+    /// Time the phantom is watched at the surface after the schedule ends, s (bubbles in gel
+    /// grow for tens of minutes after surfacing). Default 3600.
+    pub observe_after_surfacing_s: f64,
+    /// Water-vapour pressure subtracted at the open faces, Pa, for every schedule; `None`:
+    /// each schedule's own (its algorithm's conventions).
+    pub water_vapour_pa: Option<f64>,
+    /// Let the breathed O2 reach the open faces too (default false: the faces are in
+    /// equilibrium with the inspired inert gases, N2 and He, only — living tissue
+    /// metabolises oxygen).
+    pub oxygen_at_faces: bool,
+}
+
+impl Default for Protocol {
+    fn default() -> Self {
+        Protocol {
+            observe_after_surfacing_s: 3600.0,
+            water_vapour_pa: None,
+            oxygen_at_faces: false,
+        }
+    }
+}
+
+/// One criterion of a file with its label and limit.
+#[derive(Debug)]
+pub struct ConfiguredCriterion {
+    /// Unique label (tables, legends).
+    pub label: String,
+    /// Limit in the criterion's unit (> 0).
+    pub limit: f64,
+    /// The criterion.
+    pub criterion: Box<dyn RiskCriterion>,
+}
+
+/// A validated criteria file.
+#[derive(Debug)]
+pub struct CriteriaSet {
+    /// Free text from the file.
+    pub description: String,
+    /// The evaluation protocol.
+    pub protocol: Protocol,
+    /// The criteria, in file order.
+    pub criteria: Vec<ConfiguredCriterion>,
+}
+
+impl CriteriaSet {
+    /// Score a run on every criterion, in file order.
+    pub fn score(&self, run: &RunData) -> Vec<Score> {
+        self.criteria
+            .iter()
+            .map(|c| {
+                score(
+                    &c.label,
+                    c.criterion.as_ref(),
+                    c.criterion.evaluate(run),
+                    c.limit,
+                )
+            })
+            .collect()
+    }
+}
+
+/// Read and validate a criteria file.
+pub fn load_criteria(path: &Path) -> Result<CriteriaSet, InputError> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        InputError::new(format!("cannot read the criteria file: {e}")).in_file(path)
+    })?;
+    parse_criteria(&text, path)
+}
+
+/// 1-based line of the `n`-th (0-based) `[[criterion]]` header.
+fn block_line(text: &str, n: usize) -> Option<usize> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| l.trim().starts_with("[[criterion]]"))
+        .nth(n)
+        .map(|(i, _)| i + 1)
+}
+
+/// 1-based line of `key =` inside the `n`-th `[[criterion]]` block (else the block header).
+fn line_in_block(text: &str, n: usize, key: &str) -> Option<usize> {
+    let start = block_line(text, n)?;
+    let found = text
+        .lines()
+        .enumerate()
+        .skip(start)
+        .take_while(|(_, l)| !l.trim_start().starts_with('['))
+        .find(|(_, l)| {
+            let t = l.trim_start();
+            t.starts_with(key) && t[key.len()..].trim_start().starts_with('=')
+        })
+        .map(|(i, _)| i + 1);
+    Some(found.unwrap_or(start))
+}
+
+/// Parse and validate criteria TOML text (`path` names it in errors).
+pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError> {
+    let raw: RawCriteriaFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+    let top = |key: &str, msg: String| {
+        let leaf = key.rsplit('.').next().unwrap_or(key);
+        let mut e = InputError::new(msg).in_file(path).field(key);
+        if let Some(l) = line_of_key(text, leaf) {
+            e = e.at_line(l);
+        }
+        e
+    };
+    let rp = raw.protocol.unwrap_or_default();
+    let mut protocol = Protocol::default();
+    if let Some(m) = rp.observe_after_surfacing_min {
+        if !(m.is_finite() && (0.0..=7.0 * 24.0 * 60.0).contains(&m)) {
+            return Err(top(
+                "protocol.observe_after_surfacing_min",
+                format!("must be between 0 and 10080 min (got {m})"),
+            ));
+        }
+        protocol.observe_after_surfacing_s = m * 60.0;
+    }
+    if let Some(v) = rp.water_vapour_pa {
+        if !(v.is_finite() && (0.0..20_000.0).contains(&v)) {
+            return Err(top(
+                "protocol.water_vapour_pa",
+                format!("must be in 0..20000 Pa (alveolar at 37 °C: 6270) (got {v})"),
+            ));
+        }
+        protocol.water_vapour_pa = Some(v);
+    }
+    protocol.oxygen_at_faces = rp.oxygen_at_faces.unwrap_or(false);
+    if raw.criterion.is_empty() {
+        return Err(InputError::new(
+            "no criteria: add at least one [[criterion]] with kind and limit",
+        )
+        .in_file(path)
+        .field("criterion"));
+    }
+    let mut criteria: Vec<ConfiguredCriterion> = Vec::new();
+    for (n, mut t) in raw.criterion.into_iter().enumerate() {
+        let err = |key: &str, msg: String| {
+            let mut e = InputError::new(format!("criterion {}: {msg}", n + 1))
+                .in_file(path)
+                .field(format!("criterion.{key}"));
+            if let Some(l) = line_in_block(text, n, key) {
+                e = e.at_line(l);
+            }
+            e
+        };
+        let kind = match t.remove("kind") {
+            Some(toml::Value::String(s)) => s,
+            Some(_) => return Err(err("kind", "must be a string".into())),
+            None => {
+                return Err(err(
+                    "kind",
+                    format!("missing; one of {}", kinds().join(", ")),
+                ))
+            }
+        };
+        let limit = match t.remove("limit") {
+            Some(toml::Value::Float(x)) => x,
+            Some(toml::Value::Integer(i)) => i as f64,
+            Some(_) => return Err(err("limit", "must be a number".into())),
+            None => {
+                return Err(err(
+                    "limit",
+                    "missing; give the limit in the criterion's unit".into(),
+                ))
+            }
+        };
+        let label = match t.remove("label") {
+            Some(toml::Value::String(s)) => s,
+            Some(_) => return Err(err("label", "must be a string".into())),
+            None => kind.clone(),
+        };
+        let criterion = build(&kind, t).map_err(|m| {
+            if m.starts_with("unknown criterion") {
+                return err("kind", m);
+            }
+            // serde: "unknown field `x`, expected ..." / "missing field `x`"; builders: "x: ..."
+            let field = m
+                .split_once('`')
+                .and_then(|(_, r)| r.split_once('`'))
+                .map(|(f, _)| f.to_string())
+                .or_else(|| {
+                    m.split_once(": ")
+                        .map(|(f, _)| f.to_string())
+                        .filter(|f| !f.contains(' '))
+                })
+                .unwrap_or_else(|| "kind".into());
+            err(&field, m)
+        })?;
+        if !(limit.is_finite() && limit > 0.0) {
+            return Err(err(
+                "limit",
+                format!(
+                    "must be positive (got {limit}); give it in {}",
+                    if criterion.unit().is_empty() {
+                        "the criterion's unit"
+                    } else {
+                        criterion.unit()
+                    }
+                ),
+            ));
+        }
+        if criteria.iter().any(|c| c.label == label) {
+            return Err(err(
+                "label",
+                format!("label '{label}' is used twice; give each criterion its own label"),
+            ));
+        }
+        criteria.push(ConfiguredCriterion {
+            label,
+            limit,
+            criterion,
+        });
+    }
+    Ok(CriteriaSet {
+        description: raw.description.unwrap_or_default(),
+        protocol,
+        criteria,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(t: &str) -> Result<CriteriaSet, InputError> {
+        parse_criteria(t, Path::new("c.toml"))
+    }
+
+    #[test]
+    fn reads_criteria_and_protocol() {
+        let c = parse(
+            "[protocol]\nobserve_after_surfacing_min = 30\nwater_vapour_pa = 6270\n\
+             [[criterion]]\nkind = \"peak-radius\"\nlimit = 200\n\
+             [[criterion]]\nkind = \"hazard\"\nlabel = \"P\"\nlimit = 5.0\ngain_per_mm3_min = 0.1\n",
+        )
+        .unwrap();
+        assert_eq!(c.criteria.len(), 2);
+        assert_eq!(c.criteria[1].label, "P");
+        assert_eq!(c.criteria[0].limit, 200.0);
+        assert_eq!(c.protocol.observe_after_surfacing_s, 1800.0);
+        assert_eq!(c.protocol.water_vapour_pa, Some(6270.0));
+        assert!(!c.protocol.oxygen_at_faces);
+    }
+
+    #[test]
+    fn errors_name_line_and_field() {
+        let e = parse("[[criterion]]\nkind = \"peak-radius\"\nlimit = 1\n[[criterion]]\nkind = \"bogus\"\nlimit = 1\n")
+            .unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(5), Some("criterion.kind")),
+            "{e}"
+        );
+        assert!(e.message.contains("peak-total-volume"), "{e}");
+        let e = parse("[[criterion]]\nkind = \"peak-radius\"\nlimit = -3\n").unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(3), Some("criterion.limit")),
+            "{e}"
+        );
+        let e = parse(
+            "[[criterion]]\nkind = \"hazard\"\nlimit = 3\ngain_per_mm3_min = 1\nthreshold = 2\n",
+        )
+        .unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(5), Some("criterion.threshold")),
+            "{e}"
+        );
+        let e = parse("[[criterion]]\nkind = \"hazard\"\nlimit = 3\n").unwrap_err();
+        assert_eq!(
+            e.field.as_deref(),
+            Some("criterion.gain_per_mm3_min"),
+            "{e}"
+        );
+        let e = parse("[protocol]\nobserve_after_surfacing_min = -1\n[[criterion]]\nkind = \"peak-radius\"\nlimit = 1\n")
+            .unwrap_err();
+        assert_eq!(e.line, Some(2), "{e}");
+        let e = parse("[[criterion]]\nkind = \"peak-radius\"\nlimit = 1\n[[criterion]]\nkind = \"peak-radius\"\nlimit = 2\n")
+            .unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("criterion.label"), "{e}");
+        let e = parse("descripton = \"x\"\n").unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(1), Some("descripton")),
+            "{e}"
+        );
+        assert!(parse("description = \"x\"\n").is_err());
+    }
+}

@@ -1,0 +1,402 @@
+//! The evaluation path end to end: `evaluate` and `check` through a small phantom, the
+//! report files, the scores, exit codes and all-or-nothing output on bad input.
+
+use crate::common::{bin, root, tempdir};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A 3 mm gel cube open at the top only (h = 150 µm, 8 000 cells) with two nuclei of 100 µm
+/// just above R_min = 86.5 µm: impermeable while compressed at depth, growing near the surface.
+const PHANTOM: &str = r#"name = "test-gel"
+[geometry]
+shape = "box"
+size_m = [3e-3, 3e-3, 3e-3]
+grid_step_m = 150e-6
+open_faces = ["top"]
+[material.elasticity]
+law = "hyperelastic"
+shear_modulus = 40.0
+[gases.n2]
+diffusivity = 2.5e-9
+ostwald = 0.014
+[gases.o2]
+diffusivity = 2.5e-9
+ostwald = 0.027
+[gases.he]
+diffusivity = 8.35e-9
+ostwald = 0.0098
+[nuclei]
+min_radius_m = 86.5e-6
+[[bubbles]]
+position_m = [1.5e-3, 1.5e-3, 1.5e-3]
+initial_radius_m = 100e-6
+[[bubbles]]
+position_m = [1.5e-3, 1.5e-3, 2.4e-3]
+initial_radius_m = 100e-6
+[numerics]
+max_step_s = 30.0
+record_interval_s = 10.0
+"#;
+
+/// Criteria with every registered kind; `scale` multiplies every limit.
+fn criteria(scale: f64) -> String {
+    format!(
+        r#"description = "test limits"
+[protocol]
+observe_after_surfacing_min = 30
+water_vapour_pa = 6270
+[[criterion]]
+kind = "peak-total-volume"
+limit = {}
+[[criterion]]
+kind = "peak-radius"
+limit = {}
+[[criterion]]
+kind = "peak-area-growth-rate"
+label = "dA/dt after surfacing"
+window = "after-surfacing"
+limit = {}
+[[criterion]]
+kind = "volume-time-above-threshold"
+limit = {}
+threshold_mm3 = 0.008378
+[[criterion]]
+kind = "peak-supersaturation"
+limit = {}
+[[criterion]]
+kind = "hazard"
+limit = {}
+gain_per_mm3_min = 0.1
+threshold_mm3 = 0.008378
+"#,
+        0.0145 * scale,
+        107.0 * scale,
+        17.0 * scale,
+        0.04 * scale,
+        150.0 * scale,
+        0.4 * scale
+    )
+}
+
+/// 30 m for 10 min on air, straight to the surface at 30 m/min.
+const FAST: &str = "time_min,depth_m\n0,0\n1.5,30\n11.5,30\n12.5,0\n";
+/// The same dive with an ascent at about 10 m/min and stops at 6 m (5 min) and 3 m (10 min).
+const STOPS: &str = "time_min,depth_m\n0,0\n1.5,30\n11.5,30\n14,6\n19,6\n19.3,3\n29.3,3\n29.6,0\n";
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let o = Command::new(bin()).args(args).output().unwrap();
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// scores.csv as rows of (schedule, criterion, value) with value as text and parsed.
+fn scores(dir: &Path) -> Vec<Vec<String>> {
+    let text = std::fs::read_to_string(dir.join("scores.csv")).unwrap();
+    let mut lines = text.lines();
+    let header = lines.next().unwrap();
+    assert_eq!(
+        header,
+        "schedule,elasticity,criterion,unit,value,limit,margin,value/limit,result"
+    );
+    lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect()
+}
+
+fn value(rows: &[Vec<String>], criterion: &str) -> f64 {
+    rows.iter()
+        .find(|r| r[2] == criterion)
+        .unwrap_or_else(|| panic!("no row for {criterion}"))[4]
+        .parse()
+        .unwrap()
+}
+
+#[test]
+fn evaluate_writes_a_consistent_well_formed_report() {
+    let d = tempdir("evaluate-report");
+    let ph = write(&d, "phantom.toml", PHANTOM);
+    let cr = write(&d, "criteria.toml", &criteria(1.0));
+    let out = d.join("report");
+    let alg = |n: &str| root().join("algorithms").join(n);
+    let (code, stdout, stderr) = run(&[
+        "evaluate",
+        "--depth",
+        "30",
+        "--time",
+        "10",
+        "--algorithm",
+        s(&alg("zhl16c-gf30-85.toml")),
+        "--algorithm",
+        s(&alg("zhl16c-gf100-100.toml")),
+        "--elasticity",
+        "hyperelastic,none",
+        "--phantom",
+        s(&ph),
+        "--criteria",
+        s(&cr),
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    for f in [
+        "report.md",
+        "report.html",
+        "scores.csv",
+        "profiles.svg",
+        "pressure.svg",
+        "volume.svg",
+        "radius-1.svg",
+        "radius-2.svg",
+        "area.svg",
+        "area-rate.svg",
+        "supersaturation.svg",
+        "criteria.svg",
+        "elasticity-1.svg",
+        "elasticity-2.svg",
+    ] {
+        assert!(out.join(f).is_file(), "missing {f}");
+    }
+    // HTML and every SVG are well-formed XML; the HTML inlines its figures and has no script
+    let html = std::fs::read_to_string(out.join("report.html")).unwrap();
+    let opt = roxmltree::ParsingOptions {
+        allow_dtd: true,
+        ..Default::default()
+    };
+    let doc = roxmltree::Document::parse_with_options(&html, opt)
+        .expect("report.html is well-formed XML");
+    assert!(doc.descendants().any(|n| n.has_tag_name("svg")));
+    assert!(!doc.descendants().any(|n| n.has_tag_name("script")));
+    for e in std::fs::read_dir(&out).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "svg") {
+            let t = std::fs::read_to_string(&p).unwrap();
+            roxmltree::Document::parse(&t).unwrap_or_else(|e| panic!("{}: {e}", p.display()));
+        }
+    }
+    // every figure the Markdown links to is in the folder
+    let md_text = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for link in md_text.split("](").skip(1) {
+        let file = link.split(')').next().unwrap();
+        if file.ends_with(".svg") {
+            assert!(
+                out.join(file).is_file(),
+                "report.md links to missing {file}"
+            );
+        }
+    }
+    // every row of scores.csv appears, cell for cell, in report.md's criteria table
+    let rows = scores(&out);
+    assert_eq!(rows.len(), 2 * 2 * 6, "2 schedules × 2 laws × 6 criteria");
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    let md_rows: Vec<Vec<String>> = md
+        .lines()
+        .filter(|l| l.starts_with("| ") && l.matches(" | ").count() == 8)
+        .map(|l| {
+            l.trim_matches(|c| c == '|' || c == ' ')
+                .split(" | ")
+                .map(|c| c.replace('\\', ""))
+                .collect()
+        })
+        .collect();
+    for r in &rows {
+        assert!(md_rows.contains(r), "scores.csv row {r:?} not in report.md");
+    }
+    // the value, limit and margin agree: margin = limit − value to the printed precision
+    for r in &rows {
+        let (v, l, m): (f64, f64, f64) = (
+            r[4].parse().unwrap(),
+            r[5].parse().unwrap(),
+            r[6].parse().unwrap(),
+        );
+        assert!((l - v - m).abs() <= 1e-3 * l.abs().max(v.abs()), "{r:?}");
+        assert_eq!(r[8] == "pass", v <= l, "{r:?}");
+    }
+}
+
+#[test]
+fn fast_ascent_scores_worse_than_stops_and_check_exit_codes() {
+    let d = tempdir("evaluate-fast");
+    let ph = write(&d, "phantom.toml", PHANTOM);
+    let tight = write(&d, "tight.toml", &criteria(1.0));
+    let loose = write(&d, "loose.toml", &criteria(1e6));
+    let fast = write(&d, "fast.csv", FAST);
+    let stops = write(&d, "stops.csv", STOPS);
+    let mut got = Vec::new();
+    for (name, sched) in [("fast", &fast), ("stops", &stops)] {
+        let out = d.join(name);
+        let (code, stdout, stderr) = run(&[
+            "check",
+            "--schedule",
+            s(sched),
+            "--criteria",
+            s(&tight),
+            "--phantom",
+            s(&ph),
+            "--out",
+            s(&out),
+        ]);
+        assert!(code == 0 || code == 1, "{stdout}{stderr}");
+        let rows = scores(&out);
+        // exit code 1 exactly when some criterion fails
+        assert_eq!(code == 1, rows.iter().any(|r| r[8] == "FAIL"), "{stdout}");
+        got.push(rows);
+    }
+    // every criterion that measures bubble growth (and the gel supersaturation that drives it)
+    for c in [
+        "peak-total-volume",
+        "peak-radius",
+        "dA/dt after surfacing",
+        "volume-time-above-threshold",
+        "hazard",
+        "peak-supersaturation",
+    ] {
+        let (f, st) = (value(&got[0], c), value(&got[1], c));
+        assert!(
+            f > st,
+            "{c}: fast ascent {f} should exceed the schedule with stops {st}"
+        );
+    }
+    // bubbles grew at all (peak radius above R0 = 100 µm) in the fast ascent
+    assert!(value(&got[0], "peak-radius") > 100.0);
+    // the fast ascent fails the tight limits (exit 1); everything passes limits ×1e6 (exit 0)
+    let (code, out1, _) = run(&[
+        "check",
+        "--schedule",
+        s(&fast),
+        "--criteria",
+        s(&tight),
+        "--phantom",
+        s(&ph),
+    ]);
+    assert_eq!(code, 1, "{out1}");
+    assert!(out1.contains("FAIL"));
+    let (code, out0, err0) = run(&[
+        "check",
+        "--schedule",
+        s(&stops),
+        "--criteria",
+        s(&loose),
+        "--phantom",
+        s(&ph),
+    ]);
+    assert_eq!(code, 0, "{out0}{err0}");
+    assert!(out0.contains("all criteria pass"));
+}
+
+#[test]
+fn bad_input_exits_2_and_writes_nothing() {
+    let d = tempdir("evaluate-bad");
+    let ph = write(&d, "phantom.toml", PHANTOM);
+    let good = write(&d, "criteria.toml", &criteria(1.0));
+    let fast = write(&d, "fast.csv", FAST);
+    let never = write(
+        &d,
+        "never.csv",
+        "time_min,depth_m\n0,0\n1.5,30\n11.5,30\n12.5,5\n",
+    );
+    let unknown = write(
+        &d,
+        "unknown.toml",
+        "[[criterion]]\nkind = \"peak-radius\"\nlimit = 100\n[[criterion]]\nkind = \"bubble-count\"\nlimit = 3\n",
+    );
+    let negative = write(
+        &d,
+        "negative.toml",
+        "[[criterion]]\nkind = \"peak-radius\"\nlimit = -100\n",
+    );
+    // an earlier report in the output folder must survive a failed run untouched
+    let out = d.join("out");
+    let (code, o, e) = run(&[
+        "check",
+        "--schedule",
+        s(&fast),
+        "--criteria",
+        s(&good),
+        "--phantom",
+        s(&ph),
+        "--out",
+        s(&out),
+    ]);
+    assert!(code == 0 || code == 1, "{o}{e}");
+    let before = std::fs::read(out.join("scores.csv")).unwrap();
+    let listing = |p: &Path| {
+        let mut v: Vec<_> = std::fs::read_dir(p)
+            .unwrap()
+            .map(|e| e.unwrap().file_name())
+            .collect();
+        v.sort();
+        v
+    };
+    let files_before = listing(&out);
+    let cases: [(&Path, &Path, &str, &str); 3] = [
+        (&never, &good, "never surfaces", "depth_m"),
+        (&fast, &unknown, "unknown criterion", "criterion.kind"),
+        (&fast, &negative, "must be positive", "criterion.limit"),
+    ];
+    for (sched, crit, msg, field) in cases {
+        let (code, _, err) = run(&[
+            "check",
+            "--schedule",
+            s(sched),
+            "--criteria",
+            s(crit),
+            "--phantom",
+            s(&ph),
+            "--out",
+            s(&out),
+        ]);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains(msg) && err.contains(field), "{err}");
+        assert_eq!(std::fs::read(out.join("scores.csv")).unwrap(), before);
+        assert_eq!(listing(&out), files_before);
+        // evaluate with the same bad criteria creates no folder at all
+        let fresh = d.join("fresh");
+        if crit != good.as_path() {
+            let (code, _, err) = run(&[
+                "evaluate",
+                "--depth",
+                "30",
+                "--time",
+                "10",
+                "--algorithm",
+                s(&root().join("algorithms/zhl16c-gf30-85.toml")),
+                "--phantom",
+                s(&ph),
+                "--criteria",
+                s(crit),
+                "--out",
+                s(&fresh),
+            ]);
+            assert_eq!(code, 2, "{err}");
+            assert!(!fresh.exists());
+        }
+    }
+    // the line of the offending field is named
+    let (_, _, err) = run(&[
+        "check",
+        "--schedule",
+        s(&fast),
+        "--criteria",
+        s(&unknown),
+        "--phantom",
+        s(&ph),
+    ]);
+    assert!(err.contains("unknown.toml:5:"), "{err}");
+    // no staging folders left beside the output
+    assert!(!listing(&d)
+        .iter()
+        .any(|n| n.to_string_lossy().contains("staging")));
+}
