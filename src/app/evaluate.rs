@@ -149,6 +149,11 @@ impl PhantomSpec {
         for r in requested.iter().flat_map(|s| s.split(',')) {
             let r = r.trim();
             if r.eq_ignore_ascii_case("all") {
+                // the phantom's own law first: it is the primary law of the report's plots
+                let own = self.own_law();
+                if !out.contains(&own) {
+                    out.push(own);
+                }
                 for n in &names {
                     if !out.contains(n) {
                         out.push(n);
@@ -835,9 +840,18 @@ pub fn add_report(
     page.text(crit);
     page.table(&ranking_table(ev)?);
     page.table(&scores);
-    let groups: Vec<String> = ev.runs.iter().map(|r| ev.run_name(r)).collect();
+    // one group per schedule under the primary law (the phantom's own): a legend of every
+    // schedule × law would bury the bars; the other laws are in the tables above
+    let primary_runs: Vec<&RunOutcome> = ev.runs.iter().filter(|r| r.law == ev.laws[0]).collect();
+    let groups: Vec<String> = primary_runs
+        .iter()
+        .map(|r| ev.candidates[r.candidate].label.clone())
+        .collect();
     let bars = BarChart {
-        title: "Each criterion as a fraction of its limit".into(),
+        title: format!(
+            "Each criterion as a fraction of its limit ({} elasticity)",
+            ev.laws[0]
+        ),
         x_label: "criterion".into(),
         y_label: "value / limit (1 = limit)".into(),
         categories: ev
@@ -848,7 +862,7 @@ pub fn add_report(
             .collect(),
         groups,
         values: (0..ev.criteria.criteria.len())
-            .map(|k| ev.runs.iter().map(|r| r.scores[k].ratio()).collect())
+            .map(|k| primary_runs.iter().map(|r| r.scores[k].ratio()).collect())
             .collect(),
         reference: Some((1.0, "limit".into())),
         size: DEFAULT_SIZE,
@@ -858,7 +872,7 @@ pub fn add_report(
         set,
         "criteria.svg",
         bars.to_svg().map_err(plot_err)?,
-        "value/limit of every criterion for every run; bars above the limit line fail.",
+        "value/limit of every criterion for every schedule under the primary elasticity law; bars above the limit line fail.",
     )?;
 
     page.section(format!("Bubbles ({primary} elasticity)"));
