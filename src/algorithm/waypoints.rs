@@ -23,11 +23,36 @@ pub fn read_schedule(
     {
         Some("toml") => Schedule::read(path),
         Some("csv") => read_waypoints_csv(path, conventions, default_gas),
+        Some("txt") => read_legacy_schedule(path, conventions, default_gas),
         _ => Err(InputError::new(
-            "unknown schedule format: use a .toml schedule (plan --out) or a .csv of time_min,depth_m[,gas]",
+            "unknown schedule format: use a .toml schedule (plan --out), a .csv of time_min,depth_m[,gas] \
+             or the paper's two-column .txt (minutes, metres of sea water)",
         )
         .in_file(path)),
     }
+}
+
+/// Read one of the paper's legacy two-column dive files (`time depth`, minutes and metres of sea
+/// water, e.g. `100m_1deco_stop.txt`) as a schedule. The file's quirks and format errors are
+/// handled by the legacy profile reader (with file and line); the waypoints then go through the
+/// same checks as a CSV schedule.
+pub fn read_legacy_schedule(
+    path: &Path,
+    conventions: &Conventions,
+    default_gas: GasMix,
+) -> Result<Schedule, InputError> {
+    use crate::profile::legacy::{read, LegacyUnits};
+    use crate::units::{PressureUnit, TimeUnit, MSW_PA};
+    // read depths as msw over a 1 Pa "surface" so that depth 0 is a valid (positive) pressure
+    let mut units = LegacyUnits::new(TimeUnit::Min, PressureUnit::Msw);
+    units.surface_pa = 1.0;
+    let h = read(path, &units)?;
+    let mut csv = String::from("time_min,depth_m\n");
+    for (t, p) in h.times_s.iter().zip(&h.ambient_pa) {
+        let depth = ((p - 1.0) / MSW_PA).max(0.0);
+        csv.push_str(&format!("{},{}\n", t / 60.0, depth));
+    }
+    parse_waypoints_csv(&csv, path, conventions, default_gas)
 }
 
 /// Read a waypoint CSV file into a schedule in the given conventions (surface pressure,

@@ -345,7 +345,7 @@ pub fn run_matrix(
             let h = &candidates[c].history;
             let scores = criteria.score(&RunData {
                 frames: &run.frames,
-                surfaced_s: Some(h.duration_s() - criteria.protocol.observe_after_surfacing_s),
+                surfaced_s: Some(h.final_arrival_s()),
             });
             Ok(RunOutcome {
                 candidate: c,

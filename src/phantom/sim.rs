@@ -640,6 +640,13 @@ impl<'a> Simulation<'a> {
         }
         let total = self.total_moles();
         let balance = ((total - self.initial_total - self.inflow) / self.initial_total).abs();
+        // Health: the scheme is conservative to round-off (1e-14 measured), so a balance error
+        // this large means something went wrong, not that the grid is coarse.
+        if !(balance < 1e-6) {
+            return Err(Error::Solver(format!(
+                "gas balance lost: |gas now − gas at start − gas in through open faces| is {balance:.3e} of the start; the run is not trustworthy"
+            )));
+        }
         Ok(RunSummary {
             gases: self.gases.clone(),
             max_radius,

@@ -288,6 +288,18 @@ impl PressureHistory {
         }
     }
 
+    /// When the history last arrived at its final pressure (for a dive: the time of surfacing,
+    /// whatever time at the surface follows), s: the first breakpoint of the trailing run of
+    /// breakpoints within 1 Pa of the last one.
+    pub fn final_arrival_s(&self) -> f64 {
+        let last = *self.ambient_pa.last().unwrap();
+        let mut i = self.ambient_pa.len() - 1;
+        while i > 0 && (self.ambient_pa[i - 1] - last).abs() <= 1.0 {
+            i -= 1;
+        }
+        self.times_s[i]
+    }
+
     /// Every gas that appears on any segment, in [`Gas::ALL`] order (without O2 when
     /// [`PressureHistory::inert_only`]).
     pub fn gases(&self) -> Vec<Gas> {
@@ -325,6 +337,20 @@ impl PressureHistory {
 #[cfg(test)]
 mod tests {
     use super::*;
+    #[test]
+    fn final_arrival_is_the_time_of_surfacing() {
+        // descent, bottom, ascent to the surface at 30 s, then surface time to 90 s
+        let h = PressureHistory::with_gas(
+            "t",
+            vec![0.0, 5.0, 20.0, 30.0, 60.0, 90.0],
+            vec![1e5, 3e5, 3e5, 1e5, 1e5, 1e5],
+            GasMix::AIR,
+            0.0,
+        )
+        .unwrap();
+        assert_eq!(h.final_arrival_s(), 30.0);
+    }
+
     #[test]
     fn interpolates_and_rejects_non_monotone() {
         let h = PressureHistory::with_gas(

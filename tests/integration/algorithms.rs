@@ -394,3 +394,31 @@ fn schedule_that_never_surfaces_is_an_error() {
     let e = Schedule::read(&p).unwrap_err();
     assert_eq!(e.line, Some(5), "{e}");
 }
+
+/// The paper's legacy dive files (minutes, metres of sea water) read as schedules: the legs
+/// follow the file's points (`100m_1deco_stop.txt`: 0→100 m in 2 min, 12 min at 100 m, ...,
+/// surfacing at 19.5 min, on the surface until 80 min).
+#[test]
+fn legacy_two_column_dive_file_reads_as_a_schedule() {
+    let path = root().join("../shared/legacy-profiles/100m_1deco_stop.txt");
+    let s =
+        decophantom::algorithm::waypoints::read_schedule(&path, &DECOTENGU, GasMix::AIR).unwrap();
+    assert!((s.runtime_min() - 80.0).abs() < 1e-9, "{}", s.runtime_min());
+    let max_depth = s.legs.iter().map(|l| l.end_depth_m).fold(0.0, f64::max);
+    assert!((max_depth - 100.0).abs() < 1e-9);
+    let h = s.to_pressure_history().unwrap();
+    // at 14 min the diver is still at 100 m: ambient = surface + 100 m × DecoTengu's 9 985 Pa/m
+    let p = h.ambient(14.0 * 60.0);
+    assert!(
+        (p - (DECOTENGU.surface_pressure_pa + 100.0 * DECOTENGU.pa_per_m)).abs() < 1e-6,
+        "{p}"
+    );
+    assert!((h.ambient(19.5 * 60.0) - DECOTENGU.surface_pressure_pa).abs() < 1e-6);
+    // a garbled file names its line
+    let d = tempdir("legacy-schedule");
+    let bad = d.join("bad.txt");
+    std::fs::write(&bad, "0 0\n2 x\n").unwrap();
+    let e = decophantom::algorithm::waypoints::read_schedule(&bad, &DECOTENGU, GasMix::AIR)
+        .unwrap_err();
+    assert_eq!(e.line, Some(2), "{e}");
+}
