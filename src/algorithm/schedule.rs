@@ -11,9 +11,10 @@ use std::path::Path;
 /// 4th ed., table 3-3, the exceptional-exposure / deco limit; also the default deco ppO2 of
 /// DecoTengu users, Subsurface and most planners).
 pub const MAX_PPO2_BAR: f64 = 1.6;
-/// Below this oxygen partial pressure a gas is hypoxic, bar (0.16: the usual planning limit for
-/// breathing a gas at the surface, e.g. NOAA Diving Manual §16 on trimix travel gases).
-pub const HYPOXIC_PPO2_BAR: f64 = 0.16;
+/// Below this oxygen partial pressure a bottom gas is refused as hypoxic at the surface, bar.
+/// 0.15 rather than the more usual 0.16 so that Baker's own VPMDECO example (trimix 15/45 from
+/// the surface, ppO2 0.152 bar) plans; one limit for every algorithm.
+pub const HYPOXIC_PPO2_BAR: f64 = 0.15;
 
 /// Maximum operating depth of a mix at a ppO2 limit (bar) in these conventions, m (not rounded).
 pub fn mod_m(mix: GasMix, ppo2_bar: f64, conventions: &Conventions) -> f64 {
@@ -62,6 +63,14 @@ impl DivePlan {
             return Err(InputError::new(format!(
                 "bottom time {} min must be a positive number of minutes",
                 self.bottom_time_min
+            ))
+            .field("time"));
+        }
+        let descent = self.depth_m / conventions.descent_rate_m_min;
+        if conventions.bottom_time_includes_descent && self.bottom_time_min < descent {
+            return Err(InputError::new(format!(
+                "bottom time {} min is shorter than the descent ({descent:.1} min at {} m/min) that it includes; write at least {descent:.1} min",
+                self.bottom_time_min, conventions.descent_rate_m_min
             ))
             .field("time"));
         }

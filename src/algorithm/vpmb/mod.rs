@@ -35,15 +35,6 @@ use serde::Deserialize;
 /// Subsurface: 1.0, 1.05, 1.12, 1.22, 1.35).
 pub const CONSERVATISM_RADIUS_FACTORS: [f64; 5] = [1.0, 1.05, 1.12, 1.22, 1.35];
 
-/// Lowest oxygen partial pressure at the surface accepted for the bottom gas, Pa (0.15 bar).
-/// Below this a gas is hypoxic at the surface and needs a travel gas; Baker's own sample
-/// plan breathes 15/45 (0.152 bar) from the surface, so the limit sits just below it.
-pub const MIN_SURFACE_PPO2_PA: f64 = 15_000.0;
-
-/// Highest oxygen partial pressure for a deco gas at its switch depth, bar. The MOD is
-/// taken with the divers' rule MOD = 10 m · (1.6 / fO2 − 1) (oxygen: 6 m).
-pub const MAX_DECO_PPO2_BAR: f64 = 1.6;
-
 /// The `[params]` table of a `kind = "vpm-b"` algorithm file, as written.
 #[derive(Debug, Clone, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -266,7 +257,7 @@ impl VpmB {
     /// Depth at which the leading compartment enters the decompression zone on a straight
     /// ascent from the bottom, m (Baker prints it above his decompression table).
     pub fn start_of_deco_zone_m(&self, plan: &DivePlan) -> Result<f64, InputError> {
-        validate_plan(plan, &self.conventions)?;
+        plan.validate(&self.conventions)?;
         Ok(planner::Planner::new(self, plan).start_of_deco_zone())
     }
 }
@@ -306,73 +297,13 @@ fn check_conventions(c: &Conventions) -> Result<(), String> {
     Ok(())
 }
 
-/// Check a dive plan before planning: positive depth and time, a bottom gas that is not
-/// hypoxic at the surface, deco gases within their MOD.
-pub fn validate_plan(plan: &DivePlan, c: &Conventions) -> Result<(), InputError> {
-    if !(plan.depth_m.is_finite() && plan.depth_m > 0.0) {
-        return Err(InputError::new(format!(
-            "depth {} m: the dive needs a depth above 0 m",
-            plan.depth_m
-        ))
-        .field("depth"));
-    }
-    if !(plan.bottom_time_min.is_finite() && plan.bottom_time_min > 0.0) {
-        return Err(InputError::new(format!(
-            "bottom time {} min: the dive needs a bottom time above 0 min",
-            plan.bottom_time_min
-        ))
-        .field("time"));
-    }
-    let descent = plan.depth_m / c.descent_rate_m_min;
-    if c.bottom_time_includes_descent && plan.bottom_time_min < descent {
-        return Err(InputError::new(format!(
-            "bottom time {} min is shorter than the descent ({descent:.1} min at {} m/min) that it includes; write at least {:.1} min",
-            plan.bottom_time_min, c.descent_rate_m_min, descent
-        ))
-        .field("time"));
-    }
-    let ppo2 = plan.bottom_gas.o2 * c.surface_pressure_pa;
-    if ppo2 < MIN_SURFACE_PPO2_PA {
-        return Err(InputError::new(format!(
-            "bottom gas {} is hypoxic at the surface (ppO2 {:.3} bar < {:.2} bar); use a gas with more oxygen",
-            plan.bottom_gas.label(),
-            ppo2 / 1e5,
-            MIN_SURFACE_PPO2_PA / 1e5
-        ))
-        .field("gas"));
-    }
-    for g in &plan.deco_gases {
-        if g.mix.o2 <= 0.0 {
-            return Err(
-                InputError::new(format!("deco gas {} has no oxygen", g.mix.label()))
-                    .field("deco-gas"),
-            );
-        }
-        let mod_m = 10.0 * (MAX_DECO_PPO2_BAR / g.mix.o2 - 1.0);
-        if !(g.switch_depth_m.is_finite() && g.switch_depth_m >= 0.0)
-            || g.switch_depth_m > mod_m + 1e-9
-        {
-            return Err(InputError::new(format!(
-                "deco gas {} switched at {} m is beyond its MOD of {:.1} m (ppO2 {} bar); switch at {:.1} m or shallower",
-                g.mix.label(),
-                g.switch_depth_m,
-                mod_m,
-                MAX_DECO_PPO2_BAR,
-                mod_m.max(0.0)
-            ))
-            .field("deco-gas"));
-        }
-    }
-    Ok(())
-}
-
 impl DecoAlgorithm for VpmB {
     fn label(&self) -> String {
         self.label.clone()
     }
 
     fn plan(&self, plan: &DivePlan) -> Result<Schedule, InputError> {
-        validate_plan(plan, &self.conventions)?;
+        plan.validate(&self.conventions)?;
         planner::Planner::new(self, plan).schedule()
     }
 }
