@@ -6,7 +6,9 @@ use crate::error::Error;
 use crate::gas::Gas;
 use crate::phantom::config::load_phantom;
 use crate::phantom::params::PhantomParams;
-use crate::phantom::sim::{Ending, Event, Frame, Observer, Recorder, RunSummary, Simulation};
+use crate::phantom::sim::{
+    BubbleFrame, Ending, Event, Frame, Observer, Recorder, RunSummary, Simulation,
+};
 use crate::profile::{load, LoadOptions, PressureHistory};
 use crate::report::output::OutputSet;
 use crate::report::plot::{LinePlot, Series};
@@ -171,36 +173,43 @@ pub fn time_axis(frames: &[Frame]) -> (f64, &'static str) {
     }
 }
 
-/// Radius of every bubble over time, µm.
-pub fn radius_plot(frames: &[Frame], title: &str) -> LinePlot {
-    let (tu, tl) = time_axis(frames);
+/// One series per bubble of `value(bubble)` against time (in the axis unit `tu`, s).
+pub fn per_bubble_series(
+    frames: &[Frame],
+    tu: f64,
+    value: impl Fn(&BubbleFrame) -> f64,
+) -> Vec<Series> {
     let ids: std::collections::BTreeSet<usize> = frames
         .iter()
         .flat_map(|f| f.bubbles.iter().map(|b| b.id))
         .collect();
+    ids.into_iter()
+        .map(|id| {
+            let pts = frames
+                .iter()
+                .filter_map(|f| {
+                    f.bubbles
+                        .iter()
+                        .find(|b| b.id == id)
+                        .map(|b| (f.time / tu, value(b)))
+                })
+                .collect();
+            Series::new(format!("bubble {id}"), pts)
+        })
+        .collect()
+}
+
+/// Radius of every bubble over time, µm.
+pub fn radius_plot(frames: &[Frame], title: &str) -> LinePlot {
+    let (tu, tl) = time_axis(frames);
     let mut p = LinePlot::new(title, tl, "radius (µm)");
-    for id in ids {
-        let pts = frames
-            .iter()
-            .filter_map(|f| {
-                f.bubbles
-                    .iter()
-                    .find(|b| b.id == id)
-                    .map(|b| (f.time / tu, b.radius * 1e6))
-            })
-            .collect();
-        p = p.with(Series::new(format!("bubble {id}"), pts));
-    }
+    p.series = per_bubble_series(frames, tu, |b| b.radius * 1e6);
     p
 }
 
 /// Total and per-bubble volume over time, mm³.
 pub fn volume_plot(frames: &[Frame], title: &str) -> LinePlot {
     let (tu, tl) = time_axis(frames);
-    let ids: std::collections::BTreeSet<usize> = frames
-        .iter()
-        .flat_map(|f| f.bubbles.iter().map(|b| b.id))
-        .collect();
     let total = frames
         .iter()
         .map(|f| {
@@ -211,18 +220,8 @@ pub fn volume_plot(frames: &[Frame], title: &str) -> LinePlot {
         })
         .collect();
     let mut p = LinePlot::new(title, tl, "volume (mm³)").with(Series::new("total", total));
-    for id in ids {
-        let pts = frames
-            .iter()
-            .filter_map(|f| {
-                f.bubbles
-                    .iter()
-                    .find(|b| b.id == id)
-                    .map(|b| (f.time / tu, b.volume * 1e9))
-            })
-            .collect();
-        p = p.with(Series::new(format!("bubble {id}"), pts));
-    }
+    p.series
+        .extend(per_bubble_series(frames, tu, |b| b.volume * 1e9));
     p
 }
 
