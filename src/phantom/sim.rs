@@ -464,7 +464,11 @@ impl<'a> Simulation<'a> {
                 }
                 let jt: f64 = fluxes[i].iter().sum();
                 let n = b.total_moles();
-                if jt.abs() > 0.0 && -jt * dt < n {
+                // A bubble shrunk below 1 % of its initial radius may dissolve in one step
+                // (otherwise the steps would shrink with R² for ever); above that every step
+                // is limited by its relative change of content.
+                let finishing = b.radius < 0.01 * b.initial_radius && -jt * dt >= n;
+                if jt.abs() > 0.0 && !finishing {
                     dt = dt.min(num.max_content_change * n / jt.abs()).max(1e-6);
                 }
             }
