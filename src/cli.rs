@@ -49,9 +49,9 @@ pub struct CheckArgs {
     pub out: Option<std::path::PathBuf>,
 }
 
-/// Arguments of `evaluate`.
+/// The dive to plan (shared by `plan` and `evaluate`).
 #[derive(clap::Args, Debug)]
-pub struct EvaluateArgs {
+pub struct DiveArgs {
     /// Maximum depth, m.
     #[arg(long, allow_hyphen_values = true)]
     pub depth: f64,
@@ -61,9 +61,16 @@ pub struct EvaluateArgs {
     /// Bottom gas: air, 32 (nitrox), 18/45 (trimix O2/He).
     #[arg(long)]
     pub gas: Option<String>,
-    /// Deco gas, MIX@SWITCH_DEPTH_M or MIX; repeatable.
+    /// Deco gas, MIX@SWITCH_DEPTH_M or MIX (switch at its MOD at 1.6 bar); repeatable.
     #[arg(long = "deco-gas")]
     pub deco_gas: Vec<String>,
+}
+
+/// Arguments of `evaluate`.
+#[derive(clap::Args, Debug)]
+pub struct EvaluateArgs {
+    #[command(flatten)]
+    pub dive: DiveArgs,
     /// Algorithm TOML; repeat for each algorithm to compare.
     #[arg(long, required = true)]
     pub algorithm: Vec<std::path::PathBuf>,
@@ -158,18 +165,8 @@ pub struct PlanArgs {
     /// Algorithm TOML file, e.g. algorithms/zhl16c-gf30-85.toml.
     #[arg(long)]
     pub algorithm: std::path::PathBuf,
-    /// Maximum depth, m.
-    #[arg(long, allow_hyphen_values = true)]
-    pub depth: f64,
-    /// Bottom time, min.
-    #[arg(long, allow_hyphen_values = true)]
-    pub time: f64,
-    /// Bottom gas: air, 32 (nitrox), 18/45 (trimix O2/He).
-    #[arg(long)]
-    pub gas: Option<String>,
-    /// Deco gas, MIX@SWITCH_DEPTH_M or MIX (switch at its MOD at 1.6 bar); repeatable.
-    #[arg(long = "deco-gas")]
-    pub deco_gas: Vec<String>,
+    #[command(flatten)]
+    pub dive: DiveArgs,
     /// Output format: md, csv or toml.
     #[arg(long, default_value = "md", value_parser = ["md", "csv", "toml"])]
     pub format: String,
@@ -184,10 +181,10 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Plan(a) => {
             let req = decophantom::app::plan::PlanRequest {
                 algorithm: a.algorithm,
-                depth_m: a.depth,
-                time_min: a.time,
-                gas: a.gas,
-                deco_gases: a.deco_gas,
+                depth_m: a.dive.depth,
+                time_min: a.dive.time,
+                gas: a.dive.gas,
+                deco_gases: a.dive.deco_gas,
                 format: decophantom::app::plan::PlanFormat::parse(&a.format).unwrap_or_default(),
                 out: a.out,
             };
@@ -274,10 +271,10 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
         }
         Command::Evaluate(a) => {
             let req = decophantom::app::evaluate::EvaluateRequest {
-                depth_m: a.depth,
-                time_min: a.time,
-                gas: a.gas,
-                deco_gases: a.deco_gas,
+                depth_m: a.dive.depth,
+                time_min: a.dive.time,
+                gas: a.dive.gas,
+                deco_gases: a.dive.deco_gas,
                 algorithms: a.algorithm,
                 elasticity: a.elasticity,
                 phantom: a.phantom,
