@@ -161,7 +161,7 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
             Column::new("max_radius", "µm"),
             Column::new("min_radius_last_cycle", "µm"),
             Column::new("final_radius", "µm"),
-            Column::new("gas_balance_error", ""),
+            Column::plain("gas_balance_error"),
             Column::new("wall", "s"),
         ],
     );
@@ -257,7 +257,10 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         "Radius of each bubble over the five pressure cycles.",
     )
     .map_err(Error::Solver)?;
-    page.heading(3, "Elasticity laws compared on the same run");
+    page.heading(
+        3,
+        "Elasticity laws on the oscillation experiment (bubble 0, R0 = 200 µm)",
+    );
     page.table(&table);
     page.figure(
         &overlay.to_svg().map_err(plot_err)?,

@@ -110,7 +110,14 @@ impl Page {
 
     /// A table.
     pub fn table(&mut self, t: &Table) -> &mut Self {
-        self.blocks.push(Block::Table(t.clone()));
+        let mut t = t.clone();
+        // a table right under a heading of the same words does not repeat them
+        if let Some(Block::Heading(_, h)) = self.blocks.last() {
+            if h.trim() == t.title.trim() {
+                t.title.clear();
+            }
+        }
+        self.blocks.push(Block::Table(t));
         self
     }
 
@@ -274,6 +281,18 @@ fn inline_html(s: &str) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_table_under_a_heading_of_the_same_words_does_not_repeat_them() {
+        use crate::report::table::{Column, Table};
+        let mut p = Page::new("t");
+        p.section("Schedules");
+        p.table(&Table::new("Schedules", vec![Column::plain("a")]));
+        p.table(&Table::new("Other", vec![Column::plain("b")]));
+        let md = p.to_markdown().unwrap();
+        assert_eq!(md.matches("Schedules").count(), 1, "{md}");
+        assert!(md.contains("### Other"), "{md}");
+    }
 
     #[test]
     fn inline_markup() {
