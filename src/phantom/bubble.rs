@@ -166,6 +166,39 @@ mod tests {
     use super::super::elasticity::*;
     use super::*;
 
+    use proptest::prelude::*;
+
+    proptest! {
+        /// The root find inverts the balance: for any radius, the radius found for the gas
+        /// content P_B(R)·V(R) is R again (every law, wide ranges of R, P, γ, moduli, any guess).
+        #[test]
+        fn radius_for_inverts_the_balance(
+            log_r in -7.0f64..-2.0,
+            log_p in 3.0f64..7.0,
+            gamma in 0.0f64..0.1,
+            mu in 0.0f64..100.0,
+            log_m in 10.0f64..18.0,
+            law_i in 0usize..5,
+            log_r0 in -7.0f64..-3.0,
+            guess_factor in 0.01f64..100.0,
+        ) {
+            let (r, p, r0) = (10f64.powf(log_r), 10f64.powf(log_p), 10f64.powf(log_r0));
+            let laws: [Box<dyn ElasticityLaw>; 5] = [
+                Box::new(NoElasticity),
+                Box::new(BulkModulus { bulk_modulus_per_volume: 10f64.powf(log_m) }),
+                Box::new(ContinuityOfDisplacement { shear_modulus: mu }),
+                Box::new(ReferenceConfiguration { shear_modulus: mu, bulk_modulus: 2.2e9 }),
+                Box::new(Hyperelastic { shear_modulus: mu }),
+            ];
+            let b = Balance { ambient: p, surface_tension: gamma, law: laws[law_i].as_ref(), initial_radius: r0, initial_ambient: p };
+            let nrt = b.pv(r);
+            // a state with non-positive internal pressure holds no gas: not a physical bubble
+            prop_assume!(nrt > 0.0);
+            let found = b.radius_for(nrt, r * guess_factor).expect("a root exists");
+            prop_assert!((found / r - 1.0).abs() < 1e-9, "R {r} found {found}");
+        }
+    }
+
     #[test]
     fn pure_boyle_without_tension() {
         let law = NoElasticity;
