@@ -264,13 +264,36 @@ pub fn add_run_files(
 
 /// Run `simulate` and write its outputs; returns the run.
 pub fn run(req: &SimulateRequest, progress: &mut dyn FnMut(f64, f64)) -> Result<SimRun, Error> {
-    let profile = load(&req.profile, &req.load)?;
+    let profile = load_profile_or_schedule(&req.profile, &req.load)?;
     let phantom = load_phantom(&req.phantom)?;
     let run = simulate(&phantom.params, &profile, progress)?;
     let mut set = OutputSet::new();
     add_run_files(&mut set, "", &run, &profile.label, &phantom.params.name)?;
     set.commit(&req.out)?;
     Ok(run)
+}
+
+/// Load a pressure profile; a schedule TOML written by `plan --out` (it has `legs`) is accepted
+/// too and becomes its pressure history (ambient at the gel, breathed gas with the schedule's
+/// water vapour at the open faces).
+pub fn load_profile_or_schedule(
+    path: &std::path::Path,
+    opts: &LoadOptions,
+) -> Result<PressureHistory, Error> {
+    let is_schedule = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+        && std::fs::read_to_string(path)
+            .ok()
+            .and_then(|t| t.parse::<toml::Table>().ok())
+            .is_some_and(|t| t.contains_key("legs"));
+    if is_schedule {
+        let schedule = crate::algorithm::Schedule::read(path)?;
+        return schedule
+            .to_pressure_history()
+            .map_err(|m| Error::Input(crate::error::InputError::new(m).in_file(path)));
+    }
+    Ok(load(path, opts)?)
 }
 
 /// A short human-readable summary of a run.

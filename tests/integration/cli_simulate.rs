@@ -298,3 +298,33 @@ fn elasticity_command_prints_every_form() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
 }
+
+#[test]
+fn simulate_takes_a_schedule_written_by_plan() {
+    let d = tempdir("plan-then-simulate");
+    let ph = write(&d, "phantom.toml", SMALL_PHANTOM);
+    let sched = d.join("schedule.toml");
+    let o = Command::new(bin())
+        .args(["plan", "--algorithm"])
+        .arg(root().join("algorithms/zhl16c-gf30-85.toml"))
+        .args(["--depth", "30", "--time", "20", "--out"])
+        .arg(&sched)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out = d.join("out");
+    let o = simulate(&sched, &ph, &out);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: toml::Table = std::fs::read_to_string(out.join("summary.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    // the schedule's runtime (plan prints it; here: the profile ends when the schedule does)
+    let schedule: toml::Table = std::fs::read_to_string(&sched).unwrap().parse().unwrap();
+    let legs = schedule["legs"].as_array().unwrap();
+    let runtime: f64 = legs
+        .iter()
+        .map(|l| l["duration_s"].as_float().unwrap())
+        .sum();
+    assert!((summary["end_time_s"].as_float().unwrap() - runtime).abs() < 1e-6);
+}
