@@ -361,37 +361,40 @@ impl<'a> Simulation<'a> {
     }
 
     /// Gas fluxes into bubble `i` (mol/s per gas) and the gel tension at its coupling sphere.
-    fn fluxes(&mut self, i: usize, ambient: f64, profile: &PressureHistory) -> (Vec<f64>, f64) {
-        let b = self.bubbles[i].clone();
+    fn fluxes(&mut self, i: usize, ambient: f64, profile: &PressureHistory, j: &mut [f64]) -> f64 {
+        let (position, r, r0) = {
+            let b = &self.bubbles[i];
+            (b.position, b.radius, b.initial_radius)
+        };
         let ng = self.gases.len();
-        let rho = self.coupling_radius(b.radius);
+        let rho = self.coupling_radius(r);
         let mut tension = 0.0;
-        let mut cbar = vec![0.0; ng];
+        let mut cbar = [0.0; Gas::ALL.len()];
         for g in 0..ng {
             let cb = self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], self.time)
                 / self.rt;
-            cbar[g] = self.sphere_mean(g, b.position, rho, cb);
+            cbar[g] = self.sphere_mean(g, position, rho, cb);
             tension += cbar[g] * self.rt / self.ostwald[g];
         }
-        if b.radius <= self.params.min_radius {
-            return (vec![0.0; ng], tension);
+        j.iter_mut().for_each(|x| *x = 0.0);
+        if r <= self.params.min_radius {
+            return tension;
         }
-        let pb = self.balance_for(&b, ambient).internal_pressure(b.radius);
+        let b = &self.bubbles[i];
+        let pb = self.balance_for(b, ambient).internal_pressure(r);
         let n = b.total_moles();
-        let r = b.radius;
         let outer = r + self.params.surface_layer_thickness;
-        let mut j = vec![0.0; ng];
         for g in 0..ng {
             let cs = self.ostwald[g] * (b.moles[g] / n) * pb / self.rt;
             let d = self.diffusivity[g];
-            let ds = self.params.surface.d_surf(d, r, b.initial_radius);
+            let ds = self.params.surface.d_surf(d, r, r0);
             if !(ds > 0.0) {
                 continue;
             }
             let resistance = (1.0 / r - 1.0 / outer) / ds + (1.0 / outer - 1.0 / rho) / d;
             j[g] = 4.0 * PI * (cbar[g] - cs) / resistance;
         }
-        (j, tension)
+        tension
     }
 
     /// Run the profile to its end (or until a bubble reaches a face).
@@ -420,9 +423,10 @@ impl<'a> Simulation<'a> {
         let mut fluxes = vec![vec![0.0; ng]; nb];
         let h3 = self.grid.cell_volume();
         // record the initial state
+        let mut scratch_flux = [0.0; Gas::ALL.len()];
         for i in 0..nb {
             let a = profile.ambient(self.time);
-            tensions[i] = self.fluxes(i, a, profile).1;
+            tensions[i] = self.fluxes(i, a, profile, &mut scratch_flux[..ng]);
         }
         self.record(profile, &tensions, observer);
         next_record += num.record_interval;
@@ -444,9 +448,9 @@ impl<'a> Simulation<'a> {
             // 1. fluxes at the start of the step
             for i in 0..nb {
                 if self.bubbles[i].active() {
-                    let (j, ten) = self.fluxes(i, p, profile);
+                    let mut j = std::mem::take(&mut fluxes[i]);
+                    tensions[i] = self.fluxes(i, p, profile, &mut j);
                     fluxes[i] = j;
-                    tensions[i] = ten;
                 } else {
                     fluxes[i].iter_mut().for_each(|x| *x = 0.0);
                 }
@@ -495,11 +499,16 @@ impl<'a> Simulation<'a> {
                 if !self.bubbles[i].active() || fluxes[i].iter().all(|x| *x == 0.0) {
                     continue;
                 }
-                let mut dn: Vec<f64> = fluxes[i].iter().map(|j| j * dt).collect();
+                let mut dn = [0.0; Gas::ALL.len()];
+                for g in 0..ng {
+                    dn[g] = fluxes[i][g] * dt;
+                }
                 let n_after: f64 = self.bubbles[i].total_moles() + dn.iter().sum::<f64>();
                 let dissolved = n_after <= 1e-6 * self.bubbles[i].total_moles() || n_after <= 0.0;
                 if dissolved {
-                    dn = self.bubbles[i].moles.iter().map(|m| -m).collect();
+                    for g in 0..ng {
+                        dn[g] = -self.bubbles[i].moles[g];
+                    }
                 } else {
                     for g in 0..ng {
                         if self.bubbles[i].moles[g] + dn[g] < 0.0 {
@@ -624,7 +633,7 @@ impl<'a> Simulation<'a> {
             if self.time >= next_record - 1e-9 || done {
                 for i in 0..nb {
                     if self.bubbles[i].active() {
-                        tensions[i] = self.fluxes(i, p1, profile).1;
+                        tensions[i] = self.fluxes(i, p1, profile, &mut scratch_flux[..ng]);
                     }
                 }
                 self.record(profile, &tensions, observer);
