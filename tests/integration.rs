@@ -13,6 +13,8 @@ mod convergence;
 mod evaluate;
 #[path = "integration/events.rs"]
 mod events;
+#[path = "integration/growth.rs"]
+mod growth;
 #[path = "integration/profiles.rs"]
 mod profiles;
 #[path = "integration/report.rs"]
