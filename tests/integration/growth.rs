@@ -29,46 +29,98 @@ const R0: f64 = 100e-6; // m
 const DELTA: f64 = 20e-6; // surface layer, m
 const F: f64 = 2.0; // gel tension over ambient
 
-/// P_B·V of a bubble of radius r (eqs. 2.4 and 2.9 written out here).
-fn pv(r: f64) -> f64 {
-    let x = R0 / r;
-    let omega = 0.5 * MU * (5.0 - 4.0 * x - x.powi(4));
-    (P + 2.0 * GAMMA / r + omega) * 4.0 / 3.0 * PI * r.powi(3)
+/// One single-gas bubble problem for the resolved reference (SI units).
+#[derive(Clone, Copy)]
+pub struct Case {
+    /// Ambient pressure, Pa.
+    pub p: f64,
+    /// Bulk diffusivity, m²/s.
+    pub d: f64,
+    /// Surface-layer diffusivity, m²/s.
+    pub d_surf: f64,
+    /// Surface-layer thickness, m.
+    pub delta: f64,
+    /// Ostwald coefficient.
+    pub l: f64,
+    /// Surface tension, N/m.
+    pub gamma: f64,
+    /// Hyperelastic shear modulus, Pa (0: Ω = 0).
+    pub mu: f64,
+    /// Initial radius, m.
+    pub r0: f64,
+    /// Far-field tension over ambient.
+    pub f: f64,
 }
 
-fn radius_of(n: f64) -> f64 {
-    let target = n * RU * T;
-    let (mut a, mut b) = (1e-7f64, 1e-2f64);
-    for _ in 0..200 {
-        let m = (a * b).sqrt();
-        if pv(m) < target {
-            a = m
-        } else {
-            b = m
-        }
+impl Case {
+    /// P_B·V of a bubble of radius r (eqs. 2.4 and 2.9 written out here).
+    fn pv(&self, r: f64) -> f64 {
+        let x = self.r0 / r;
+        let omega = 0.5 * self.mu * (5.0 - 4.0 * x - x.powi(4));
+        (self.p + 2.0 * self.gamma / r + omega) * 4.0 / 3.0 * PI * r.powi(3)
     }
-    (a * b).sqrt()
+
+    fn radius_of(&self, n: f64) -> f64 {
+        let target = n * RU * T;
+        let (mut a, mut b) = (1e-9f64, 1e-2f64);
+        for _ in 0..200 {
+            let m = (a * b).sqrt();
+            if self.pv(m) < target {
+                a = m
+            } else {
+                b = m
+            }
+        }
+        (a * b).sqrt()
+    }
 }
 
-/// Fully resolved reference: radius at the requested times.
 fn reference(d_surf: f64, times: &[f64]) -> Vec<f64> {
+    let case = Case {
+        p: P,
+        d: D,
+        d_surf,
+        delta: DELTA,
+        l: L,
+        gamma: GAMMA,
+        mu: MU,
+        r0: R0,
+        f: F,
+    };
+    resolved(&case, times).0
+}
+
+/// Fully resolved reference: the radius at the requested times (0 once dissolved) and the
+/// dissolution time (NaN if the bubble survives).
+pub fn resolved(case: &Case, times: &[f64]) -> (Vec<f64>, f64) {
+    let Case {
+        p,
+        d,
+        d_surf,
+        delta,
+        l,
+        r0,
+        f,
+        ..
+    } = *case;
     // mesh in s = r − R: 40 cells of 0.5 µm in the layer, then geometric to 4 mm
     let mut faces = vec![0.0];
     for i in 1..=40 {
-        faces.push(DELTA * i as f64 / 40.0);
+        faces.push(delta * i as f64 / 40.0);
     }
-    let mut w = DELTA / 40.0;
+    let mut w = delta / 40.0;
     while *faces.last().unwrap() < 4e-3 {
         w *= 1.04;
         faces.push(faces.last().unwrap() + w);
     }
     let nc = faces.len() - 1;
     let centre: Vec<f64> = (0..nc).map(|i| 0.5 * (faces[i] + faces[i + 1])).collect();
-    let dface = |i: usize| if faces[i] < DELTA - 1e-12 { d_surf } else { D };
-    let c_inf = F * L * P / (RU * T);
+    let dface = |i: usize| if faces[i] < delta - 1e-12 { d_surf } else { d };
+    let c_inf = f * l * p / (RU * T);
     let mut c = vec![c_inf; nc];
-    let mut n = pv(R0) / (RU * T);
-    let mut r = R0;
+    let mut n = case.pv(r0) / (RU * T);
+    let mut dissolved_at = f64::NAN;
+    let mut r = r0;
     let mut rdot = 0.0;
     let dt = 0.02; // s; 0.005 s changes no printed digit beyond 0.01 µm
     let mut t = 0.0;
@@ -77,7 +129,7 @@ fn reference(d_surf: f64, times: &[f64]) -> Vec<f64> {
     let (mut a, mut b, mut cc, mut rhs) =
         (vec![0.0; nc], vec![0.0; nc], vec![0.0; nc], vec![0.0; nc]);
     while next < times.len() {
-        let cs = L * (pv(r) / (4.0 / 3.0 * PI * r.powi(3))) / (RU * T);
+        let cs = l * (case.pv(r) / (4.0 / 3.0 * PI * r.powi(3))) / (RU * T);
         // backward Euler: V_i (c_i' − c_i)/dt = Σ face fluxes(c') + advection (explicit, upwind)
         for i in 0..nc {
             let vol = 4.0 / 3.0 * PI * ((r + faces[i + 1]).powi(3) - (r + faces[i]).powi(3));
@@ -89,7 +141,7 @@ fn reference(d_surf: f64, times: &[f64]) -> Vec<f64> {
                 area_in * dface(i) / (centre[i] - centre[i - 1])
             };
             let g_out = if i == nc - 1 {
-                area_out * D / (faces[nc] - centre[nc - 1])
+                area_out * d / (faces[nc] - centre[nc - 1])
             } else {
                 area_out * dface(i + 1) / (centre[i + 1] - centre[i])
             };
@@ -123,16 +175,24 @@ fn reference(d_surf: f64, times: &[f64]) -> Vec<f64> {
         // the bubble takes what crosses its surface
         let flux = 4.0 * PI * r * r * d_surf * (c[0] - cs) / (centre[0] - faces[0]);
         n += flux * dt;
-        let r_new = radius_of(n);
+        t += dt;
+        if n <= 0.0 {
+            // dissolved within this step: interpolate the moment n crossed zero
+            dissolved_at = t - dt * (n / (flux * dt)).abs().min(1.0);
+            while out.len() < times.len() {
+                out.push(0.0);
+            }
+            break;
+        }
+        let r_new = case.radius_of(n);
         rdot = (r_new - r) / dt;
         r = r_new;
-        t += dt;
         while next < times.len() && t >= times[next] - 1e-9 {
             out.push(r);
             next += 1;
         }
     }
-    out
+    (out, dissolved_at)
 }
 
 fn three_d(d_surf_fold: f64, times: &[f64]) -> Vec<f64> {
