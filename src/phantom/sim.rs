@@ -29,6 +29,11 @@ use crate::units::GAS_CONSTANT;
 use rand::{Rng, SeedableRng};
 use std::f64::consts::PI;
 
+/// Largest relative gas-balance error a healthy run may show. The scheme is conservative to
+/// round-off (1e-14 measured), so an error this large means something went wrong, not that the
+/// grid is coarse.
+const BALANCE_LIMIT: f64 = 1e-6;
+
 /// What the observer sees of one bubble at a recorded time.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BubbleFrame {
@@ -428,7 +433,7 @@ impl<'a> Simulation<'a> {
             let a = profile.ambient(self.time);
             tensions[i] = self.fluxes(i, a, profile, &mut scratch_flux[..ng]);
         }
-        self.record(profile, &tensions, observer);
+        self.record(profile, &tensions, observer)?;
         next_record += num.record_interval;
         for b in self.bubbles.iter().filter(|b| b.active()) {
             if b.radius > max_radius.0 {
@@ -636,7 +641,7 @@ impl<'a> Simulation<'a> {
                         tensions[i] = self.fluxes(i, p1, profile, &mut scratch_flux[..ng]);
                     }
                 }
-                self.record(profile, &tensions, observer);
+                self.record(profile, &tensions, observer)?;
                 if num.record_interval > 0.0 {
                     while next_record <= self.time + 1e-9 {
                         next_record += num.record_interval;
@@ -653,9 +658,7 @@ impl<'a> Simulation<'a> {
         }
         let total = self.total_moles();
         let balance = ((total - self.initial_total - self.inflow) / self.initial_total).abs();
-        // Health: the scheme is conservative to round-off (1e-14 measured), so a balance error
-        // this large means something went wrong, not that the grid is coarse.
-        if !(balance < 1e-6) {
+        if !(balance < BALANCE_LIMIT) {
             return Err(Error::Solver(format!(
                 "gas balance lost: |gas now − gas at start − gas in through open faces| is {balance:.3e} of the start; the run is not trustworthy"
             )));
@@ -786,9 +789,30 @@ impl<'a> Simulation<'a> {
         (max_t - ambient, sums.into_iter().map(|x| x * v).collect())
     }
 
-    fn record(&self, profile: &PressureHistory, tensions: &[f64], observer: &mut dyn Observer) {
+    /// Send a frame to the observer; checks the gas balance on the way (the frame's grid
+    /// totals come from the same pass), so a broken run stops at the first frame that shows it.
+    fn record(
+        &self,
+        profile: &PressureHistory,
+        tensions: &[f64],
+        observer: &mut dyn Observer,
+    ) -> Result<(), Error> {
         let p = profile.ambient(self.time);
         let (max_ss, grid_moles) = self.gel_state(p);
+        let total = grid_moles.iter().sum::<f64>()
+            + self
+                .bubbles
+                .iter()
+                .filter(|b| b.active())
+                .map(|b| b.total_moles())
+                .sum::<f64>();
+        let balance = ((total - self.initial_total - self.inflow) / self.initial_total).abs();
+        if !(balance < BALANCE_LIMIT) {
+            return Err(Error::Solver(format!(
+                "gas balance lost at t = {:.3} s: |gas now − gas at start − gas in through open faces| is {balance:.3e} of the start; the run is not trustworthy",
+                self.time
+            )));
+        }
         let frame = Frame {
             time: self.time,
             ambient: p,
@@ -810,6 +834,7 @@ impl<'a> Simulation<'a> {
             grid_moles,
         };
         observer.frame(&frame);
+        Ok(())
     }
 }
 

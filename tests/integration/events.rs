@@ -97,3 +97,18 @@ fn a_bubble_reaching_a_face_ends_the_run_and_is_named() {
         other => panic!("expected the bubble to reach the bottom face, got {other:?}"),
     }
 }
+
+/// The solver checks its own gas balance: gas that appears from nowhere (here: the field edited
+/// behind the solver's back, without `rebase_balance`) stops the run with a solver error.
+#[test]
+fn a_lost_gas_balance_stops_the_run() {
+    let mut p = base();
+    p.bubbles = BubblePlacement::Explicit(vec![([1.0e-3; 3], 60e-6)]);
+    let prof = decompression();
+    let mut sim = Simulation::new(&p, &prof).unwrap();
+    sim.field_mut(0)[0] *= 2.0;
+    match sim.run(&prof, &mut Recorder::default()) {
+        Err(decophantom::error::Error::Solver(m)) => assert!(m.contains("gas balance"), "{m}"),
+        other => panic!("expected a gas-balance error, got {other:?}"),
+    }
+}
