@@ -261,6 +261,47 @@ mod tests {
         assert!((g.integrate(&u) / total0 - 1.0).abs() < 1e-13);
     }
 
+    /// Unconditional stability and positivity: backward Euler's matrices are M-matrices, so
+    /// the new field stays within the range of the old field and the boundary value (discrete
+    /// maximum principle) for any step; forward Euler does so up to its stated limit.
+    #[test]
+    fn both_schemes_keep_the_maximum_principle() {
+        let g = Grid::new(
+            Shape::Box {
+                size: [1.2e-3, 0.9e-3, 0.6e-3],
+            },
+            1e-4,
+            &[Face::Top, Face::XMinus],
+        )
+        .unwrap();
+        let d = 2.5e-9;
+        let u0: Vec<f64> = (0..g.len())
+            .map(|i| ((i * 7919 + 13) % 101) as f64 / 100.0)
+            .collect();
+        let cb = 1.5;
+        let (lo, hi) = (0.0f64, cb);
+        let limit = explicit_limit(&g, d);
+        for factor in [1.0, 10.0, 1e3, 1e6] {
+            let mut u = u0.clone();
+            let mut s = vec![0.0; g.len()];
+            implicit_step(&g, &mut u, &mut s, d, factor * limit, cb);
+            for (i, x) in u.iter().enumerate() {
+                if g.inside(i) {
+                    assert!(
+                        *x >= lo - 1e-12 && *x <= hi + 1e-12,
+                        "implicit, {factor}× the limit: {x}"
+                    );
+                }
+            }
+        }
+        let mut out = vec![0.0; g.len()];
+        explicit_step(&g, &u0, &mut out, d, limit, cb);
+        assert!(out
+            .iter()
+            .enumerate()
+            .all(|(i, x)| !g.inside(i) || (*x >= lo - 1e-12 && *x <= hi + 1e-12)));
+    }
+
     #[test]
     fn implicit_line_solve_matches_dense_solve() {
         // A 1-D open line (5 cells) along x solved as a dense system independently.
