@@ -218,6 +218,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 },
                 phantom: a.phantom,
                 out: a.out.clone(),
+                stop: Some(interrupt_flag()),
             };
             let mut bar = Progress::new();
             let run = decophantom::app::simulate::run(&req, &mut |t, e| bar.update(t, e));
@@ -225,7 +226,11 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             let run = run?;
             print!("{}", decophantom::app::simulate::describe(&run));
             println!("wrote {}", a.out.display());
-            Ok(0)
+            // interrupted runs wrote what they had, and say so with the usual SIGINT code
+            Ok(match run.summary.ending {
+                decophantom::phantom::sim::Ending::Interrupted { .. } => 130,
+                _ => 0,
+            })
         }
         Command::Elasticity(a) => {
             let req = decophantom::app::elasticity::ElasticityRequest {
@@ -342,4 +347,19 @@ impl Progress {
             b.finish_and_clear();
         }
     }
+}
+
+/// A flag that Ctrl-C sets: the simulation stops at its next step and writes what it has.
+/// A second Ctrl-C ends the process at once.
+fn interrupt_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    let flag = std::sync::Arc::new(AtomicBool::new(false));
+    let f = flag.clone();
+    let _ = ctrlc::set_handler(move || {
+        if f.swap(true, Ordering::Relaxed) {
+            std::process::exit(130);
+        }
+        eprintln!("\ninterrupted: finishing the current step and writing what was simulated so far (Ctrl-C again to quit now)");
+    });
+    flag
 }

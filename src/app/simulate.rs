@@ -14,6 +14,7 @@ use crate::report::output::OutputSet;
 use crate::report::plot::{LinePlot, Series};
 use serde::Serialize;
 use std::path::PathBuf;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 /// What `simulate` needs.
 #[derive(Debug, Clone)]
@@ -26,6 +27,9 @@ pub struct SimulateRequest {
     pub phantom: PathBuf,
     /// Output folder.
     pub out: PathBuf,
+    /// Set to true (e.g. by a Ctrl-C handler) to stop the run early; what was simulated up to
+    /// then is written, and the summary says where it stopped.
+    pub stop: Option<std::sync::Arc<AtomicBool>>,
 }
 
 /// A finished run: its summary, frames and wall time.
@@ -42,6 +46,7 @@ pub struct SimRun {
 struct WithProgress<'a> {
     rec: Recorder,
     progress: &'a mut dyn FnMut(f64, f64),
+    stop: Option<&'a AtomicBool>,
 }
 
 impl Observer for WithProgress<'_> {
@@ -51,6 +56,9 @@ impl Observer for WithProgress<'_> {
     fn progress(&mut self, time: f64, end: f64) {
         (self.progress)(time, end);
     }
+    fn should_stop(&self) -> bool {
+        self.stop.is_some_and(|s| s.load(Ordering::Relaxed))
+    }
 }
 
 /// Run a profile through a phantom, recording every frame.
@@ -59,11 +67,22 @@ pub fn simulate(
     profile: &PressureHistory,
     progress: &mut dyn FnMut(f64, f64),
 ) -> Result<SimRun, Error> {
+    simulate_until(params, profile, progress, None)
+}
+
+/// [`simulate`], stopping early (as [`Ending::Interrupted`]) once `stop` becomes true.
+pub fn simulate_until(
+    params: &PhantomParams,
+    profile: &PressureHistory,
+    progress: &mut dyn FnMut(f64, f64),
+    stop: Option<&AtomicBool>,
+) -> Result<SimRun, Error> {
     let start = std::time::Instant::now();
     let mut sim = Simulation::new(params, profile)?;
     let mut obs = WithProgress {
         rec: Recorder::default(),
         progress,
+        stop,
     };
     let summary = sim.run(profile, &mut obs)?;
     Ok(SimRun {
@@ -120,6 +139,9 @@ struct SummaryFile<'a> {
 pub fn ending_text(e: &Ending) -> String {
     match e {
         Ending::Completed => "completed".into(),
+        Ending::Interrupted { time } => {
+            format!("interrupted at t = {time:.1} s; everything up to then is recorded")
+        }
         Ending::BubbleReachedFace { bubble, face, time } => {
             format!(
                 "bubble {bubble} reached the {} face at t = {time:.1} s; the run stopped there",
@@ -266,7 +288,7 @@ pub fn add_run_files(
 pub fn run(req: &SimulateRequest, progress: &mut dyn FnMut(f64, f64)) -> Result<SimRun, Error> {
     let profile = load_profile_or_schedule(&req.profile, &req.load)?;
     let phantom = load_phantom(&req.phantom)?;
-    let run = simulate(&phantom.params, &profile, progress)?;
+    let run = simulate_until(&phantom.params, &profile, progress, req.stop.as_deref())?;
     let mut set = OutputSet::new();
     add_run_files(&mut set, "", &run, &profile.label, &phantom.params.name)?;
     set.commit(&req.out)?;

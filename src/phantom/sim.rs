@@ -75,6 +75,11 @@ pub trait Observer {
     fn frame(&mut self, frame: &Frame);
     /// Progress: simulated time and end time, s. Called every step; default does nothing.
     fn progress(&mut self, _time: f64, _end: f64) {}
+    /// Whether the run should stop now (e.g. the user pressed Ctrl-C). Checked every step; the
+    /// run then ends as [`Ending::Interrupted`] with everything up to that moment recorded.
+    fn should_stop(&self) -> bool {
+        false
+    }
 }
 
 /// Keeps every frame in memory.
@@ -95,6 +100,11 @@ impl Observer for Recorder {
 pub enum Ending {
     /// The profile ended.
     Completed,
+    /// Stopped on request (the observer's `should_stop`) at this time, s.
+    Interrupted {
+        /// Time, s.
+        time: f64,
+    },
     /// A bubble reached a face of the phantom at this time; everything up to it is kept.
     BubbleReachedFace {
         /// Bubble id.
@@ -634,6 +644,9 @@ impl<'a> Simulation<'a> {
                 }
             }
             observer.progress(t1, end);
+            if ending == Ending::Completed && observer.should_stop() {
+                ending = Ending::Interrupted { time: t1 };
+            }
             let done = ending != Ending::Completed || self.time >= end - 1e-9;
             if self.time >= next_record - 1e-9 || done {
                 for i in 0..nb {

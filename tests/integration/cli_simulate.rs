@@ -328,3 +328,57 @@ fn simulate_takes_a_schedule_written_by_plan() {
         .sum();
     assert!((summary["end_time_s"].as_float().unwrap() - runtime).abs() < 1e-6);
 }
+
+/// Ctrl-C during a long run: the run stops at its next step, writes everything simulated up to
+/// then (whole files, a summary that says where it stopped) and exits with 130.
+#[test]
+fn an_interrupted_run_keeps_what_it_simulated() {
+    let d = tempdir("interrupt");
+    let out = d.join("out");
+    let mut child = Command::new(bin())
+        .args(["simulate", "--profile"])
+        .arg(root().join("profiles/fig5-dive.toml"))
+        .arg("--phantom")
+        .arg(root().join("profiles/phantoms/hydrogel.toml"))
+        .arg("--out")
+        .arg(&out)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    std::thread::sleep(std::time::Duration::from_millis(1500));
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let status = child.wait().unwrap();
+    assert_eq!(status.code(), Some(130));
+    let summary: toml::Table = std::fs::read_to_string(out.join("summary.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        summary["ending"]
+            .as_str()
+            .unwrap()
+            .starts_with("interrupted"),
+        "{summary:?}"
+    );
+    let end = summary["end_time_s"].as_float().unwrap();
+    assert!(end > 0.0 && end < 21726.0, "stopped at {end} s");
+    let csv = std::fs::read_to_string(out.join("bubbles.csv")).unwrap();
+    let last_t: f64 = csv
+        .lines()
+        .last()
+        .unwrap()
+        .split(',')
+        .next()
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(
+        (last_t - end).abs() < 1e-3,
+        "the last recorded frame is the moment it stopped"
+    );
+}
