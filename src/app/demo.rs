@@ -1,5 +1,6 @@
 //! `decophantom demo`: the built-in example, written as one report. First a dive: 45 m for
-//! 25 min on air planned by ZH-L16C GF 30/85, GF 50/80 and VPM-B +2, each schedule run
+//! 25 min on air planned by ZH-L16C GF 30/85, GF 50/80 and VPM-B +2 (and GF 100/100 as an
+//! aggressive reference), each schedule run
 //! through the hydrogel-dive phantom under every tissue-elasticity law and scored with
 //! `algorithms/criteria/default.toml` (the `evaluate` path). Then the paper's oscillation
 //! experiment (§4.1) under each law, and the laws without mass transfer (the paper's Fig. 2a).
@@ -30,7 +31,7 @@ pub const OSCILLATION_PROFILE: &str = include_str!("../../profiles/oscillation-3
 /// The built-in phantom (`profiles/phantoms/oscillation.toml`).
 pub const OSCILLATION_PHANTOM: &str = include_str!("../../profiles/phantoms/oscillation.toml");
 /// The demo's algorithms (text, path named in messages and tables).
-pub const DEMO_ALGORITHMS: [(&str, &str); 3] = [
+pub const DEMO_ALGORITHMS: [(&str, &str); 4] = [
     (
         include_str!("../../algorithms/zhl16c-gf30-85.toml"),
         "algorithms/zhl16c-gf30-85.toml",
@@ -42,6 +43,12 @@ pub const DEMO_ALGORITHMS: [(&str, &str); 3] = [
     (
         include_str!("../../algorithms/vpmb-2-baker.toml"),
         "algorithms/vpmb-2-baker.toml",
+    ),
+    // an aggressive reference (no gradient-factor margin), so the report shows what failing
+    // the criteria looks like
+    (
+        include_str!("../../algorithms/zhl16c-gf100-100.toml"),
+        "algorithms/zhl16c-gf100-100.toml",
     ),
 ];
 /// The demo's criteria (`algorithms/criteria/default.toml`).
@@ -86,7 +93,7 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         "decophantom demo: a {dive} dive through the hydrogel phantom, and the oscillation experiment"
     ));
     let mut set = OutputSet::new();
-    page.text("This report is produced by `cargo run --release -- demo`. Part 1 evaluates one dive planned by three algorithms through the hydrogel phantom under every tissue-elasticity law, exactly as `decophantom evaluate --depth 45 --time 25 --algorithm algorithms/zhl16c-gf30-85.toml --algorithm algorithms/zhl16c-gf50-80.toml --algorithm algorithms/vpmb-2-baker.toml --elasticity all --criteria algorithms/criteria/default.toml` does. The phantom is `profiles/phantoms/hydrogel-dive.toml`: the Fig. 5 hydrogel at a grid step of 125 µm instead of 86.5 µm (about 3× fewer cells; the whole demo takes about 20 s on two cores) with the nuclei unchanged (R0 = 86.5 µm, R_min = 80 µm). Part 2 is the paper's oscillation experiment (§4.1).");
+    page.text("This report is produced by `cargo run --release -- demo`. Part 1 evaluates one dive planned by three algorithms, and by ZH-L16C GF 100/100 as an aggressive reference, through the hydrogel phantom under every tissue-elasticity law, exactly as `decophantom evaluate --depth 45 --time 25 --algorithm algorithms/zhl16c-gf30-85.toml --algorithm algorithms/zhl16c-gf50-80.toml --algorithm algorithms/vpmb-2-baker.toml --algorithm algorithms/zhl16c-gf100-100.toml --elasticity all --criteria algorithms/criteria/default.toml` does. The phantom is `profiles/phantoms/hydrogel-dive.toml`: the Fig. 5 hydrogel at a grid step of 125 µm instead of 86.5 µm (about 3× fewer cells; the whole demo takes about 20 s on two cores) with the nuclei unchanged (R0 = 86.5 µm, R_min = 80 µm). Part 2 is the paper's oscillation experiment (§4.1).");
     page.section(format!("Part 1 — the dive: {dive}"));
     add_report(
         &mut page,
