@@ -19,6 +19,8 @@ mod growth;
 mod profiles;
 #[path = "integration/report.rs"]
 mod report;
+#[path = "integration/robustness.rs"]
+mod robustness;
 #[path = "integration/verification.rs"]
 mod verification;
 #[path = "integration/vpmb.rs"]

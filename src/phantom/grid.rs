@@ -134,8 +134,13 @@ impl Grid {
             n[a] = c as usize;
         }
         let total = n[0] * n[1] * n[2];
-        if total > 400_000_000 {
-            return Err(format!("{total} cells is too many; use a larger grid step"));
+        // 100 M cells is 0.8 GB per gas field (plus scratch): beyond that a 24 GB machine runs
+        // out of memory with three gases, and the run would take hours anyway
+        if total > 100_000_000 {
+            return Err(format!(
+                "{total} cells ({} × {} × {}) is too many (limit 100 million); use a larger grid step",
+                n[0], n[1], n[2]
+            ));
         }
         for f in open {
             if !shape.faces().contains(f) {
