@@ -15,6 +15,8 @@ mod evaluate;
 mod events;
 #[path = "integration/growth.rs"]
 mod growth;
+#[path = "integration/paper_findings.rs"]
+mod paper_findings;
 #[path = "integration/profiles.rs"]
 mod profiles;
 #[path = "integration/report.rs"]

@@ -40,19 +40,27 @@ impl SurfacePermeability for Fold {
     }
 }
 
-/// The paper-text area law (section 4.1): D_surf = (D_bulk/k)(R/R_0)².
+/// The paper-text area law (section 4.1): D_surf = (D_bulk/k)(R/R_ref)², with R_ref each
+/// bubble's own initial radius R_0 (the paper's wording) or, if `reference_radius_m` is given,
+/// one fixed radius for every bubble — then D_surf depends on the current surface area only.
+/// The paper fitted k = 30 at R_0 = 0.2 mm (the mean bubble of §4.1). With R_ref = R_0, a small
+/// nucleus that grows gets a far more permeable skin than a large one at the same radius, which
+/// reverses the paper's Fig. 6a trend (tests/integration/paper_findings.rs).
 #[derive(Debug, Clone, Copy, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct AreaLaw {
     /// k, dimensionless (> 0).
     pub fold: f64,
+    /// R_ref, m (> 0); absent: each bubble's own R_0.
+    #[serde(default)]
+    pub reference_radius_m: Option<f64>,
 }
 impl SurfacePermeability for AreaLaw {
     fn name(&self) -> &'static str {
         "area"
     }
     fn d_surf(&self, d_bulk: f64, r: f64, r0: f64) -> f64 {
-        d_bulk / self.fold * (r / r0).powi(2)
+        d_bulk / self.fold * (r / self.reference_radius_m.unwrap_or(r0)).powi(2)
     }
 }
 
@@ -88,6 +96,14 @@ fn parse<T: for<'de> Deserialize<'de> + SurfacePermeability + 'static>(
     if let Some(k) = fold {
         if !(k > 0.0) {
             return Err(format!("fold must be positive (got {k})"));
+        }
+    }
+    let reference = v
+        .get("reference_radius_m")
+        .and_then(|f| f.as_float().or(f.as_integer().map(|i| i as f64)));
+    if let Some(r) = reference {
+        if !(r > 0.0) {
+            return Err(format!("reference_radius_m must be positive (got {r} m)"));
         }
     }
     T::deserialize(v)

@@ -40,7 +40,10 @@ fn phantom(h: f64, step_scale: f64) -> PhantomParams {
     p.elasticity = Arc::new(Hyperelastic {
         shear_modulus: 40.0,
     });
-    p.surface = Arc::new(AreaLaw { fold: 30.0 });
+    p.surface = Arc::new(AreaLaw {
+        fold: 30.0,
+        reference_radius_m: None,
+    });
     p.min_radius = 55e-6;
     p.bubbles = BubblePlacement::Explicit(vec![([1.2e-3; 3], 60e-6)]);
     p.numerics.max_step *= step_scale;

@@ -385,7 +385,10 @@ fn conservation_params(open: Vec<Face>) -> PhantomParams {
     p.open_faces = open;
     p.surface_tension = 0.07;
     p.elasticity = Arc::new(Hyperelastic { shear_modulus: 5e3 });
-    p.surface = Arc::new(AreaLaw { fold: 30.0 });
+    p.surface = Arc::new(AreaLaw {
+        fold: 30.0,
+        reference_radius_m: None,
+    });
     p.min_radius = 20e-6;
     p.bubbles = BubblePlacement::Explicit(vec![
         ([0.45e-3, 0.45e-3, 0.45e-3], 150e-6),
