@@ -21,3 +21,27 @@ pub fn tempdir(name: &str) -> PathBuf {
     std::fs::create_dir_all(&d).unwrap();
     d
 }
+
+/// The paper's dive profile (§4.2, Fig. 6a): compression at 6.9e4 Pa/s to 130 psi gauge, a
+/// 20 min hold, decompression at 8.9e4 Pa/s, then `after_s` of growth at the surface; air.
+pub fn fig6_dive(after_s: f64) -> decophantom::profile::PressureHistory {
+    use decophantom::units::{ATM_PA, PSI_PA};
+    let top = ATM_PA + 130.0 * PSI_PA;
+    let down = (top - ATM_PA) / 6.9e4;
+    let up = (top - ATM_PA) / 8.9e4;
+    let t = vec![
+        0.0,
+        down,
+        down + 1200.0,
+        down + 1200.0 + up,
+        down + 1200.0 + up + after_s,
+    ];
+    decophantom::profile::PressureHistory::with_gas(
+        "fig6a",
+        t,
+        vec![ATM_PA, top, top, ATM_PA, ATM_PA],
+        decophantom::gas::GasMix::AIR,
+        0.0,
+    )
+    .unwrap()
+}

@@ -1,36 +1,10 @@
 //! Verification item 5: grid and time-step convergence on the paper's dive profile.
 
-use decophantom::gas::GasMix;
 use decophantom::phantom::elasticity::Hyperelastic;
 use decophantom::phantom::params::{BubblePlacement, PhantomParams};
 use decophantom::phantom::sim::{Recorder, Simulation};
 use decophantom::phantom::surface::AreaLaw;
-use decophantom::profile::PressureHistory;
-use decophantom::units::{ATM_PA, PSI_PA};
 use std::sync::Arc;
-
-/// The paper's dive profile (§4.2, Fig. 6a): compression at 6.9e4 Pa/s to 130 psi gauge, a hold
-/// (20 min in Fig. 6a), decompression at 8.9e4 Pa/s, then growth at the surface (here 40 min).
-fn paper_dive() -> PressureHistory {
-    let top = ATM_PA + 130.0 * PSI_PA;
-    let down = (top - ATM_PA) / 6.9e4;
-    let up = (top - ATM_PA) / 8.9e4;
-    let t = vec![
-        0.0,
-        down,
-        down + 1200.0,
-        down + 1200.0 + up,
-        down + 1200.0 + up + 2400.0,
-    ];
-    PressureHistory::with_gas(
-        "fig6a",
-        t,
-        vec![ATM_PA, top, top, ATM_PA, ATM_PA],
-        GasMix::AIR,
-        0.0,
-    )
-    .unwrap()
-}
 
 /// One centred bubble in a 2.4 mm hydrogel cube (the hydrogel's material: D = 2.5e-9 m²/s,
 /// D_surf = D/30 area law, μ = 40 Pa hyperelastic, γ = 0.07 N/m); R0 and R_min fixed in metres
@@ -55,7 +29,7 @@ fn phantom(h: f64, step_scale: f64) -> PhantomParams {
 }
 
 fn plateau(h: f64, step_scale: f64) -> f64 {
-    let prof = paper_dive();
+    let prof = crate::common::fig6_dive(2400.0);
     let params = phantom(h, step_scale);
     let mut sim = Simulation::new(&params, &prof).unwrap();
     let s = sim.run(&prof, &mut Recorder::default()).unwrap();

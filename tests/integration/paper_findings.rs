@@ -4,35 +4,12 @@
 //! Profile: the Fig. 6 dive (compression at 6.9e4 Pa/s to 130 psi gauge, 20 min hold,
 //! decompression at 8.9e4 Pa/s, growth at the surface); hydrogel material (Fig. 5 caption).
 
-use decophantom::gas::GasMix;
 use decophantom::phantom::elasticity::Hyperelastic;
 use decophantom::phantom::params::{BubblePlacement, PhantomParams};
 use decophantom::phantom::sim::{Recorder, Simulation};
 use decophantom::phantom::surface::{AreaLaw, Fold, SurfacePermeability};
 use decophantom::profile::PressureHistory;
-use decophantom::units::{ATM_PA, PSI_PA};
 use std::sync::Arc;
-
-fn fig6_dive(after_s: f64) -> PressureHistory {
-    let top = ATM_PA + 130.0 * PSI_PA;
-    let down = (top - ATM_PA) / 6.9e4;
-    let up = (top - ATM_PA) / 8.9e4;
-    let t = vec![
-        0.0,
-        down,
-        down + 1200.0,
-        down + 1200.0 + up,
-        down + 1200.0 + up + after_s,
-    ];
-    PressureHistory::with_gas(
-        "fig6",
-        t,
-        vec![ATM_PA, top, top, ATM_PA, ATM_PA],
-        GasMix::AIR,
-        0.0,
-    )
-    .unwrap()
-}
 
 fn hydrogel_box(
     size: [f64; 3],
@@ -77,7 +54,7 @@ fn plateaus(p: &PhantomParams, prof: &PressureHistory) -> Vec<f64> {
 /// R_ref = 0.2 mm) — so that form cannot be what the paper's Fig. 6a used.
 #[test]
 fn fig6a_larger_nuclei_reach_larger_plateaus() {
-    let prof = fig6_dive(2400.0);
+    let prof = crate::common::fig6_dive(2400.0);
     let radii = [40e-6, 60e-6, 90e-6];
     let laws: [(&str, Arc<dyn SurfacePermeability>); 3] = [
         ("fold 30", Arc::new(Fold { fold: 30.0 })),
@@ -126,7 +103,7 @@ fn fig6a_larger_nuclei_reach_larger_plateaus() {
 
 #[test]
 fn fig6b_the_bubble_nearest_the_edge_has_the_lowest_plateau() {
-    let prof = fig6_dive(2400.0);
+    let prof = crate::common::fig6_dive(2400.0);
     // three equal nuclei in a row from near the open x− face to the centre (open faces: all
     // but the bottom), far enough apart not to touch
     let size = [6e-3, 3e-3, 3e-3];
