@@ -1,6 +1,7 @@
 //! Qualitative findings of the paper's section 4.2 that the model must reproduce:
 //! - Fig. 6a: a larger initial radius R0 gives a larger plateau radius;
 //! - Fig. 6b: the bubble nearest the phantom's edge has the lowest plateau radius.
+//!
 //! Profile: the Fig. 6 dive (compression at 6.9e4 Pa/s to 130 psi gauge, 20 min hold,
 //! decompression at 8.9e4 Pa/s, growth at the surface); hydrogel material (Fig. 5 caption).
 
