@@ -115,7 +115,17 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
     let err = |key: &str, msg: String| {
         let leaf = key.rsplit('.').next().unwrap_or(key);
         let mut e = InputError::new(msg).in_file(path).field(key);
-        if let Some(l) = line_of_key(text, leaf) {
+        // a key's own line, else the line of a table of that name ([material.elasticity],
+        // [[bubbles]], [population])
+        let table_line = || {
+            text.lines()
+                .position(|l| {
+                    let t = l.trim().trim_start_matches('[').trim_end_matches(']');
+                    l.trim_start().starts_with('[') && t == key
+                })
+                .map(|i| i + 1)
+        };
+        if let Some(l) = line_of_key(text, leaf).or_else(table_line) {
             e = e.at_line(l);
         }
         e
