@@ -93,7 +93,7 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         "decophantom demo: a {dive} dive through the hydrogel phantom, and the oscillation experiment"
     ));
     let mut set = OutputSet::new();
-    page.text("This report is produced by `cargo run --release -- demo`. Part 1 evaluates one dive planned by three algorithms, and by ZH-L16C GF 100/100 as an aggressive reference, through the hydrogel phantom under every tissue-elasticity law, exactly as `decophantom evaluate --depth 45 --time 25 --algorithm algorithms/zhl16c-gf30-85.toml --algorithm algorithms/zhl16c-gf50-80.toml --algorithm algorithms/vpmb-2-baker.toml --algorithm algorithms/zhl16c-gf100-100.toml --elasticity all --criteria algorithms/criteria/default.toml` does. The phantom is `profiles/phantoms/hydrogel-dive.toml`: the Fig. 5 hydrogel at a grid step of 125 µm instead of 86.5 µm (about 3× fewer cells; the whole demo takes about 20 s on two cores) with the nuclei unchanged (R0 = 86.5 µm, R_min = 80 µm). Part 2 is the paper's oscillation experiment (§4.1).");
+    page.text("This report is produced by `cargo run --release -- demo`. Part 1 evaluates one dive planned by three algorithms, and by ZH-L16C GF 100/100 as an aggressive reference, through the hydrogel phantom under every tissue-elasticity law, exactly as `decophantom evaluate --depth 45 --time 25 --algorithm algorithms/zhl16c-gf30-85.toml --algorithm algorithms/zhl16c-gf50-80.toml --algorithm algorithms/vpmb-2-baker.toml --algorithm algorithms/zhl16c-gf100-100.toml --elasticity all --criteria algorithms/criteria/default.toml` does. The phantom is `profiles/phantoms/hydrogel-dive.toml`: the Fig. 5 hydrogel at a grid step of 125 µm instead of 86.5 µm (about 3× fewer cells; the whole demo takes about 22 s on two cores) with the nuclei unchanged (R0 = 86.5 µm, R_min = 80 µm). Part 2 is the paper's oscillation experiment (§4.1).");
     page.section(format!("Part 1 — the dive: {dive}"));
     add_report(
         &mut page,
@@ -246,6 +246,8 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
 
     // report
     let main = &runs[main_idx];
+    page.section("Why the bubbles grow so little on this dive");
+    page.text("The nuclei (R0 = 86.5 µm) are shut below R_min = 80 µm: compressed on the descent, they stay impermeable at depth and through the stops, and reopen only in the last metres of the ascent. Only the gas still in excess in the gel when the diver surfaces can then grow them, so the criteria separate the schedules by how much supersaturation each leaves at the surface — the long shallow stops of GF 30/85, GF 50/80 and VPM-B +2 leave little, GF 100/100 leaves more. Deeper, longer or faster dives, smaller R_min or larger nuclei give larger bubbles; see `decophantom simulate` with `profiles/fig5-dive.toml` for a saturation dive that grows them to several hundred µm.");
     page.section("Part 2 — the oscillation experiment of Walsh et al. 2017 (§4.1)");
     page.text(format!(
         "Profile: **{}** ({}). Phantom: **{}**. {}",
