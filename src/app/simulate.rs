@@ -163,7 +163,7 @@ fn event_text(e: &Event) -> String {
 }
 
 /// `summary.toml` text.
-pub fn summary_toml(run: &SimRun, profile: &str, phantom: &str) -> String {
+pub fn summary_toml(run: &SimRun, profile: &str, phantom: &str) -> Result<String, Error> {
     let s = &run.summary;
     let f = SummaryFile {
         profile,
@@ -183,7 +183,7 @@ pub fn summary_toml(run: &SimRun, profile: &str, phantom: &str) -> String {
         events: s.events.iter().map(event_text).collect(),
         wall_seconds: run.wall_seconds,
     };
-    toml::to_string(&f).unwrap_or_default()
+    toml::to_string(&f).map_err(|e| Error::Solver(format!("summary.toml: {e}")))
 }
 
 /// Time axis in s for runs up to an hour, in min beyond.
@@ -266,7 +266,7 @@ pub fn add_run_files(
     );
     set.add(
         format!("{prefix}summary.toml"),
-        summary_toml(run, profile_name, phantom_name),
+        summary_toml(run, profile_name, phantom_name)?,
     );
     let title = format!("{profile_name} — {phantom_name}");
     set.add(

@@ -428,12 +428,13 @@ impl<'a> Simulation<'a> {
         let mut events = Vec::new();
         let mut ending = Ending::Completed;
         let mut next_record = self.time;
-        let mut dt_prev = num.max_step.min(
-            self.explicit_limit
-                .iter()
-                .cloned()
-                .fold(f64::INFINITY, f64::min),
-        );
+        // the smallest explicit limit over the gases: fixed for the run
+        let lim = self
+            .explicit_limit
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min);
+        let mut dt_prev = num.max_step.min(lim);
         let mut tensions = vec![0.0; nb];
         let mut fluxes = vec![vec![0.0; ng]; nb];
         let h3 = self.grid.cell_volume();
@@ -499,11 +500,6 @@ impl<'a> Simulation<'a> {
                 .max(1e-9);
             // An implicit step costs about ten explicit ones (benches/kernel.rs): below that
             // ratio, the explicit limit itself is the cheaper (and more accurate) step.
-            let lim = self
-                .explicit_limit
-                .iter()
-                .cloned()
-                .fold(f64::INFINITY, f64::min);
             if dt > lim && dt < num.implicit_cost_ratio * lim {
                 dt = lim;
             }
