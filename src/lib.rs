@@ -11,7 +11,9 @@
 
 pub mod algorithm;
 pub mod app;
+pub mod discover;
 pub mod error;
+pub mod fit;
 pub mod gas;
 pub mod phantom;
 pub mod profile;

@@ -108,6 +108,55 @@ impl ElasticityLaw for Hyperelastic {
     }
 }
 
+/// The sum of several laws, Ω = Σ Ω_i: a law with an extra term on top (used by `discover`'s
+/// `elasticity:<law>` candidates, whose extra term at zero modulus leaves the model exactly as
+/// it was). TOML: `law = "sum"`, `terms = [{ law = "hyperelastic", shear_modulus = 40.0 }, …]`.
+#[derive(Debug)]
+pub struct Sum {
+    /// The terms.
+    pub terms: Vec<Box<dyn ElasticityLaw>>,
+}
+impl ElasticityLaw for Sum {
+    fn name(&self) -> &'static str {
+        "sum"
+    }
+    fn omega(&self, s: &ElasticState) -> f64 {
+        self.terms.iter().map(|t| t.omega(s)).sum()
+    }
+}
+
+fn parse_sum(v: toml::Value) -> Result<Box<dyn ElasticityLaw>, String> {
+    let mut t = match v {
+        toml::Value::Table(t) => t,
+        _ => return Err("a sum law needs a table".into()),
+    };
+    let terms = t
+        .remove("terms")
+        .ok_or("law \"sum\" needs terms = [{ law = ... }, ...]")?;
+    if let Some(k) = t.keys().next() {
+        return Err(format!(
+            "unknown field `{k}` of law \"sum\", expected `terms`"
+        ));
+    }
+    let list = terms.as_array().ok_or("terms must be a list of tables")?;
+    let mut out = Vec::new();
+    for (i, item) in list.iter().enumerate() {
+        let mut tt = item
+            .as_table()
+            .cloned()
+            .ok_or_else(|| format!("terms[{i}] must be a table with a law"))?;
+        let name = tt
+            .remove("law")
+            .and_then(|l| l.as_str().map(str::to_string))
+            .ok_or_else(|| format!("terms[{i}] needs law = \"...\""))?;
+        if name == "sum" {
+            return Err("a sum cannot contain a sum".into());
+        }
+        out.push(build(&name, toml::Value::Table(tt)).map_err(|e| format!("terms[{i}]: {e}"))?);
+    }
+    Ok(Box::new(Sum { terms: out }))
+}
+
 type Build = fn(toml::Value) -> Result<Box<dyn ElasticityLaw>, String>;
 
 fn parse<T: for<'de> Deserialize<'de> + ElasticityLaw + 'static>(
@@ -128,11 +177,16 @@ pub const REGISTRY: &[(&str, Build)] = &[
     ),
     ("reference-configuration", parse::<ReferenceConfiguration>),
     ("hyperelastic", parse::<Hyperelastic>),
+    ("sum", parse_sum),
 ];
 
-/// Names of all registered laws, in registry order.
+/// Names of the paper's forms (every registered law but the `sum` combinator), in registry order.
 pub fn law_names() -> Vec<&'static str> {
-    REGISTRY.iter().map(|(n, _)| *n).collect()
+    REGISTRY
+        .iter()
+        .map(|(n, _)| *n)
+        .filter(|n| *n != "sum")
+        .collect()
 }
 
 /// Build a law by name from its parameter table (fields other than `law`).

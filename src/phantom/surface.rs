@@ -40,7 +40,8 @@ impl SurfacePermeability for Fold {
     }
 }
 
-/// The paper-text area law (section 4.1): D_surf = (D_bulk/k)(R/R_ref)², with R_ref each
+/// The paper-text area law (section 4.1): D_surf = (D_bulk/k)(R/R_ref)^a, a = 2 (the paper's
+/// R_B² dependence; `exponent` sets another, as `discover`'s `surface-area-law` fits it), with R_ref each
 /// bubble's own initial radius R_0 (the paper's wording) or, if `reference_radius_m` is given,
 /// one fixed radius for every bubble — then D_surf depends on the current surface area only.
 /// The paper fitted k = 30 at R_0 = 0.2 mm (the mean bubble of §4.1). With R_ref = R_0, a small
@@ -54,13 +55,20 @@ pub struct AreaLaw {
     /// R_ref, m (> 0); absent: each bubble's own R_0.
     #[serde(default)]
     pub reference_radius_m: Option<f64>,
+    /// Exponent a of R/R_ref, dimensionless. Default 2 (surface area).
+    #[serde(default = "default_area_exponent")]
+    pub exponent: f64,
+}
+
+fn default_area_exponent() -> f64 {
+    2.0
 }
 impl SurfacePermeability for AreaLaw {
     fn name(&self) -> &'static str {
         "area"
     }
     fn d_surf(&self, d_bulk: f64, r: f64, r0: f64) -> f64 {
-        d_bulk / self.fold * (r / self.reference_radius_m.unwrap_or(r0)).powi(2)
+        d_bulk / self.fold * (r / self.reference_radius_m.unwrap_or(r0)).powf(self.exponent)
     }
 }
 

@@ -5,5 +5,6 @@
 
 pub mod html;
 pub mod output;
+pub mod overlay;
 pub mod plot;
 pub mod table;

@@ -64,6 +64,7 @@ fn fig6a_larger_nuclei_reach_larger_plateaus() {
             Arc::new(AreaLaw {
                 fold: 30.0,
                 reference_radius_m: Some(0.2e-3),
+                exponent: 2.0,
             }),
         ),
         (
@@ -71,6 +72,7 @@ fn fig6a_larger_nuclei_reach_larger_plateaus() {
             Arc::new(AreaLaw {
                 fold: 30.0,
                 reference_radius_m: None,
+                exponent: 2.0,
             }),
         ),
     ];

@@ -389,6 +389,7 @@ fn conservation_params(open: Vec<Face>) -> PhantomParams {
     p.surface = Arc::new(AreaLaw {
         fold: 30.0,
         reference_radius_m: None,
+        exponent: 2.0,
     });
     p.min_radius = 20e-6;
     p.bubbles = BubblePlacement::Explicit(vec![

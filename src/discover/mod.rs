@@ -1,0 +1,84 @@
+//! Finding the effect the model is missing (issue 7's `discover`): candidate model extensions,
+//! residual diagnostics, and a forward search that adds an effect only when an extra
+//! sum-of-squares F-test, Bonferroni-corrected over the candidates tried, says the data need it
+//! and the gain in RMSE exceeds the simulation's own numerical error.
+//!
+//! A candidate is a [`CandidateEffect`]: one file each, one line each in [`REGISTRY`]. It edits
+//! the phantom documents so that the effect is present with its parameters at their *null*
+//! values — where the model is exactly the one it was given — and names those parameters.
+
+pub mod bubble_fixed_gases;
+pub mod diagnose;
+pub mod elasticity;
+pub mod perfusion;
+pub mod report;
+pub mod scale;
+pub mod sealed_faces;
+pub mod search;
+pub mod surface_area_law;
+pub mod surface_permeability;
+
+use crate::fit::paths::ParamSpec;
+
+/// One parameter of a candidate effect.
+#[derive(Debug, Clone, PartialEq)]
+pub struct EffectParam {
+    /// How it is fitted: path (or `scale:` pattern), log space, start.
+    pub spec: ParamSpec,
+    /// The value at which the effect is absent.
+    pub null: f64,
+    /// Values tried before the local fit starts (the best of these and the null is the start):
+    /// a coarse scan, so that a fit from the null can reach an effect several decades away.
+    pub scan: Vec<f64>,
+}
+
+/// What a candidate did to the model.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prepared {
+    /// Its parameters (one or two), at their null values in the edited documents.
+    pub params: Vec<EffectParam>,
+    /// Degrees of freedom it adds (the number of parameters; 1 for a discrete choice without one).
+    pub dof: usize,
+}
+
+/// A candidate model extension.
+pub trait CandidateEffect: Send + Sync {
+    /// Name in reports, `discover.toml` and `synth --effect` (e.g. `perfusion`, `elasticity:bulk-modulus`).
+    fn name(&self) -> String;
+    /// Edit the phantom documents (one per experiment) to hold the effect at its null values
+    /// and return its parameters; `None` when it does not apply to these phantoms.
+    fn prepare(&self, docs: &mut [toml::Table]) -> Result<Option<Prepared>, String>;
+}
+
+/// Builds the candidates of one registry entry for given phantoms (an entry may expand to
+/// several variants, e.g. one per elasticity law or one per open face).
+pub type Build = fn(&[toml::Table]) -> Vec<Box<dyn CandidateEffect>>;
+
+/// The registry: entry name → variants.
+pub const REGISTRY: &[(&str, Build)] = &[
+    ("surface-permeability", surface_permeability::build),
+    ("surface-area-law", surface_area_law::build),
+    ("elasticity", elasticity::build),
+    ("sealed-faces", sealed_faces::build),
+    ("perfusion", perfusion::build),
+    ("bubble-fixed-gases", bubble_fixed_gases::build),
+    ("diffusivity-scale", scale::build_diffusivity),
+    ("solubility-scale", scale::build_solubility),
+];
+
+/// Every candidate for these phantoms, in registry order.
+pub fn all_candidates(docs: &[toml::Table]) -> Vec<Box<dyn CandidateEffect>> {
+    REGISTRY.iter().flat_map(|(_, b)| b(docs)).collect()
+}
+
+/// The candidate of this name (a registry name or a variant such as `elasticity:hyperelastic`).
+pub fn find(docs: &[toml::Table], name: &str) -> Option<Box<dyn CandidateEffect>> {
+    all_candidates(docs).into_iter().find(|c| c.name() == name)
+}
+
+/// Log-spaced values from `lo` to `hi` (n ≥ 2).
+pub fn log_scan(lo: f64, hi: f64, n: usize) -> Vec<f64> {
+    (0..n)
+        .map(|i| lo * (hi / lo).powf(i as f64 / (n - 1).max(1) as f64))
+        .collect()
+}

@@ -1,0 +1,457 @@
+//! The forward search of `discover`:
+//!
+//! 1. fit the baseline (the experiments as configured, `[fit] free` free);
+//! 2. estimate the simulation's own numerical error: the baseline re-run with the grid step and
+//!    every step limit halved; e_b = RMS over each bubble's observations of the change;
+//! 3. fix the weights once: σ_i² = sd_i² + e_b² (sd from the file, or, without one, the
+//!    measurement variance estimated from the baseline fit, less the numerical part), so grid
+//!    error is never read as physics;
+//! 4. each round: every candidate not yet added is prepared on the current model, its
+//!    parameters started from the best of a coarse scan and the null, and the whole model
+//!    refitted; the extra sum-of-squares F-test against the current model, ΔSSR and ΔAICc;
+//! 5. the candidate with the smallest p is added only if p < α/m (Bonferroni over the m
+//!    candidates tried in that round) AND it lowers the RMSE by more than the numerical error;
+//!    repeat until none qualifies.
+
+use super::diagnose::{diagnose, Diagnostics};
+use super::{all_candidates, Prepared};
+use crate::error::Error;
+use crate::fit::data::{Experiments, Measurements};
+use crate::fit::lsq::{Estimate, LsqOptions};
+use crate::fit::model::{fit, observed, refine, Fitted, Model};
+use crate::fit::stats::{aicc, extra_ss_f_test, FTest};
+use rayon::prelude::*;
+
+/// Settings of the search.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DiscoverOptions {
+    /// Family-wise significance level, Bonferroni-corrected over each round's candidates.
+    /// Default 0.01.
+    pub alpha: f64,
+    /// Most effects added. Default 3.
+    pub max_effects: usize,
+    /// Least-squares settings of every fit.
+    pub lsq: LsqOptions,
+    /// Only candidates whose name starts with one of these (empty: all).
+    pub only: Vec<String>,
+}
+
+impl Default for DiscoverOptions {
+    fn default() -> Self {
+        DiscoverOptions {
+            alpha: 0.01,
+            max_effects: 3,
+            lsq: LsqOptions {
+                fd_step: 1e-2,
+                ftol: 1e-5,
+                xtol: 1e-4,
+                patience: 12,
+            },
+            only: Vec::new(),
+        }
+    }
+}
+
+/// One candidate's refit in one round.
+#[derive(Debug, Clone)]
+pub struct CandidateOutcome {
+    /// Candidate name.
+    pub name: String,
+    /// Its parameters' estimates (empty for a discrete candidate).
+    pub estimates: Vec<Estimate>,
+    /// Degrees of freedom it adds.
+    pub dof: usize,
+    /// Weighted SSR of the refitted model.
+    pub ssr: f64,
+    /// Current SSR − this SSR (≥ 0 when the refit started at the null).
+    pub delta_ssr: f64,
+    /// The F-test against the current model.
+    pub f_test: FTest,
+    /// AICc of this model − AICc of the current one (negative favours the candidate).
+    pub delta_aicc: f64,
+    /// Unweighted RMSE, m.
+    pub rmse: f64,
+    /// Why it could not be fitted, if it could not.
+    pub error: Option<String>,
+    /// The refitted model (kept for the accepted one).
+    pub fitted: Option<Box<Fitted>>,
+}
+
+/// One round of the search.
+#[derive(Debug, Clone)]
+pub struct Round {
+    /// Effects in the model at the start of the round.
+    pub current: Vec<String>,
+    /// Every candidate tried.
+    pub outcomes: Vec<CandidateOutcome>,
+    /// The Bonferroni threshold α/m.
+    pub threshold: f64,
+    /// The candidate added, if any.
+    pub accepted: Option<String>,
+    /// Why the best candidate was or was not added.
+    pub verdict: String,
+}
+
+/// An added effect.
+#[derive(Debug, Clone)]
+pub struct Added {
+    /// Effect name.
+    pub effect: String,
+    /// Its parameters (estimates and intervals in the final model).
+    pub parameters: Vec<Estimate>,
+    /// p-value of its F-test when it was added.
+    pub p_value: f64,
+    /// F statistic then.
+    pub f: f64,
+    /// SSR reduction then.
+    pub delta_ssr: f64,
+    /// ΔAICc then.
+    pub delta_aicc: f64,
+}
+
+/// The numerical-error estimate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct NumericalError {
+    /// Refined minus coarse radius at every observation, m.
+    pub difference: Vec<f64>,
+    /// Per-observation e_b (the RMS over its bubble), m.
+    pub per_observation: Vec<f64>,
+    /// RMS over all observations, m.
+    pub rms: f64,
+}
+
+/// The outcome of `discover`.
+#[derive(Debug, Clone)]
+pub struct Discovery {
+    /// The baseline fit with the final weights.
+    pub baseline: Fitted,
+    /// The final model's fit.
+    pub final_fit: Fitted,
+    /// Effect names added, in order.
+    pub effects: Vec<String>,
+    /// Details of each added effect.
+    pub added: Vec<Added>,
+    /// Every round.
+    pub rounds: Vec<Round>,
+    /// Numerical error of the baseline.
+    pub numerical: NumericalError,
+    /// Measurement sd used, m (per observation).
+    pub measurement_sd: Vec<f64>,
+    /// Whether the sd came from the file.
+    pub sd_given: bool,
+    /// Weights 1/σ² used in every test.
+    pub weights: Vec<f64>,
+    /// Diagnostics of the baseline.
+    pub diagnostics_before: Diagnostics,
+    /// Diagnostics of the final model.
+    pub diagnostics_after: Diagnostics,
+    /// Settings used.
+    pub options: DiscoverOptions,
+}
+
+/// Diagnose a fit (runs it once more for the bubble positions).
+pub fn diagnose_fit(
+    f: &Fitted,
+    experiments: &Experiments,
+    data: &Measurements,
+) -> Result<Diagnostics, Error> {
+    let runs = f.model.run(experiments, &f.values)?;
+    let first: Vec<_> = runs.iter().map(|r| r.frames.first().cloned()).collect();
+    Ok(diagnose(experiments, data, &f.predicted, &first))
+}
+
+/// The numerical error of a fitted model: refined run minus the run itself.
+pub fn numerical_error(
+    f: &Fitted,
+    experiments: &Experiments,
+    data: &Measurements,
+) -> Result<NumericalError, Error> {
+    let mut fine = f.model.clone();
+    for d in fine.docs.iter_mut() {
+        refine(d).map_err(|m| Error::Input(crate::error::InputError::new(m)))?;
+    }
+    let pf = fine.predict(experiments, data, &f.values)?;
+    let difference: Vec<f64> = pf.iter().zip(&f.predicted).map(|(a, b)| a - b).collect();
+    let mut per_observation = Vec::with_capacity(difference.len());
+    let mut k = 0;
+    for s in &data.series {
+        let n = s.points.len();
+        let rms =
+            (difference[k..k + n].iter().map(|x| x * x).sum::<f64>() / n.max(1) as f64).sqrt();
+        per_observation.extend(std::iter::repeat_n(rms, n));
+        k += n;
+    }
+    let rms =
+        (difference.iter().map(|x| x * x).sum::<f64>() / difference.len().max(1) as f64).sqrt();
+    Ok(NumericalError {
+        difference,
+        per_observation,
+        rms,
+    })
+}
+
+fn try_candidate(
+    cand: &dyn super::CandidateEffect,
+    current: &Fitted,
+    experiments: &Experiments,
+    data: &Measurements,
+    weights: &[f64],
+    opts: &DiscoverOptions,
+) -> CandidateOutcome {
+    let name = cand.name();
+    let failed = |m: String| CandidateOutcome {
+        name: name.clone(),
+        estimates: Vec::new(),
+        dof: 0,
+        ssr: f64::NAN,
+        delta_ssr: f64::NAN,
+        f_test: FTest {
+            f: f64::NAN,
+            df_num: 0,
+            df_den: 0,
+            p_value: 1.0,
+        },
+        delta_aicc: f64::NAN,
+        rmse: f64::NAN,
+        error: Some(m),
+        fitted: None,
+    };
+    let mut docs = current.model.docs.clone();
+    let prepared: Prepared = match cand.prepare(&mut docs) {
+        Ok(Some(p)) => p,
+        Ok(None) => return failed("does not apply to these phantoms".into()),
+        Err(m) => return failed(m),
+    };
+    let mut model = Model {
+        docs,
+        free: current.model.free.clone(),
+    };
+    let base_values = current.values.clone();
+    // start: the best of the null and a scan of the first parameter
+    let mut specs: Vec<_> = prepared.params.iter().map(|p| p.spec.clone()).collect();
+    if let Some(first) = prepared.params.first() {
+        let y = observed(data);
+        let ssr_at = |v: f64| -> f64 {
+            let mut m = model.clone();
+            let mut s = specs.clone();
+            s[0].start = v;
+            m.free.extend(s);
+            let mut values = base_values.clone();
+            values.extend(m.free[base_values.len()..].iter().map(|s| s.start));
+            match m.predict(experiments, data, &values) {
+                Ok(f) => y
+                    .iter()
+                    .zip(&f)
+                    .zip(weights)
+                    .map(|((a, b), w)| w * (a - b).powi(2))
+                    .sum(),
+                Err(_) => f64::INFINITY,
+            }
+        };
+        let scores: Vec<(f64, f64)> = first.scan.par_iter().map(|v| (*v, ssr_at(*v))).collect();
+        if let Some((v, s)) = scores
+            .into_iter()
+            .filter(|(_, s)| s.is_finite())
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+        {
+            if s < current.ssr {
+                specs[0].start = v;
+            }
+        }
+    }
+    // the current model's parameters start where they are
+    for (s, v) in model.free.iter_mut().zip(&current.values) {
+        s.start = *v;
+    }
+    model.free.extend(specs);
+    let f = match fit(&model, experiments, data, weights, &opts.lsq) {
+        Ok(f) => f,
+        Err(e) => return failed(e.to_string()),
+    };
+    let p_extra = prepared.dof;
+    let df0 = current.dof();
+    let df1 = current.n.saturating_sub(current.p() + p_extra);
+    let ssr1 = f.ssr.min(current.ssr);
+    let f_test = extra_ss_f_test(current.ssr, df0, ssr1, df1);
+    let delta_aicc =
+        aicc(ssr1, current.n, current.p() + p_extra) - aicc(current.ssr, current.n, current.p());
+    let k0 = current.p();
+    CandidateOutcome {
+        name,
+        estimates: f.inference.estimates[k0..].to_vec(),
+        dof: p_extra,
+        ssr: f.ssr,
+        delta_ssr: current.ssr - f.ssr,
+        f_test,
+        delta_aicc,
+        rmse: f.rmse,
+        error: None,
+        fitted: Some(Box::new(f)),
+    }
+}
+
+/// Run the search. `progress(done, total)` is called as candidate fits finish (total is an
+/// estimate: rounds × candidates).
+pub fn discover(
+    experiments: &Experiments,
+    data: &Measurements,
+    opts: &DiscoverOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Discovery, Error> {
+    let base = Model::baseline(experiments)?;
+    let n = data.len();
+    let sd_given = data.has_sd();
+    let unit: Vec<f64> = data
+        .series
+        .iter()
+        .flat_map(|s| {
+            s.points
+                .iter()
+                .map(|p| p.sd.map_or(1.0, |sd| 1.0 / (sd * sd)))
+        })
+        .collect();
+    let first = fit(&base, experiments, data, &unit, &opts.lsq)?;
+    let numerical = numerical_error(&first, experiments, data)?;
+    // measurement sd: from the file, else from the baseline residuals less the numerical part
+    let measurement_sd: Vec<f64> = if sd_given {
+        data.series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.sd.unwrap_or(0.0)))
+            .collect()
+    } else {
+        let y = observed(data);
+        let ss: f64 = y
+            .iter()
+            .zip(&first.predicted)
+            .map(|(a, b)| (a - b).powi(2))
+            .sum();
+        let s2 = ss / first.dof().max(1) as f64 - numerical.rms.powi(2);
+        vec![s2.max(1e-30).sqrt(); n]
+    };
+    let weights: Vec<f64> = measurement_sd
+        .iter()
+        .zip(&numerical.per_observation)
+        .map(|(s, e)| 1.0 / (s * s + e * e).max(1e-40))
+        .collect();
+    let mut base_w = base.clone();
+    for (s, v) in base_w.free.iter_mut().zip(&first.values) {
+        s.start = *v;
+    }
+    let baseline = fit(&base_w, experiments, data, &weights, &opts.lsq)?;
+    let diagnostics_before = diagnose_fit(&baseline, experiments, data)?;
+    let mut current = baseline.clone();
+    let mut effects: Vec<String> = Vec::new();
+    let mut added: Vec<(Added, usize)> = Vec::new();
+    let mut rounds = Vec::new();
+    let total_guess = all_candidates(&current.model.docs).len() * (opts.max_effects.min(2) + 1);
+    let done = std::sync::atomic::AtomicUsize::new(0);
+    while effects.len() < opts.max_effects {
+        let cands: Vec<_> = all_candidates(&current.model.docs)
+            .into_iter()
+            .filter(|c| {
+                let name = c.name();
+                !effects.iter().any(|e| *e == name)
+                    && (opts.only.is_empty() || opts.only.iter().any(|o| name.starts_with(o)))
+            })
+            .collect();
+        let outcomes: Vec<CandidateOutcome> = cands
+            .par_iter()
+            .map(|c| {
+                let o = try_candidate(c.as_ref(), &current, experiments, data, &weights, opts);
+                let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
+                progress(k, total_guess.max(k));
+                o
+            })
+            .collect();
+        let tried = outcomes.iter().filter(|o| o.error.is_none()).count().max(1);
+        let threshold = opts.alpha / tried as f64;
+        let best = outcomes
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.error.is_none() && o.f_test.p_value.is_finite())
+            .min_by(|a, b| {
+                a.1.f_test
+                    .p_value
+                    .total_cmp(&b.1.f_test.p_value)
+                    .then(b.1.delta_ssr.total_cmp(&a.1.delta_ssr))
+            })
+            .map(|(i, _)| i);
+        let mut round = Round {
+            current: effects.clone(),
+            outcomes,
+            threshold,
+            accepted: None,
+            verdict: String::new(),
+        };
+        let Some(bi) = best else {
+            round.verdict = "no candidate could be fitted".into();
+            rounds.push(round);
+            break;
+        };
+        let b = &round.outcomes[bi];
+        let gain = current.rmse - b.rmse;
+        let significant = b.f_test.p_value < threshold;
+        let above_numerics = gain > numerical.rms;
+        round.verdict = format!(
+            "best: {} (p = {:.3e} {} α/m = {:.3e}; RMSE gain {:.4} µm {} numerical error {:.4} µm)",
+            b.name,
+            b.f_test.p_value,
+            if significant { "<" } else { "≥" },
+            threshold,
+            gain * 1e6,
+            if above_numerics { ">" } else { "≤" },
+            numerical.rms * 1e6
+        );
+        if significant && above_numerics {
+            let fitted = b.fitted.clone().expect("a fitted candidate keeps its fit");
+            let name = b.name.clone();
+            added.push((
+                Added {
+                    effect: name.clone(),
+                    parameters: Vec::new(),
+                    p_value: b.f_test.p_value,
+                    f: b.f_test.f,
+                    delta_ssr: b.delta_ssr,
+                    delta_aicc: b.delta_aicc,
+                },
+                current.p(),
+            ));
+            round.accepted = Some(name.clone());
+            effects.push(name);
+            current = *fitted;
+            rounds.push(round);
+        } else {
+            rounds.push(round);
+            break;
+        }
+    }
+    // the added effects' parameters as estimated in the final model
+    let mut added_out = Vec::new();
+    for (i, (mut a, k0)) in added.clone().into_iter().enumerate() {
+        let k1 = added.get(i + 1).map_or(current.p(), |x| x.1);
+        a.parameters = current.inference.estimates[k0..k1].to_vec();
+        added_out.push(a);
+    }
+    // strip the kept fits from the rounds (only the accepted ones matter, and they are in
+    // `current`'s history)
+    for r in rounds.iter_mut() {
+        for o in r.outcomes.iter_mut() {
+            o.fitted = None;
+        }
+    }
+    let diagnostics_after = diagnose_fit(&current, experiments, data)?;
+    Ok(Discovery {
+        baseline,
+        final_fit: current,
+        effects,
+        added: added_out,
+        rounds,
+        numerical,
+        measurement_sd,
+        sd_given,
+        weights,
+        diagnostics_before,
+        diagnostics_after,
+        options: opts.clone(),
+    })
+}

@@ -1,0 +1,432 @@
+//! The inputs of `fit`, `discover` and `synth`: measured radii (`measurements.csv`) and the
+//! experiments that produced them (`experiments.toml`).
+//!
+//! `measurements.csv`: header `experiment,bubble,time_s,radius_m` and optionally `sd_m` (the
+//! measurement standard deviation of that row), any column order, any row order. `bubble` is
+//! the 0-based index of the bubble in the experiment's phantom (the numbering of
+//! `simulate`'s `bubbles.csv`).
+//!
+//! `experiments.toml` (paths relative to the file):
+//! ```toml
+//! [[experiment]]
+//! name = "osc-150"                  # the measurements' experiment column
+//! profile = "osc-profile.toml"      # anything `simulate --profile` reads
+//! phantom = "osc-150-phantom.toml"  # its [[bubbles]] in order are bubble 0, 1, ...
+//! # units = "min,psi-gauge"         # only for the paper's two-column profiles
+//! [fit]
+//! free = ["gases.n2.diffusivity"]   # baseline parameters fitted in every model (default none)
+//! ```
+
+use crate::error::{line_of_key, toml_error, Error, InputError};
+use crate::phantom::config::parse_phantom;
+use crate::phantom::params::{BubblePlacement, PhantomParams};
+use crate::profile::{legacy, LoadOptions, PressureHistory};
+use serde::Deserialize;
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+/// One measured radius.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Observation {
+    /// Time, s.
+    pub time: f64,
+    /// Radius, m.
+    pub radius: f64,
+    /// Measurement standard deviation, m, if given.
+    pub sd: Option<f64>,
+    /// 1-based line of the CSV row (for messages).
+    pub line: usize,
+}
+
+/// The measured radius–time series of one bubble, in time order.
+#[derive(Debug, Clone, PartialEq)]
+pub struct BubbleSeries {
+    /// Experiment name.
+    pub experiment: String,
+    /// 0-based bubble index in that experiment's phantom.
+    pub bubble: usize,
+    /// Observations in increasing time.
+    pub points: Vec<Observation>,
+}
+
+/// All measurements, grouped by experiment and bubble (sorted by both).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Measurements {
+    /// The file read.
+    pub file: PathBuf,
+    /// Series in (experiment, bubble) order.
+    pub series: Vec<BubbleSeries>,
+}
+
+impl Measurements {
+    /// Number of observations.
+    pub fn len(&self) -> usize {
+        self.series.iter().map(|s| s.points.len()).sum()
+    }
+    /// No observations.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// Whether every row carries `sd_m`.
+    pub fn has_sd(&self) -> bool {
+        self.series
+            .iter()
+            .all(|s| s.points.iter().all(|p| p.sd.is_some()))
+    }
+}
+
+/// Read `measurements.csv`. Refused (exit 2, file/row/field named): a missing column, a value
+/// that is not a finite number, a negative radius, a non-positive sd, a bubble index that is
+/// not a non-negative integer, and a time that does not increase within a bubble.
+pub fn read_measurements(path: &Path) -> Result<Measurements, InputError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::new(format!("cannot read measurements: {e}")).in_file(path))?;
+    parse_measurements(&text, path)
+}
+
+/// Parse measurements text (`path` for messages).
+pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, InputError> {
+    let mut rdr = csv::ReaderBuilder::new()
+        .trim(csv::Trim::All)
+        .comment(Some(b'#'))
+        .from_reader(text.as_bytes());
+    let headers = rdr
+        .headers()
+        .map_err(|e| InputError::new(format!("cannot read the header: {e}")).in_file(path))?
+        .clone();
+    let col = |name: &str| headers.iter().position(|h| h == name);
+    let mut cols = [0usize; 4];
+    for (k, name) in ["experiment", "bubble", "time_s", "radius_m"]
+        .iter()
+        .enumerate()
+    {
+        cols[k] = col(name).ok_or_else(|| {
+            InputError::new(format!(
+                "missing column '{name}'; the header must be experiment,bubble,time_s,radius_m[,sd_m] (found: {})",
+                headers.iter().collect::<Vec<_>>().join(",")
+            ))
+            .in_file(path)
+            .at_line(1)
+            .field(*name)
+        })?;
+    }
+    let sd_col = col("sd_m");
+    let mut groups: BTreeMap<(String, usize), Vec<Observation>> = BTreeMap::new();
+    for rec in rdr.records() {
+        let rec = rec.map_err(|e| {
+            let line = e.position().map(|p| p.line() as usize).unwrap_or(0);
+            let mut ie = InputError::new(format!("malformed row: {e}")).in_file(path);
+            if line > 0 {
+                ie = ie.at_line(line);
+            }
+            ie
+        })?;
+        let line = rec.position().map(|p| p.line() as usize).unwrap_or(0);
+        let err = |field: &str, m: String| {
+            InputError::new(m)
+                .in_file(path)
+                .at_line(line)
+                .field(field.to_string())
+        };
+        let cell = |k: usize, name: &str| -> Result<&str, InputError> {
+            rec.get(k)
+                .filter(|s| !s.is_empty())
+                .ok_or_else(|| err(name, format!("no value for '{name}'")))
+        };
+        let number = |k: usize, name: &str| -> Result<f64, InputError> {
+            let s = cell(k, name)?;
+            s.parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| err(name, format!("'{s}' is not a finite number")))
+        };
+        let experiment = cell(cols[0], "experiment")?.to_string();
+        let b = cell(cols[1], "bubble")?;
+        let bubble = b.parse::<usize>().map_err(|_| {
+            err(
+                "bubble",
+                format!("'{b}' is not a bubble index (0, 1, 2, … as in the phantom's [[bubbles]])"),
+            )
+        })?;
+        let time = number(cols[2], "time_s")?;
+        let radius = number(cols[3], "radius_m")?;
+        if radius < 0.0 {
+            return Err(err(
+                "radius_m",
+                format!("a radius cannot be negative (got {radius} m)"),
+            ));
+        }
+        if radius > 1.0 {
+            return Err(err(
+                "radius_m",
+                format!("{radius} m is not a bubble radius; radii are in metres (e.g. 2.0e-4 for 0.2 mm)"),
+            ));
+        }
+        let sd = match sd_col {
+            Some(k) if rec.get(k).is_some_and(|s| !s.is_empty()) => {
+                let v = number(k, "sd_m")?;
+                if !(v > 0.0) {
+                    return Err(err(
+                        "sd_m",
+                        format!("a standard deviation must be positive (got {v} m)"),
+                    ));
+                }
+                Some(v)
+            }
+            _ => None,
+        };
+        groups
+            .entry((experiment, bubble))
+            .or_default()
+            .push(Observation {
+                time,
+                radius,
+                sd,
+                line,
+            });
+    }
+    let mut series = Vec::new();
+    for ((experiment, bubble), mut points) in groups {
+        points.sort_by(|a, b| a.time.total_cmp(&b.time));
+        for w in points.windows(2) {
+            if !(w[1].time > w[0].time) {
+                return Err(InputError::new(format!(
+                    "experiment '{experiment}', bubble {bubble}: time {} s appears twice (lines {} and {}); times must increase within a bubble",
+                    w[1].time, w[0].line, w[1].line
+                ))
+                .in_file(path)
+                .at_line(w[1].line)
+                .field("time_s"));
+            }
+        }
+        if points.first().is_some_and(|p| p.time < 0.0) {
+            return Err(InputError::new(format!(
+                "experiment '{experiment}', bubble {bubble}: negative time {} s (times are from the start of the profile)",
+                points[0].time
+            ))
+            .in_file(path)
+            .at_line(points[0].line)
+            .field("time_s"));
+        }
+        series.push(BubbleSeries {
+            experiment,
+            bubble,
+            points,
+        });
+    }
+    if series.is_empty() {
+        return Err(InputError::new("no measurements (only a header)").in_file(path));
+    }
+    Ok(Measurements {
+        file: path.to_path_buf(),
+        series,
+    })
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawExperiments {
+    experiment: Vec<RawExperiment>,
+    #[serde(default)]
+    fit: RawFit,
+}
+
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawExperiment {
+    name: String,
+    profile: PathBuf,
+    phantom: PathBuf,
+    units: Option<String>,
+    gas: Option<String>,
+    vapour_pa: Option<f64>,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawFit {
+    #[serde(default)]
+    free: Vec<String>,
+}
+
+/// One experiment: its pressure profile and its phantom (kept as the TOML document, so any
+/// parameter can be set by path).
+#[derive(Debug, Clone)]
+pub struct Experiment {
+    /// Name (the measurements' experiment column).
+    pub name: String,
+    /// The pressure history.
+    pub profile: PressureHistory,
+    /// The phantom file.
+    pub phantom_path: PathBuf,
+    /// The phantom as a TOML document.
+    pub phantom: toml::Table,
+    /// Number of bubbles the phantom defines.
+    pub bubbles: usize,
+}
+
+/// The experiments file.
+#[derive(Debug, Clone)]
+pub struct Experiments {
+    /// The file read.
+    pub file: PathBuf,
+    /// Experiments in file order.
+    pub list: Vec<Experiment>,
+    /// Baseline free parameters (`[fit] free`).
+    pub free: Vec<String>,
+}
+
+impl Experiments {
+    /// The experiment of this name.
+    pub fn get(&self, name: &str) -> Option<&Experiment> {
+        self.list.iter().find(|e| e.name == name)
+    }
+}
+
+/// Build validated phantom parameters from a (possibly edited) phantom document.
+pub fn build_params(doc: &toml::Table, path: &Path) -> Result<PhantomParams, InputError> {
+    let text = toml::to_string(doc).map_err(|e| {
+        InputError::new(format!("cannot write the phantom back to TOML: {e}")).in_file(path)
+    })?;
+    Ok(parse_phantom(&text, path)?.params)
+}
+
+/// Number of bubbles a phantom defines.
+pub fn bubble_count(p: &PhantomParams) -> usize {
+    match &p.bubbles {
+        BubblePlacement::Explicit(list) => list.len(),
+        BubblePlacement::Random { count, .. } => *count,
+    }
+}
+
+/// Read `experiments.toml` and everything it names.
+pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| InputError::new(format!("cannot read experiments file: {e}")).in_file(path))?;
+    let raw: RawExperiments = toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let err = |key: &str, m: String| {
+        let mut e = InputError::new(m).in_file(path).field(key.to_string());
+        if let Some(l) = line_of_key(&text, key.rsplit('.').next().unwrap_or(key)) {
+            e = e.at_line(l);
+        }
+        e
+    };
+    let mut list: Vec<Experiment> = Vec::new();
+    if raw.experiment.is_empty() {
+        return Err(err("experiment", "no [[experiment]] entries".into()).into());
+    }
+    for e in &raw.experiment {
+        if e.name.trim().is_empty() {
+            return Err(err("name", "an experiment needs a non-empty name".into()).into());
+        }
+        if list.iter().any(|x| x.name == e.name) {
+            return Err(err("name", format!("experiment '{}' is defined twice", e.name)).into());
+        }
+        let (time_unit, pressure_unit) = match &e.units {
+            Some(u) => {
+                let (t, p) = legacy::parse_units(u).map_err(|ie| err("units", ie.message))?;
+                (Some(t), Some(p))
+            }
+            None => (None, None),
+        };
+        let gas = match &e.gas {
+            Some(g) => Some(crate::gas::GasMix::parse(g).map_err(|m| err("gas", m))?),
+            None => None,
+        };
+        let opts = LoadOptions {
+            time_unit,
+            pressure_unit,
+            surface_pa: None,
+            gas,
+            vapour_pa: e.vapour_pa,
+            dive: None,
+        };
+        let profile = crate::app::simulate::load_profile_or_schedule(&dir.join(&e.profile), &opts)?;
+        let phantom_path = dir.join(&e.phantom);
+        let ptext = std::fs::read_to_string(&phantom_path).map_err(|x| {
+            InputError::new(format!("cannot read phantom file: {x}")).in_file(&phantom_path)
+        })?;
+        // validate as a phantom file first, so errors point at its own lines
+        let params = parse_phantom(&ptext, &phantom_path)?.params;
+        let phantom: toml::Table = ptext
+            .parse()
+            .map_err(|x: toml::de::Error| toml_error(&phantom_path, &ptext, &x))?;
+        list.push(Experiment {
+            name: e.name.clone(),
+            profile,
+            phantom_path,
+            phantom,
+            bubbles: bubble_count(&params),
+        });
+    }
+    for f in &raw.fit.free {
+        if list
+            .iter()
+            .all(|x| !crate::fit::paths::holds(&x.phantom, f))
+        {
+            return Err(err(
+                "fit.free",
+                format!("'{f}' is not a number set in any experiment's phantom file"),
+            )
+            .into());
+        }
+    }
+    Ok(Experiments {
+        file: path.to_path_buf(),
+        list,
+        free: raw.fit.free,
+    })
+}
+
+/// Check that every measured series names an experiment and a bubble that exist, and that
+/// every experiment has a measurement.
+pub fn check_against(m: &Measurements, e: &Experiments) -> Result<(), InputError> {
+    for s in &m.series {
+        let line = s.points[0].line;
+        let Some(x) = e.get(&s.experiment) else {
+            return Err(InputError::new(format!(
+                "experiment '{}' is not defined in {} (defined: {})",
+                s.experiment,
+                e.file.display(),
+                e.list
+                    .iter()
+                    .map(|x| x.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ))
+            .in_file(&m.file)
+            .at_line(line)
+            .field("experiment"));
+        };
+        if s.bubble >= x.bubbles {
+            return Err(InputError::new(format!(
+                "experiment '{}' has {} bubble(s) (0..{}) in {}; there is no bubble {}",
+                x.name,
+                x.bubbles,
+                x.bubbles.saturating_sub(1),
+                x.phantom_path.display(),
+                s.bubble
+            ))
+            .in_file(&m.file)
+            .at_line(line)
+            .field("bubble"));
+        }
+        if let Some(p) = s
+            .points
+            .iter()
+            .find(|p| p.time > x.profile.duration_s() + 1e-9)
+        {
+            return Err(InputError::new(format!(
+                "time {} s is after the end of experiment '{}' ({} s)",
+                p.time,
+                x.name,
+                x.profile.duration_s()
+            ))
+            .in_file(&m.file)
+            .at_line(p.line)
+            .field("time_s"));
+        }
+    }
+    Ok(())
+}

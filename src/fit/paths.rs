@@ -1,0 +1,417 @@
+//! Parameters named by their phantom-TOML path (`gases.n2.diffusivity`,
+//! `material.elasticity.shear_modulus`, `bubbles.0.initial_radius_m`, `perfusion.rate_per_s`).
+//!
+//! A phantom is kept as its TOML document; a parameter value is written into the document at
+//! its path and the document is validated again by the same reader as a phantom file
+//! ([`crate::phantom::config::parse_phantom`]), so every numeric field a phantom file can hold
+//! can be fitted or swept, with the reader's own range checks. Used by `fit`, `discover`,
+//! `synth` and the sweeps.
+
+use crate::error::InputError;
+
+/// One segment of a path: a table key or an array index.
+#[derive(Debug, Clone, PartialEq, Eq)]
+enum Segment {
+    Key(String),
+    Index(usize),
+}
+
+fn segments(path: &str) -> Result<Vec<Segment>, String> {
+    if path.trim().is_empty() {
+        return Err("empty parameter path".into());
+    }
+    path.split('.')
+        .map(|s| {
+            if s.is_empty() {
+                Err(format!("'{path}': empty segment in the path"))
+            } else if let Ok(i) = s.parse::<usize>() {
+                Ok(Segment::Index(i))
+            } else {
+                Ok(Segment::Key(s.to_string()))
+            }
+        })
+        .collect()
+}
+
+fn as_number(v: &toml::Value) -> Option<f64> {
+    v.as_float().or(v.as_integer().map(|i| i as f64))
+}
+
+/// The number at `path` in `doc`, if the path exists and holds a number.
+pub fn get(doc: &toml::Table, path: &str) -> Option<f64> {
+    let segs = segments(path).ok()?;
+    let mut cur: &toml::Value = doc.get(match &segs[0] {
+        Segment::Key(k) => k.as_str(),
+        Segment::Index(_) => return None,
+    })?;
+    for s in &segs[1..] {
+        cur = match s {
+            Segment::Key(k) => cur.as_table()?.get(k)?,
+            Segment::Index(i) => cur.as_array()?.get(*i)?,
+        };
+    }
+    as_number(cur)
+}
+
+/// Write `value` at `path`, creating missing tables on the way (a setting left at its default
+/// in the file is added). An existing non-table on the way, an array index out of range or a
+/// non-numeric leaf is an error naming the path.
+pub fn set(doc: &mut toml::Table, path: &str, value: f64) -> Result<(), String> {
+    let segs = segments(path)?;
+    let not_table = |at: &str| format!("'{path}': '{at}' is not a table in the phantom file");
+    let mut cur: &mut toml::Value = {
+        let Segment::Key(k) = &segs[0] else {
+            return Err(format!("'{path}' must start with a table name"));
+        };
+        if segs.len() == 1 {
+            return set_leaf(doc.entry(k.clone()), path, value);
+        }
+        doc.entry(k.clone())
+            .or_insert_with(|| toml::Value::Table(toml::Table::new()))
+    };
+    for (n, s) in segs[1..].iter().enumerate() {
+        let last = n + 2 == segs.len();
+        match s {
+            Segment::Key(k) => {
+                let t = cur.as_table_mut().ok_or_else(|| not_table(k))?;
+                if last {
+                    return set_leaf(t.entry(k.clone()), path, value);
+                }
+                cur = t
+                    .entry(k.clone())
+                    .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+            }
+            Segment::Index(i) => {
+                let a = cur
+                    .as_array_mut()
+                    .ok_or_else(|| format!("'{path}': index {i} into something not a list"))?;
+                let len = a.len();
+                let item = a.get_mut(*i).ok_or_else(|| {
+                    format!("'{path}': index {i} is out of range (the list has {len} entries)")
+                })?;
+                if last {
+                    return match item {
+                        toml::Value::Float(_) | toml::Value::Integer(_) => {
+                            *item = toml::Value::Float(value);
+                            Ok(())
+                        }
+                        _ => Err(format!("'{path}' is not a number")),
+                    };
+                }
+                cur = item;
+            }
+        }
+    }
+    unreachable_path(path)
+}
+
+fn unreachable_path(path: &str) -> Result<(), String> {
+    Err(format!("'{path}': not a settable number"))
+}
+
+fn set_leaf(entry: toml::map::Entry<'_>, path: &str, value: f64) -> Result<(), String> {
+    match entry {
+        toml::map::Entry::Vacant(v) => {
+            v.insert(toml::Value::Float(value));
+            Ok(())
+        }
+        toml::map::Entry::Occupied(mut o) => match o.get() {
+            toml::Value::Float(_) | toml::Value::Integer(_) => {
+                o.insert(toml::Value::Float(value));
+                Ok(())
+            }
+            _ => Err(format!(
+                "'{path}' holds a {} in the phantom file, not a number",
+                o.get().type_str()
+            )),
+        },
+    }
+}
+
+/// Expand a path whose key segments may be `*` (every key of that table) into the concrete
+/// paths that hold a number in `doc`, e.g. `gases.*.diffusivity` → `gases.n2.diffusivity`, ….
+pub fn expand(doc: &toml::Table, pattern: &str) -> Vec<String> {
+    fn walk(v: &toml::Value, rest: &[&str], prefix: String, out: &mut Vec<String>) {
+        let Some((head, tail)) = rest.split_first() else {
+            if as_number(v).is_some() {
+                out.push(prefix);
+            }
+            return;
+        };
+        let join = |k: &str| {
+            if prefix.is_empty() {
+                k.to_string()
+            } else {
+                format!("{prefix}.{k}")
+            }
+        };
+        match v {
+            toml::Value::Table(t) if *head == "*" => {
+                for (k, x) in t {
+                    walk(x, tail, join(k), out);
+                }
+            }
+            toml::Value::Table(t) => {
+                if let Some(x) = t.get(*head) {
+                    walk(x, tail, join(head), out);
+                }
+            }
+            toml::Value::Array(a) => {
+                if let Ok(i) = head.parse::<usize>() {
+                    if let Some(x) = a.get(i) {
+                        walk(x, tail, join(head), out);
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    let segs: Vec<&str> = pattern.split('.').collect();
+    let mut out = Vec::new();
+    walk(
+        &toml::Value::Table(doc.clone()),
+        &segs,
+        String::new(),
+        &mut out,
+    );
+    out
+}
+
+/// Prefix of a parameter that scales, rather than sets, the numbers at a path pattern:
+/// `scale:gases.*.diffusivity` = 1.5 multiplies every gas's diffusivity by 1.5.
+pub const SCALE_PREFIX: &str = "scale:";
+
+/// Apply a parameter to a document: a plain path is set; a `scale:` pattern multiplies every
+/// number it matches (an error if it matches none).
+pub fn apply(doc: &mut toml::Table, path: &str, value: f64) -> Result<(), String> {
+    match path.strip_prefix(SCALE_PREFIX) {
+        Some(pattern) => {
+            let hits = expand(doc, pattern);
+            if hits.is_empty() {
+                return Err(format!("'{pattern}' matches no number in the phantom"));
+            }
+            for h in hits {
+                let v = get(doc, &h).unwrap_or(0.0);
+                set(doc, &h, v * value)?;
+            }
+            Ok(())
+        }
+        None => set(doc, path, value),
+    }
+}
+
+/// Whether a document holds the parameter (a `scale:` pattern: whether it matches anything).
+pub fn holds(doc: &toml::Table, path: &str) -> bool {
+    match path.strip_prefix(SCALE_PREFIX) {
+        Some(pattern) => !expand(doc, pattern).is_empty(),
+        None => get(doc, path).is_some(),
+    }
+}
+
+/// A parameter to fit or sweep: its path, optional bounds, and whether it is fitted in log
+/// space (positive parameters are).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamSpec {
+    /// TOML path in the phantom, e.g. `gases.n2.diffusivity`.
+    pub path: String,
+    /// Lower bound (in the parameter's own unit), if any.
+    pub lower: Option<f64>,
+    /// Upper bound, if any.
+    pub upper: Option<f64>,
+    /// Fitted in log space (the parameter is positive).
+    pub log: bool,
+    /// Starting value.
+    pub start: f64,
+}
+
+impl ParamSpec {
+    /// Parse `NAME` or `NAME=LO..HI` (the command-line form). The start is the value in the
+    /// phantom (`base`), else the geometric (log) or arithmetic mean of the bounds.
+    pub fn parse(text: &str, base: Option<f64>) -> Result<ParamSpec, InputError> {
+        let bad = |m: String| {
+            InputError::new(m)
+                .in_file("<command line>")
+                .field("--param")
+        };
+        let (path, range) = match text.split_once('=') {
+            Some((p, r)) => (p.trim(), Some(r.trim())),
+            None => (text.trim(), None),
+        };
+        segments(path.strip_prefix(SCALE_PREFIX).unwrap_or(path)).map_err(bad)?;
+        let (lower, upper) = match range {
+            None => (None, None),
+            Some(r) => {
+                let (lo, hi) = r.split_once("..").ok_or_else(|| {
+                    bad(format!(
+                        "'{text}': bounds are written NAME=LO..HI, e.g. gases.n2.diffusivity=1e-10..5e-9"
+                    ))
+                })?;
+                let num = |s: &str| -> Result<f64, InputError> {
+                    s.trim()
+                        .parse::<f64>()
+                        .ok()
+                        .filter(|v| v.is_finite())
+                        .ok_or_else(|| bad(format!("'{text}': '{s}' is not a finite number")))
+                };
+                let (lo, hi) = (num(lo)?, num(hi)?);
+                if !(lo < hi) {
+                    return Err(bad(format!(
+                        "'{text}': the lower bound must be below the upper"
+                    )));
+                }
+                (Some(lo), Some(hi))
+            }
+        };
+        let positive = base.map_or(true, |b| b > 0.0) && lower.map_or(true, |l| l > 0.0);
+        let start = match (base, lower, upper) {
+            (Some(b), _, _) => b,
+            (None, Some(lo), Some(hi)) if positive => (lo * hi).sqrt(),
+            (None, Some(lo), Some(hi)) => 0.5 * (lo + hi),
+            _ => {
+                return Err(bad(format!(
+                    "'{path}' is not set in the phantom file (it is at its default): write a starting value there, or give bounds NAME=LO..HI"
+                )))
+            }
+        };
+        if let (Some(lo), Some(hi)) = (lower, upper) {
+            if !(lo..=hi).contains(&start) {
+                return Err(bad(format!(
+                    "'{path}': its value in the phantom, {start}, is outside the bounds {lo}..{hi}"
+                )));
+            }
+        }
+        let log = positive && start > 0.0;
+        Ok(ParamSpec {
+            path: path.to_string(),
+            lower,
+            upper,
+            log,
+            start,
+        })
+    }
+
+    /// A positive parameter without bounds fitted in log space.
+    pub fn positive(path: impl Into<String>, start: f64) -> ParamSpec {
+        ParamSpec {
+            path: path.into(),
+            lower: None,
+            upper: None,
+            log: true,
+            start,
+        }
+    }
+
+    /// Internal (unbounded) coordinate of value `x`.
+    pub fn to_internal(&self, x: f64) -> f64 {
+        let v = if self.log { x.ln() } else { x };
+        match self.bounds_v() {
+            Some((a, b)) => {
+                let f = ((v - a) / (b - a)).clamp(1e-9, 1.0 - 1e-9);
+                (f / (1.0 - f)).ln()
+            }
+            None => v,
+        }
+    }
+
+    /// Value of internal coordinate `u`.
+    pub fn from_internal(&self, u: f64) -> f64 {
+        let v = self.v_of(u);
+        if self.log {
+            v.exp()
+        } else {
+            v
+        }
+    }
+
+    /// The fitting-space coordinate v (ln x for log parameters, x otherwise) of internal `u`.
+    pub fn v_of(&self, u: f64) -> f64 {
+        match self.bounds_v() {
+            Some((a, b)) => a + (b - a) / (1.0 + (-u).exp()),
+            None => u,
+        }
+    }
+
+    /// dv/du at internal `u` (1 without bounds).
+    pub fn dv_du(&self, u: f64) -> f64 {
+        match self.bounds_v() {
+            Some((a, b)) => {
+                let s = 1.0 / (1.0 + (-u).exp());
+                (b - a) * s * (1.0 - s)
+            }
+            None => 1.0,
+        }
+    }
+
+    /// Bounds in v space (ln for log parameters).
+    fn bounds_v(&self) -> Option<(f64, f64)> {
+        match (self.lower, self.upper) {
+            (Some(lo), Some(hi)) if self.log => Some((lo.ln(), hi.ln())),
+            (Some(lo), Some(hi)) => Some((lo, hi)),
+            _ => None,
+        }
+    }
+
+    /// Whether `x` sits within 0.1 % (of the v-range) of a bound.
+    pub fn at_bound(&self, x: f64) -> bool {
+        match self.bounds_v() {
+            Some((a, b)) => {
+                let v = if self.log { x.ln() } else { x };
+                let f = (v - a) / (b - a);
+                !(0.001..=0.999).contains(&f)
+            }
+            None => false,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn doc() -> toml::Table {
+        "[gases.n2]\ndiffusivity = 2.5e-9\nostwald = 0.014\n[[bubbles]]\nposition_m = [1.0, 2.0, 3.0]\ninitial_radius_m = 1e-4\n"
+            .parse()
+            .unwrap()
+    }
+
+    #[test]
+    fn get_and_set_by_path() {
+        let mut d = doc();
+        assert_eq!(get(&d, "gases.n2.diffusivity"), Some(2.5e-9));
+        assert_eq!(get(&d, "bubbles.0.position_m.1"), Some(2.0));
+        set(&mut d, "gases.n2.diffusivity", 1e-9).unwrap();
+        assert_eq!(get(&d, "gases.n2.diffusivity"), Some(1e-9));
+        // a setting at its default is added, with the tables on the way
+        set(&mut d, "perfusion.rate_per_s", 2e-3).unwrap();
+        assert_eq!(get(&d, "perfusion.rate_per_s"), Some(2e-3));
+        set(&mut d, "bubbles.0.position_m.2", 4.0).unwrap();
+        assert_eq!(get(&d, "bubbles.0.position_m.2"), Some(4.0));
+        assert!(set(&mut d, "bubbles.3.initial_radius_m", 1.0).is_err());
+        assert!(set(&mut d, "gases.n2", 1.0).is_err());
+        assert!(set(&mut d, "gases..x", 1.0).is_err());
+        set(&mut d, "gases.o2.diffusivity", 2e-9).unwrap();
+        set(&mut d, "gases.o2.ostwald", 0.027).unwrap();
+        let mut e = expand(&d, "gases.*.diffusivity");
+        e.sort();
+        assert_eq!(e, vec!["gases.n2.diffusivity", "gases.o2.diffusivity"]);
+        apply(&mut d, "scale:gases.*.diffusivity", 2.0).unwrap();
+        assert_eq!(get(&d, "gases.n2.diffusivity"), Some(2e-9));
+        assert_eq!(get(&d, "gases.o2.diffusivity"), Some(4e-9));
+        assert!(apply(&mut d, "scale:gases.*.nothing", 2.0).is_err());
+    }
+
+    #[test]
+    fn transforms_round_trip_inside_bounds() {
+        let p = ParamSpec::parse("gases.n2.diffusivity=1e-10..5e-9", Some(2.5e-9)).unwrap();
+        assert!(p.log);
+        for x in [1.1e-10, 2.5e-9, 4.9e-9] {
+            let back = p.from_internal(p.to_internal(x));
+            assert!((back / x - 1.0).abs() < 1e-9, "{x} -> {back}");
+        }
+        let q = ParamSpec::parse("material.surface_tension=-1..1", None).unwrap();
+        assert!(!q.log);
+        assert_eq!(q.start, 0.0);
+        assert!(ParamSpec::parse("perfusion.rate_per_s", None).is_err());
+        assert!(ParamSpec::parse("a.b=3..1", Some(2.0)).is_err());
+    }
+}

@@ -1,0 +1,1 @@
+//! Report pieces shared by `fit` and `discover`: parameter tables and overlays.
