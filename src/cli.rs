@@ -24,6 +24,76 @@ pub enum Command {
     Check(CheckArgs),
     /// Plan a dive with several algorithms, run each schedule (× elasticity law) through the phantom, rank, report.
     Evaluate(EvaluateArgs),
+    /// Fit phantom parameters (by TOML path) to measured bubble radii: estimates, intervals, report.
+    Fit(FitArgs),
+    /// Measured-like radius data from the model, with candidate effects switched on and noise.
+    Synth(SynthArgs),
+    /// Fit the baseline, diagnose the misfit, and add the candidate effects the data need.
+    Discover(DiscoverArgs),
+}
+
+/// Arguments of `fit`.
+#[derive(clap::Args, Debug)]
+pub struct FitArgs {
+    /// measurements.csv: experiment,bubble,time_s,radius_m[,sd_m].
+    #[arg(long)]
+    pub measured: std::path::PathBuf,
+    /// experiments.toml: [[experiment]] name, profile, phantom; optional [fit] free.
+    #[arg(long)]
+    pub experiments: std::path::PathBuf,
+    /// Parameter to fit: a phantom TOML path, optionally with bounds NAME=LO..HI; repeatable.
+    #[arg(long = "param")]
+    pub params: Vec<String>,
+    /// Output folder (replaced whole).
+    #[arg(long)]
+    pub out: std::path::PathBuf,
+}
+
+/// Arguments of `synth`.
+#[derive(clap::Args, Debug)]
+pub struct SynthArgs {
+    /// experiments.toml.
+    #[arg(long)]
+    pub experiments: std::path::PathBuf,
+    /// Effect switched on: NAME=VALUE[,VALUE2] (a discover candidate, e.g. perfusion=2e-3,
+    /// surface-area-law=30,2, sealed-faces:top) or a phantom path PATH=VALUE; repeatable.
+    #[arg(long = "effect")]
+    pub effects: Vec<String>,
+    /// Standard deviation of the Gaussian noise added to every radius, m.
+    #[arg(long = "noise-sd", allow_hyphen_values = true)]
+    pub noise_sd: f64,
+    /// Sampling interval, s.
+    #[arg(long, default_value_t = 5.0, allow_hyphen_values = true)]
+    pub every: f64,
+    /// Seed of the noise.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Output CSV (measurements.csv format, with sd_m).
+    #[arg(long)]
+    pub out: std::path::PathBuf,
+}
+
+/// Arguments of `discover`.
+#[derive(clap::Args, Debug)]
+pub struct DiscoverArgs {
+    /// measurements.csv.
+    #[arg(long)]
+    pub measured: std::path::PathBuf,
+    /// experiments.toml.
+    #[arg(long)]
+    pub experiments: std::path::PathBuf,
+    /// Output folder (replaced whole).
+    #[arg(long)]
+    pub out: std::path::PathBuf,
+    /// Family-wise significance level (Bonferroni over each round's candidates).
+    #[arg(long, default_value_t = 0.01, allow_hyphen_values = true)]
+    pub alpha: f64,
+    /// Most effects added.
+    #[arg(long = "max-effects", default_value_t = 3)]
+    pub max_effects: usize,
+    /// Only try candidates whose names start with these (comma-separated); default all.
+    #[arg(long, value_delimiter = ',')]
+    pub only: Vec<String>,
 }
 
 /// Arguments of `check`.
@@ -295,7 +365,69 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             println!("wrote {}", a.out.display());
             Ok(0)
         }
+        Command::Fit(a) => {
+            let req = decophantom::app::fit::FitRequest {
+                measured: a.measured,
+                experiments: a.experiments,
+                params: a.params,
+                out: a.out.clone(),
+                command: command_line(),
+            };
+            let f = decophantom::app::fit::run(&req)?;
+            print!("{}", decophantom::app::fit::summary_text(&f));
+            println!("wrote {}", a.out.display());
+            Ok(0)
+        }
+        Command::Synth(a) => {
+            let req = decophantom::app::synth::SynthRequest {
+                experiments: a.experiments,
+                effects: a.effects,
+                noise_sd: a.noise_sd,
+                every: a.every,
+                seed: a.seed,
+                out: a.out.clone(),
+            };
+            let rows = decophantom::app::synth::run(&req)?;
+            println!("wrote {} ({rows} rows)", a.out.display());
+            Ok(0)
+        }
+        Command::Discover(a) => {
+            let req = decophantom::app::discover::DiscoverRequest {
+                measured: a.measured,
+                experiments: a.experiments,
+                out: a.out.clone(),
+                alpha: a.alpha,
+                max_effects: a.max_effects,
+                only: a.only,
+                command: command_line(),
+            };
+            let bar = std::sync::Mutex::new(Progress::runs());
+            let d = decophantom::app::discover::run(&req, &|done, total| {
+                if let Ok(mut b) = bar.lock() {
+                    b.update(done as f64, total as f64);
+                }
+            });
+            if let Ok(b) = bar.lock() {
+                b.finish();
+            }
+            print!("{}", decophantom::app::discover::summary_text(&d?));
+            println!("wrote {}", a.out.display());
+            Ok(0)
+        }
     }
+}
+
+fn command_line() -> String {
+    std::env::args()
+        .map(|a| {
+            if a.contains(' ') {
+                format!("'{a}'")
+            } else {
+                a
+            }
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// A progress bar on stderr that appears only for runs longer than a second.

@@ -2,8 +2,11 @@
 //! return. Nothing here touches the terminal.
 
 pub mod check;
+pub mod discover;
 pub mod demo;
 pub mod elasticity;
 pub mod evaluate;
+pub mod fit;
 pub mod plan;
 pub mod simulate;
+pub mod synth;

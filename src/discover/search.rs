@@ -222,22 +222,35 @@ fn try_candidate(
         Ok(None) => return failed("does not apply to these phantoms".into()),
         Err(m) => return failed(m),
     };
-    let mut model = Model {
-        docs,
-        free: current.model.free.clone(),
-    };
-    let base_values = current.values.clone();
-    // start: the best of the null and a scan of the first parameter
+    // a parameter the current model already fits (e.g. the fold, when the area law follows the
+    // constant fold) passes to the candidate, starting where it is, and adds no freedom
+    let mut free = current.model.free.clone();
+    let mut base_values = current.values.clone();
     let mut specs: Vec<_> = prepared.params.iter().map(|p| p.spec.clone()).collect();
+    let mut dof = prepared.dof;
+    for s in specs.iter_mut() {
+        if let Some(j) = free.iter().position(|f| f.path == s.path) {
+            s.start = base_values[j];
+            free.remove(j);
+            base_values.remove(j);
+            dof = dof.saturating_sub(1);
+        }
+    }
+    if dof == 0 {
+        return failed("adds no parameter to the current model".into());
+    }
+    for (s, v) in free.iter_mut().zip(&base_values) {
+        s.start = *v;
+    }
+    let mut model = Model { docs, free };
+    // start: the best of the null and a scan (of the first parameter, and of the second with it)
     if let Some(first) = prepared.params.first() {
         let y = observed(data);
-        let ssr_at = |v: f64| -> f64 {
-            let mut m = model.clone();
-            let mut s = specs.clone();
-            s[0].start = v;
-            m.free.extend(s);
+        let ssr_at = |vals: &[f64]| -> f64 {
             let mut values = base_values.clone();
-            values.extend(m.free[base_values.len()..].iter().map(|s| s.start));
+            values.extend(vals.iter().copied());
+            let mut m = model.clone();
+            m.free.extend(specs.iter().cloned());
             match m.predict(experiments, data, &values) {
                 Ok(f) => y
                     .iter()
@@ -248,34 +261,53 @@ fn try_candidate(
                 Err(_) => f64::INFINITY,
             }
         };
-        let scores: Vec<(f64, f64)> = first.scan.par_iter().map(|v| (*v, ssr_at(*v))).collect();
-        if let Some((v, s)) = scores
+        let starts: Vec<f64> = specs.iter().map(|s| s.start).collect();
+        let mut grid: Vec<Vec<f64>> = Vec::new();
+        for v in &first.scan {
+            match prepared.params.get(1) {
+                Some(second) => {
+                    for w in second.scan.iter().chain(std::iter::once(&starts[1])) {
+                        grid.push(vec![*v, *w]);
+                    }
+                }
+                None => grid.push(vec![*v]),
+            }
+        }
+        let scores: Vec<(Vec<f64>, f64)> = grid
+            .into_par_iter()
+            .map(|g| {
+                let mut vals = starts.clone();
+                vals[..g.len()].copy_from_slice(&g);
+                let s = ssr_at(&vals);
+                (vals, s)
+            })
+            .collect();
+        if let Some((v, sc)) = scores
             .into_iter()
             .filter(|(_, s)| s.is_finite())
             .min_by(|a, b| a.1.total_cmp(&b.1))
         {
-            if s < current.ssr {
-                specs[0].start = v;
+            if sc < current.ssr {
+                for (s, x) in specs.iter_mut().zip(v) {
+                    s.start = x;
+                }
             }
         }
     }
-    // the current model's parameters start where they are
-    for (s, v) in model.free.iter_mut().zip(&current.values) {
-        s.start = *v;
-    }
+    let n_effect = specs.len();
     model.free.extend(specs);
     let f = match fit(&model, experiments, data, weights, &opts.lsq) {
         Ok(f) => f,
         Err(e) => return failed(e.to_string()),
     };
-    let p_extra = prepared.dof;
+    let p_extra = dof;
     let df0 = current.dof();
     let df1 = current.n.saturating_sub(current.p() + p_extra);
     let ssr1 = f.ssr.min(current.ssr);
     let f_test = extra_ss_f_test(current.ssr, df0, ssr1, df1);
     let delta_aicc =
         aicc(ssr1, current.n, current.p() + p_extra) - aicc(current.ssr, current.n, current.p());
-    let k0 = current.p();
+    let k0 = f.p() - n_effect;
     CandidateOutcome {
         name,
         estimates: f.inference.estimates[k0..].to_vec(),
@@ -341,7 +373,7 @@ pub fn discover(
     let diagnostics_before = diagnose_fit(&baseline, experiments, data)?;
     let mut current = baseline.clone();
     let mut effects: Vec<String> = Vec::new();
-    let mut added: Vec<(Added, usize)> = Vec::new();
+    let mut added: Vec<(Added, Vec<String>)> = Vec::new();
     let mut rounds = Vec::new();
     let total_guess = all_candidates(&current.model.docs).len() * (opts.max_effects.min(2) + 1);
     let done = std::sync::atomic::AtomicUsize::new(0);
@@ -405,6 +437,10 @@ pub fn discover(
         if significant && above_numerics {
             let fitted = b.fitted.clone().expect("a fitted candidate keeps its fit");
             let name = b.name.clone();
+            let claimed: Vec<String> = b.estimates.iter().map(|e| e.name.clone()).collect();
+            for (_, paths) in added.iter_mut() {
+                paths.retain(|p| !claimed.contains(p));
+            }
             added.push((
                 Added {
                     effect: name.clone(),
@@ -414,7 +450,7 @@ pub fn discover(
                     delta_ssr: b.delta_ssr,
                     delta_aicc: b.delta_aicc,
                 },
-                current.p(),
+                claimed,
             ));
             round.accepted = Some(name.clone());
             effects.push(name);
@@ -426,10 +462,16 @@ pub fn discover(
         }
     }
     // the added effects' parameters as estimated in the final model
+    // (a parameter taken over by a later effect is reported with that effect)
     let mut added_out = Vec::new();
-    for (i, (mut a, k0)) in added.clone().into_iter().enumerate() {
-        let k1 = added.get(i + 1).map_or(current.p(), |x| x.1);
-        a.parameters = current.inference.estimates[k0..k1].to_vec();
+    for (mut a, paths) in added {
+        a.parameters = current
+            .inference
+            .estimates
+            .iter()
+            .filter(|e| paths.contains(&e.name))
+            .cloned()
+            .collect();
         added_out.push(a);
     }
     // strip the kept fits from the rounds (only the accepted ones matter, and they are in

@@ -137,7 +137,7 @@ impl Model {
             .zip(docs.par_iter())
             .map(|(e, d)| {
                 let params = build_params(d, &e.phantom_path)?;
-                simulate(&params, &e.profile, &mut |_, _| {})
+                run_one(&params, &e.profile)
             })
             .collect()
     }
@@ -151,6 +151,38 @@ impl Model {
     ) -> Result<Vec<f64>, Error> {
         let runs = self.run(experiments, values)?;
         Ok(sample(experiments, data, &runs))
+    }
+}
+
+/// Grids up to this many cells run on one thread: a fit's parallelism is across simulations
+/// (experiments, Jacobian columns, candidates), and on a small grid the per-step fork/join of
+/// grid-level parallelism costs more than the step itself (measured on a 512-cell cube:
+/// ~60 % of the run was thread wake-ups).
+const SMALL_GRID_CELLS: f64 = 2.0e5;
+
+thread_local! {
+    static ONE_THREAD: Option<rayon::ThreadPool> =
+        rayon::ThreadPoolBuilder::new().num_threads(1).build().ok();
+}
+
+/// One simulation, on a one-thread pool when its grid is small (results are identical across
+/// thread counts).
+pub fn run_one(
+    params: &crate::phantom::params::PhantomParams,
+    profile: &crate::profile::PressureHistory,
+) -> Result<SimRun, Error> {
+    let extent = match params.shape {
+        crate::phantom::grid::Shape::Box { size } => size[0] * size[1] * size[2],
+        crate::phantom::grid::Shape::Cylinder { diameter, depth } => diameter * diameter * depth,
+    };
+    let cells = extent / params.grid_step.powi(3);
+    if cells < SMALL_GRID_CELLS {
+        ONE_THREAD.with(|p| match p {
+            Some(pool) => pool.install(|| simulate(params, profile, &mut |_, _| {})),
+            None => simulate(params, profile, &mut |_, _| {}),
+        })
+    } else {
+        simulate(params, profile, &mut |_, _| {})
     }
 }
 

@@ -242,3 +242,40 @@ mod tests {
         assert!(s.check_paths().is_ok());
     }
 }
+
+/// Write one file whole or not at all: the bytes go to a temporary file beside the target,
+/// are flushed to disk, and the temporary file is renamed over the target.
+pub fn write_file_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+    use std::io::Write as _;
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .ok_or_else(|| {
+            Error::Input(InputError::new("the output path names no file").in_file(path))
+        })?
+        .to_string_lossy()
+        .into_owned();
+    if path.is_dir() {
+        return Err(Error::Input(
+            InputError::new("the output path is a folder; give a file name").in_file(path),
+        ));
+    }
+    let tmp = dir.join(format!(
+        ".{name}.tmp-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp).map_err(|e| io_err(&tmp, e))?;
+        f.write_all(bytes).map_err(|e| io_err(&tmp, e))?;
+        f.sync_all().map_err(|e| io_err(&tmp, e))?;
+        std::fs::rename(&tmp, path).map_err(|e| io_err(path, e))
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    result
+}

@@ -1,0 +1,89 @@
+//! `decophantom discover`: fit the baseline, diagnose it, try every candidate effect and add
+//! those the data need. Wiring only: the work is in [`crate::discover`].
+
+use crate::discover::report::discover_outputs;
+use crate::discover::search::{discover, DiscoverOptions, Discovery};
+use crate::error::{Error, InputError};
+use crate::fit::data::{check_against, read_experiments, read_measurements};
+use std::path::PathBuf;
+
+/// What `discover` needs.
+#[derive(Debug, Clone)]
+pub struct DiscoverRequest {
+    /// measurements.csv.
+    pub measured: PathBuf,
+    /// experiments.toml.
+    pub experiments: PathBuf,
+    /// Output folder.
+    pub out: PathBuf,
+    /// Family-wise α.
+    pub alpha: f64,
+    /// Most effects added.
+    pub max_effects: usize,
+    /// Only candidates whose names start with these.
+    pub only: Vec<String>,
+    /// The command line, for the report.
+    pub command: String,
+}
+
+/// Run the search and write `discover.toml`, `report.md`, `report.html` and the overlays.
+pub fn run(
+    req: &DiscoverRequest,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Discovery, Error> {
+    if !(req.alpha > 0.0 && req.alpha < 1.0) {
+        return Err(InputError::new(format!("must be in (0, 1) (got {})", req.alpha))
+            .in_file("<command line>")
+            .field("--alpha")
+            .into());
+    }
+    let data = read_measurements(&req.measured)?;
+    let experiments = read_experiments(&req.experiments)?;
+    check_against(&data, &experiments)?;
+    let opts = DiscoverOptions {
+        alpha: req.alpha,
+        max_effects: req.max_effects,
+        only: req.only.clone(),
+        ..DiscoverOptions::default()
+    };
+    let d = discover(&experiments, &data, &opts, progress)?;
+    let base_runs = d.baseline.model.run(&experiments, &d.baseline.values)?;
+    let final_runs = d.final_fit.model.run(&experiments, &d.final_fit.values)?;
+    let set = discover_outputs(&d, &base_runs, &final_runs, &experiments, &data, &req.command)?;
+    set.commit(&req.out)?;
+    Ok(d)
+}
+
+/// A short text summary.
+pub fn summary_text(d: &Discovery) -> String {
+    use crate::fit::report::sig;
+    let mut s = String::new();
+    if d.effects.is_empty() {
+        s.push_str("no missing effect found among the candidates tried\n");
+    }
+    for a in &d.added {
+        s.push_str(&format!(
+            "added {} (F-test p = {}): {}\n",
+            a.effect,
+            sig(a.p_value, 3),
+            a.parameters
+                .iter()
+                .map(|e| format!(
+                    "{} = {} [{}, {}]",
+                    e.name,
+                    sig(e.value, 4),
+                    sig(e.ci95[0], 4),
+                    sig(e.ci95[1], 4)
+                ))
+                .collect::<Vec<_>>()
+                .join("; ")
+        ));
+    }
+    s.push_str(&format!(
+        "RMSE {} → {} µm (numerical error {} µm)\n",
+        sig(d.baseline.rmse * 1e6, 4),
+        sig(d.final_fit.rmse * 1e6, 4),
+        sig(d.numerical.rms * 1e6, 3)
+    ));
+    s
+}

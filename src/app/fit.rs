@@ -1,0 +1,108 @@
+//! `decophantom fit`: least squares of the phantom model to measured radii over all experiments
+//! at once. Wiring only: the work is in [`crate::fit`].
+
+use crate::error::{Error, InputError};
+use crate::fit::data::{check_against, read_experiments, read_measurements};
+use crate::fit::lsq::LsqOptions;
+use crate::fit::model::{fit, Fitted, Model};
+use crate::fit::paths::{self, ParamSpec};
+use crate::fit::report::fit_outputs;
+use std::path::PathBuf;
+
+/// What `fit` needs.
+#[derive(Debug, Clone)]
+pub struct FitRequest {
+    /// measurements.csv.
+    pub measured: PathBuf,
+    /// experiments.toml.
+    pub experiments: PathBuf,
+    /// `NAME` or `NAME=LO..HI`, each a phantom TOML path (added to `[fit] free`).
+    pub params: Vec<String>,
+    /// Output folder.
+    pub out: PathBuf,
+    /// The command line, for the report.
+    pub command: String,
+}
+
+/// Fit and write `fit.toml`, `report.md`, `report.html` and the overlays.
+pub fn run(req: &FitRequest) -> Result<Fitted, Error> {
+    let data = read_measurements(&req.measured)?;
+    let experiments = read_experiments(&req.experiments)?;
+    check_against(&data, &experiments)?;
+    let mut model = Model::baseline(&experiments)?;
+    for p in &req.params {
+        let path = p.split_once('=').map_or(p.as_str(), |x| x.0).trim();
+        let base = if path.starts_with(paths::SCALE_PREFIX) {
+            Some(1.0)
+        } else {
+            model.docs.iter().find_map(|d| paths::get(d, path))
+        };
+        let spec = ParamSpec::parse(p, base)?;
+        if model.free.iter().any(|s| s.path == spec.path) {
+            return Err(InputError::new(format!("'{}' is given twice", spec.path))
+                .in_file("<command line>")
+                .field("--param")
+                .into());
+        }
+        // the value must be settable: try it on every phantom now, before any simulation
+        for (d, e) in model.docs.iter().zip(&experiments.list) {
+            let mut t = d.clone();
+            paths::apply(&mut t, &spec.path, spec.start).map_err(|m| {
+                InputError::new(m).in_file(&e.phantom_path).field(spec.path.clone())
+            })?;
+            crate::fit::data::build_params(&t, &e.phantom_path)?;
+        }
+        model.free.push(spec);
+    }
+    if model.free.is_empty() {
+        return Err(InputError::new(
+            "nothing to fit: give --param NAME (a phantom TOML path such as gases.n2.diffusivity) or [fit] free in the experiments file",
+        )
+        .in_file("<command line>")
+        .field("--param")
+        .into());
+    }
+    let weights: Vec<f64> = data
+        .series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|p| p.sd.map_or(1.0, |sd| 1.0 / (sd * sd))))
+        .collect();
+    let fitted = fit(&model, &experiments, &data, &weights, &LsqOptions::default())?;
+    let start_runs = model.run(&experiments, &model.start())?;
+    let fitted_runs = model.run(&experiments, &fitted.values)?;
+    let set = fit_outputs(
+        &fitted,
+        &start_runs,
+        &fitted_runs,
+        &experiments,
+        &data,
+        &req.command,
+    )?;
+    set.commit(&req.out)?;
+    Ok(fitted)
+}
+
+/// A short text summary of a fit.
+pub fn summary_text(f: &Fitted) -> String {
+    use crate::fit::report::sig;
+    let mut s = String::new();
+    for e in &f.inference.estimates {
+        s.push_str(&format!(
+            "{} = {} (95 % interval {} … {}){}\n",
+            e.name,
+            sig(e.value, 4),
+            sig(e.ci95[0], 4),
+            sig(e.ci95[1], 4),
+            if e.at_bound { " at a bound" } else { "" }
+        ));
+    }
+    s.push_str(&format!(
+        "n = {}, SSR = {}, RMSE = {} µm, AICc = {}; {}\n",
+        f.n,
+        sig(f.ssr, 4),
+        sig(f.rmse * 1e6, 4),
+        sig(f.aicc, 5),
+        f.lsq.termination
+    ));
+    s
+}
