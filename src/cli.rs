@@ -419,13 +419,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
 
 fn command_line() -> String {
     std::env::args()
-        .map(|a| {
-            if a.contains(' ') {
-                format!("'{a}'")
-            } else {
-                a
-            }
-        })
+        .map(|a| if a.contains(' ') { format!("'{a}'") } else { a })
         .collect::<Vec<_>>()
         .join(" ")
 }

@@ -132,7 +132,6 @@ struct SummaryFile<'a> {
     steps_implicit: usize,
     cells: usize,
     events: Vec<String>,
-    wall_seconds: f64,
 }
 
 /// A one-line description of how a run ended.
@@ -162,7 +161,18 @@ fn event_text(e: &Event) -> String {
     }
 }
 
-/// `summary.toml` text.
+/// `timing.toml` text: the run's wall-clock time, kept out of `summary.toml` so that the
+/// summary of the same inputs is byte-identical from run to run (and a committed report does
+/// not change when it is regenerated).
+pub fn timing_toml(run: &SimRun) -> String {
+    format!(
+        "# wall-clock time of this run on the machine that ran it (not a result)\nwall_seconds = {}\n",
+        run.wall_seconds
+    )
+}
+
+/// `summary.toml` text (results only: identical for identical inputs; the wall time is in
+/// [`timing_toml`]).
 pub fn summary_toml(run: &SimRun, profile: &str, phantom: &str) -> Result<String, Error> {
     let s = &run.summary;
     let f = SummaryFile {
@@ -181,7 +191,6 @@ pub fn summary_toml(run: &SimRun, profile: &str, phantom: &str) -> Result<String
         steps_implicit: s.steps.1,
         cells: s.cells,
         events: s.events.iter().map(event_text).collect(),
-        wall_seconds: run.wall_seconds,
     };
     toml::to_string(&f).map_err(|e| Error::Solver(format!("summary.toml: {e}")))
 }
@@ -251,7 +260,8 @@ fn plot_err(e: impl std::fmt::Display) -> Error {
     Error::Solver(format!("plot: {e}"))
 }
 
-/// The four files of a simulation, added to `set` under `prefix`.
+/// The files of a simulation, added to `set` under `prefix`: bubbles.csv, summary.toml,
+/// radius.svg, volume.svg, and timing.toml (the wall time, which differs from run to run).
 pub fn add_run_files(
     set: &mut OutputSet,
     prefix: &str,
@@ -268,6 +278,7 @@ pub fn add_run_files(
         format!("{prefix}summary.toml"),
         summary_toml(run, profile_name, phantom_name)?,
     );
+    set.add(format!("{prefix}timing.toml"), timing_toml(run));
     let title = format!("{profile_name} — {phantom_name}");
     set.add(
         format!("{prefix}radius.svg"),
@@ -318,11 +329,20 @@ pub fn load_profile_or_schedule(
     Ok(load(path, opts)?)
 }
 
-/// A short human-readable summary of a run.
+/// A short human-readable summary of a run, with its wall time (for the terminal).
 pub fn describe(run: &SimRun) -> String {
+    let mut text = describe_results(run);
+    text.pop();
+    text.push_str(&format!("; wall {:.2} s\n", run.wall_seconds));
+    text
+}
+
+/// A short human-readable summary of a run's results, without the wall time (for reports,
+/// which must not change when regenerated from the same inputs).
+pub fn describe_results(run: &SimRun) -> String {
     let s = &run.summary;
     format!(
-        "{}\nmax radius {:.1} µm (bubble {}, t = {:.1} s); peak total volume {:.4e} m³ (t = {:.1} s)\nsteps {} explicit + {} implicit on {} cells; gas-balance error {:.2e}; wall {:.2} s\n",
+        "{}\nmax radius {:.1} µm (bubble {}, t = {:.1} s); peak total volume {:.4e} m³ (t = {:.1} s)\nsteps {} explicit + {} implicit on {} cells; gas-balance error {:.2e}\n",
         ending_text(&s.ending),
         s.max_radius.0 * 1e6,
         s.max_radius.2,
@@ -333,6 +353,5 @@ pub fn describe(run: &SimRun) -> String {
         s.steps.1,
         s.cells,
         s.gas_balance_error,
-        run.wall_seconds
     )
 }

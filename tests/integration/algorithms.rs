@@ -395,25 +395,32 @@ fn schedule_that_never_surfaces_is_an_error() {
     assert_eq!(e.line, Some(5), "{e}");
 }
 
-/// The paper's legacy dive files (minutes, metres of sea water) read as schedules: the legs
-/// follow the file's points (`100m_1deco_stop.txt`: 0→100 m in 2 min, 12 min at 100 m, ...,
-/// surfacing at 19.5 min, on the surface until 80 min).
+/// Legacy two-column dive files (minutes, metres of sea water, the paper's format) read as
+/// schedules: the legs follow the file's points. tests/data/legacy/dive-40m-two-stops.txt:
+/// 0→40 m in 2 min, 20 min at 40 m, up to 9 m by 25 min, stops at 9 m and 6 m, surfacing at
+/// 33 min, on the surface until 60 min.
 #[test]
 fn legacy_two_column_dive_file_reads_as_a_schedule() {
-    let path = root().join("../shared/legacy-profiles/100m_1deco_stop.txt");
+    let path = root().join("tests/data/legacy/dive-40m-two-stops.txt");
     let s =
         decophantom::algorithm::waypoints::read_schedule(&path, &DECOTENGU, GasMix::AIR).unwrap();
-    assert!((s.runtime_min() - 80.0).abs() < 1e-9, "{}", s.runtime_min());
+    assert!((s.runtime_min() - 60.0).abs() < 1e-9, "{}", s.runtime_min());
     let max_depth = s.legs.iter().map(|l| l.end_depth_m).fold(0.0, f64::max);
-    assert!((max_depth - 100.0).abs() < 1e-9);
+    assert!((max_depth - 40.0).abs() < 1e-9);
     let h = s.to_pressure_history().unwrap();
-    // at 14 min the diver is still at 100 m: ambient = surface + 100 m × DecoTengu's 9 985 Pa/m
+    // at 14 min the diver is still at 40 m: ambient = surface + 40 m × DecoTengu's 9 985 Pa/m
     let p = h.ambient(14.0 * 60.0);
     assert!(
-        (p - (DECOTENGU.surface_pressure_pa + 100.0 * DECOTENGU.pa_per_m)).abs() < 1e-6,
+        (p - (DECOTENGU.surface_pressure_pa + 40.0 * DECOTENGU.pa_per_m)).abs() < 1e-6,
         "{p}"
     );
-    assert!((h.ambient(19.5 * 60.0) - DECOTENGU.surface_pressure_pa).abs() < 1e-6);
+    // at 30 min on the 6 m stop (27.3–32.3 min)
+    let p = h.ambient(30.0 * 60.0);
+    assert!(
+        (p - (DECOTENGU.surface_pressure_pa + 6.0 * DECOTENGU.pa_per_m)).abs() < 1e-6,
+        "{p}"
+    );
+    assert!((h.ambient(33.0 * 60.0) - DECOTENGU.surface_pressure_pa).abs() < 1e-6);
     // a garbled file names its line
     let d = tempdir("legacy-schedule");
     let bad = d.join("bad.txt");

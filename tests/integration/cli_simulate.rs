@@ -234,7 +234,7 @@ fn bad_input_exits_2_names_the_place_and_writes_nothing() {
         &out,
     );
     // a legacy file without units
-    let legacy = root().join("../shared/legacy-profiles/30sec_oscill.txt");
+    let legacy = root().join("tests/data/legacy/oscillation-30s.txt");
     expect_input_error(
         &[
             "simulate",

@@ -45,3 +45,24 @@ pub fn fig6_dive(after_s: f64) -> decophantom::profile::PressureHistory {
     )
     .unwrap()
 }
+
+/// A file or folder of the project's own fixtures, `tests/data/<rel>` (written for this
+/// project; see `tests/data/README.md`).
+pub fn data(rel: &str) -> PathBuf {
+    root().join("tests/data").join(rel)
+}
+
+/// A file or folder of the third-party fixtures beside the repository (`../shared/<rel>`,
+/// present on the project's own machines, not in a clone), or `None` after printing
+/// `skipped: ../shared/<rel> not present` on stderr. The note is written to the process's
+/// stderr directly, past the test harness's output capture, so it shows in a passing run.
+pub fn shared(rel: &str) -> Option<PathBuf> {
+    let p = root().join("../shared").join(rel);
+    if p.exists() {
+        Some(p)
+    } else {
+        use std::io::Write;
+        let _ = writeln!(std::io::stderr(), "skipped: ../shared/{rel} not present");
+        None
+    }
+}

@@ -9,6 +9,7 @@ use decophantom::gas::GasMix;
 use decophantom::profile::legacy::LegacyUnits;
 use decophantom::units::{PressureUnit, TimeUnit};
 use proptest::prelude::*;
+use proptest::test_runner::FileFailurePersistence;
 use std::path::Path;
 
 fn read(rel: &str) -> String {
@@ -50,8 +51,23 @@ fn edits() -> impl Strategy<Value = Vec<(f64, u8, char)>> {
     )
 }
 
+/// 64 cases per test. A failing case is saved to the committed file
+/// `proptest-regressions/integration/robustness.txt` (re-run first on the next run; commit it
+/// with the fix), never to an untracked `*.proptest-regressions` file beside this source
+/// (proptest's default for a test outside `src/`). Paths are relative to the package root,
+/// which is the working directory of `cargo test`.
+fn config() -> ProptestConfig {
+    ProptestConfig {
+        cases: 64,
+        failure_persistence: Some(Box::new(FileFailurePersistence::Direct(
+            "proptest-regressions/integration/robustness.txt",
+        ))),
+        ..ProptestConfig::default()
+    }
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(64))]
+    #![proptest_config(config())]
 
     #[test]
     fn phantom_reader_never_panics(e in edits()) {
@@ -85,7 +101,7 @@ proptest! {
     fn schedule_and_dive_log_readers_never_panic(e in edits()) {
         let csv = mutate("time_min,depth_m,gas\n0,0,air\n2,30,\n20,30,\n25,6,50\n28,0,\n", &e);
         let _ = decophantom::algorithm::waypoints::parse_waypoints_csv(&csv, Path::new("s.csv"), &DECOTENGU, GasMix::AIR);
-        let xml = mutate(&read("../shared/dive-files/subsurface__test20.xml"), &e);
+        let xml = mutate(&read("tests/data/divelogs/legacy-v1.xml"), &e);
         let _ = decophantom::profile::divelog::parse(&xml, Path::new("d.xml"));
     }
 }
