@@ -30,6 +30,53 @@ pub enum Command {
     Synth(SynthArgs),
     /// Fit the baseline, diagnose the misfit, and add the candidate effects the data need.
     Discover(DiscoverArgs),
+    /// Sensitivity of run metrics to phantom parameters: one-at-a-time, Morris or Sobol'; shardable.
+    Sensitivity(SensitivityArgs),
+    /// Merge `sensitivity --shard` output folders and compute the indices and report.
+    Merge(MergeArgs),
+}
+
+/// Arguments of `sensitivity`.
+#[derive(clap::Args, Debug)]
+pub struct SensitivityArgs {
+    /// Phantom TOML.
+    #[arg(long)]
+    pub phantom: std::path::PathBuf,
+    /// Pressure profile (anything `simulate --profile` reads).
+    #[arg(long)]
+    pub profile: std::path::PathBuf,
+    /// Swept parameter NAME=LO..HI (a phantom TOML path or scale: pattern); repeatable.
+    #[arg(long = "param", allow_hyphen_values = true)]
+    pub params: Vec<String>,
+    /// Metric: r_max, t_max, plateau, half_life, peak_volume, final_radius, optionally :BUBBLE; repeatable.
+    #[arg(long = "metric")]
+    pub metrics: Vec<String>,
+    /// oat, morris or sobol.
+    #[arg(long, default_value = "oat")]
+    pub method: String,
+    /// Levels (oat), trajectories (morris) or base rows (sobol: N(k + 2) runs).
+    #[arg(long, default_value_t = 5)]
+    pub samples: usize,
+    /// Seed of the design (same seed, same design: resumable and shardable).
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Run only the I-th of N slices of the design (0-based), e.g. 3/64.
+    #[arg(long)]
+    pub shard: Option<String>,
+    /// Output folder (written whole; the journal DIR.partial/ beside it until then).
+    #[arg(long)]
+    pub out: std::path::PathBuf,
+}
+
+/// Arguments of `merge`.
+#[derive(clap::Args, Debug)]
+pub struct MergeArgs {
+    /// Shard output folders of one design.
+    #[arg(required = true)]
+    pub dirs: Vec<std::path::PathBuf>,
+    /// Output folder.
+    #[arg(long)]
+    pub out: std::path::PathBuf,
 }
 
 /// Arguments of `fit`.
@@ -411,6 +458,38 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 b.finish();
             }
             print!("{}", decophantom::app::discover::summary_text(&d?));
+            println!("wrote {}", a.out.display());
+            Ok(0)
+        }
+        Command::Sensitivity(a) => {
+            let req = decophantom::app::sensitivity::SensitivityRequest {
+                phantom: a.phantom,
+                profile: a.profile,
+                params: a.params,
+                metrics: a.metrics,
+                method: a.method,
+                samples: a.samples,
+                seed: a.seed,
+                shard: a.shard,
+                out: a.out.clone(),
+                command: command_line(),
+            };
+            let bar = std::sync::Mutex::new(Progress::runs());
+            let r = decophantom::app::sensitivity::run(&req, &|done, total| {
+                if let Ok(mut b) = bar.lock() {
+                    b.update(done as f64, total as f64);
+                }
+            });
+            if let Ok(b) = bar.lock() {
+                b.finish();
+            }
+            print!("{}", decophantom::app::sensitivity::summary_text(&r?));
+            println!("wrote {}", a.out.display());
+            Ok(0)
+        }
+        Command::Merge(a) => {
+            let r = decophantom::app::sensitivity::run_merge(&a.dirs, &a.out, &command_line())?;
+            print!("{}", decophantom::app::sensitivity::summary_text(&r));
             println!("wrote {}", a.out.display());
             Ok(0)
         }

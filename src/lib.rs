@@ -19,4 +19,5 @@ pub mod phantom;
 pub mod profile;
 pub mod report;
 pub mod risk;
+pub mod sweep;
 pub mod units;

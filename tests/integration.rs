@@ -29,6 +29,8 @@ mod profiles;
 mod report;
 #[path = "integration/robustness.rs"]
 mod robustness;
+#[path = "integration/sweep.rs"]
+mod sweep;
 #[path = "integration/verification.rs"]
 mod verification;
 #[path = "integration/vpmb.rs"]

@@ -8,5 +8,6 @@ pub mod elasticity;
 pub mod evaluate;
 pub mod fit;
 pub mod plan;
+pub mod sensitivity;
 pub mod simulate;
 pub mod synth;

@@ -1,0 +1,135 @@
+//! `decophantom sensitivity` and `decophantom merge`: wiring only; the work is in
+//! [`crate::sweep`].
+
+use crate::app::simulate::load_profile_or_schedule;
+use crate::error::{Error, InputError};
+use crate::profile::LoadOptions;
+use crate::sweep::run::{merge, run_study, Results, Shard, Study};
+use crate::sweep::{Method, Metric, Param, StudySpec};
+use std::path::PathBuf;
+
+/// What `sensitivity` needs.
+#[derive(Debug, Clone)]
+pub struct SensitivityRequest {
+    /// Phantom TOML.
+    pub phantom: PathBuf,
+    /// Pressure profile (anything `simulate --profile` reads).
+    pub profile: PathBuf,
+    /// `NAME=LO..HI`, each a phantom TOML path or `scale:` pattern.
+    pub params: Vec<String>,
+    /// Metric names (`r_max`, `r_max:0`, …).
+    pub metrics: Vec<String>,
+    /// `oat`, `morris` or `sobol`.
+    pub method: String,
+    /// Levels (oat), trajectories (morris), base rows (sobol).
+    pub samples: usize,
+    /// Seed of the design.
+    pub seed: u64,
+    /// `I/N`, or the whole design.
+    pub shard: Option<String>,
+    /// Output folder.
+    pub out: PathBuf,
+    /// The command line, for the report.
+    pub command: String,
+}
+
+fn cli_err(field: &str, m: String) -> Error {
+    InputError::new(m)
+        .in_file("<command line>")
+        .field(field)
+        .into()
+}
+
+/// Read the inputs, check them all, run the (shard of the) design and write the outputs.
+pub fn run(
+    req: &SensitivityRequest,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Results, Error> {
+    let method = Method::parse(&req.method).ok_or_else(|| {
+        cli_err(
+            "--method",
+            format!("unknown method '{}'; use oat, morris or sobol", req.method),
+        )
+    })?;
+    if req.samples < 2 {
+        return Err(cli_err(
+            "--samples",
+            format!("--samples must be at least 2 (got {})", req.samples),
+        ));
+    }
+    let text = std::fs::read_to_string(&req.phantom).map_err(|e| {
+        InputError::new(format!("cannot read the phantom: {e}")).in_file(&req.phantom)
+    })?;
+    let doc: toml::Table = text
+        .parse()
+        .map_err(|e| InputError::new(format!("not valid TOML: {e}")).in_file(&req.phantom))?;
+    if req.params.is_empty() {
+        return Err(cli_err(
+            "--param",
+            "give at least one --param NAME=LO..HI (a phantom TOML path)".into(),
+        ));
+    }
+    let params = req
+        .params
+        .iter()
+        .map(|p| Param::parse(p, &doc))
+        .collect::<Result<Vec<_>, _>>()?;
+    for (i, p) in params.iter().enumerate() {
+        if params[..i].iter().any(|q| q.path == p.path) {
+            return Err(cli_err("--param", format!("'{}' is given twice", p.path)));
+        }
+    }
+    if req.metrics.is_empty() {
+        return Err(cli_err(
+            "--metric",
+            "give at least one --metric (r_max, t_max, plateau, half_life, peak_volume, final_radius)".into(),
+        ));
+    }
+    let metrics = req
+        .metrics
+        .iter()
+        .map(|m| Metric::parse(m))
+        .collect::<Result<Vec<_>, _>>()?;
+    let shard = match &req.shard {
+        Some(s) => Shard::parse(s)?,
+        None => Shard::WHOLE,
+    };
+    let profile = load_profile_or_schedule(&req.profile, &LoadOptions::default())?;
+    let study = Study {
+        spec: StudySpec {
+            method,
+            samples: req.samples,
+            seed: req.seed,
+            params,
+            metrics,
+        },
+        doc,
+        phantom_path: req.phantom.clone(),
+        profile,
+    };
+    run_study(&study, shard, &req.out, &req.command, progress)
+}
+
+/// Merge shard folders into one study with its indices and report.
+pub fn run_merge(dirs: &[PathBuf], out: &std::path::Path, command: &str) -> Result<Results, Error> {
+    merge(dirs, out, command)
+}
+
+/// A short text summary: the indices.
+pub fn summary_text(r: &Results) -> String {
+    let mut s = format!(
+        "{} runs ({} resumed from the journal)\n",
+        r.rows.len(),
+        r.resumed
+    );
+    let (h, rows) = crate::sweep::report::indices(r);
+    for (m, p, v) in rows {
+        let vals: Vec<String> = h
+            .iter()
+            .zip(&v)
+            .map(|(n, x)| format!("{n} {}", crate::fit::report::sig(*x, 3)))
+            .collect();
+        s.push_str(&format!("{m} / {p}: {}\n", vals.join(", ")));
+    }
+    s
+}

@@ -1,0 +1,245 @@
+//! Sensitivity studies over phantom parameters (`decophantom sensitivity`, `merge`): the
+//! design ([`design`]), metrics of a run ([`metric`]), running a design in parallel with a
+//! resumable journal and shards ([`run`]), and the outputs ([`report`]).
+//!
+//! A study is fixed by its method, samples, seed, parameters (TOML path and range) and
+//! metrics: the same settings give the same design, so a restarted or sharded study runs
+//! exactly the runs of the whole one.
+
+pub mod design;
+pub mod metric;
+pub mod report;
+pub mod run;
+
+use crate::error::InputError;
+use crate::fit::paths;
+
+pub use design::Method;
+pub use metric::Metric;
+
+/// A swept parameter: its phantom TOML path (or `scale:` pattern), range and base value.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Param {
+    /// Path in the phantom document.
+    pub path: String,
+    /// Lower end of the range.
+    pub lo: f64,
+    /// Upper end of the range.
+    pub hi: f64,
+    /// Sampled log-uniformly (the range spans more than a decade and is positive).
+    pub log: bool,
+    /// The value in the phantom (1 for a `scale:` pattern; clamped into the range).
+    pub base: f64,
+}
+
+impl Param {
+    /// Parse `NAME=LO..HI` against a phantom document; the path must exist in it (or be a
+    /// `scale:` pattern that matches something).
+    pub fn parse(text: &str, doc: &toml::Table) -> Result<Param, InputError> {
+        let bad = |m: String| {
+            InputError::new(m)
+                .in_file("<command line>")
+                .field("--param")
+        };
+        let path = text.split_once('=').map_or(text, |x| x.0).trim();
+        if !text.contains('=') {
+            return Err(bad(format!(
+                "'{text}': a swept parameter needs a range, NAME=LO..HI (e.g. gases.n2.diffusivity=1e-10..5e-9)"
+            )));
+        }
+        let base = if path.starts_with(paths::SCALE_PREFIX) {
+            Some(1.0)
+        } else {
+            paths::get(doc, path)
+        };
+        // the range is checked by the same parser as `fit`'s bounds; a base outside it is
+        // allowed here (the sweep need not contain the phantom's value)
+        let spec = paths::ParamSpec::parse(text, None)?;
+        let (lo, hi) = (spec.lower.unwrap_or(0.0), spec.upper.unwrap_or(0.0));
+        // whether the path can be set at all is checked by the caller on the phantom
+        let _ = &bad;
+        let log = lo > 0.0 && hi / lo > 10.0;
+        let base = base.unwrap_or(if log {
+            (lo * hi).sqrt()
+        } else {
+            0.5 * (lo + hi)
+        });
+        Ok(Param {
+            path: path.to_string(),
+            lo,
+            hi,
+            log,
+            base: base.clamp(lo, hi),
+        })
+    }
+
+    /// The value at unit-cube coordinate u ∈ [0, 1].
+    pub fn value(&self, u: f64) -> f64 {
+        if self.log {
+            self.lo * (self.hi / self.lo).powf(u)
+        } else {
+            self.lo + u * (self.hi - self.lo)
+        }
+    }
+
+    /// The unit-cube coordinate of value x.
+    pub fn unit(&self, x: f64) -> f64 {
+        if self.log {
+            (x / self.lo).ln() / (self.hi / self.lo).ln()
+        } else {
+            (x - self.lo) / (self.hi - self.lo)
+        }
+    }
+
+    /// `path=lo..hi` as given.
+    pub fn label(&self) -> String {
+        format!("{}={}..{}", self.path, num(self.lo), num(self.hi))
+    }
+}
+
+/// What fixes a design: same settings, same runs.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StudySpec {
+    /// Method.
+    pub method: Method,
+    /// Levels (oat), trajectories (morris) or base rows (sobol).
+    pub samples: usize,
+    /// Seed of the design and the bootstrap.
+    pub seed: u64,
+    /// Parameters.
+    pub params: Vec<Param>,
+    /// Metrics.
+    pub metrics: Vec<Metric>,
+}
+
+impl StudySpec {
+    /// Unit-cube points of every run, in run order.
+    pub fn points(&self) -> Vec<Vec<f64>> {
+        let base: Vec<f64> = self.params.iter().map(|p| p.unit(p.base)).collect();
+        design::design(
+            self.method,
+            self.params.len(),
+            self.samples,
+            self.seed,
+            &base,
+        )
+    }
+
+    /// Parameter values of every run.
+    pub fn values(&self) -> Vec<Vec<f64>> {
+        self.points()
+            .iter()
+            .map(|u| {
+                u.iter()
+                    .zip(&self.params)
+                    .map(|(u, p)| p.value(*u))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// One line naming the design (the journal's and the shards' identity check).
+    pub fn fingerprint(&self) -> String {
+        format!(
+            "method={} samples={} seed={} params={} metrics={} base={}",
+            self.method.name(),
+            self.samples,
+            self.seed,
+            self.params
+                .iter()
+                .map(Param::label)
+                .collect::<Vec<_>>()
+                .join(","),
+            self.metrics
+                .iter()
+                .map(Metric::name)
+                .collect::<Vec<_>>()
+                .join(","),
+            self.params
+                .iter()
+                .map(|p| num(p.base))
+                .collect::<Vec<_>>()
+                .join(","),
+        )
+    }
+
+    /// Parse a fingerprint back (for `merge`).
+    pub fn from_fingerprint(s: &str) -> Option<StudySpec> {
+        let mut kv = std::collections::HashMap::new();
+        for part in s.split_whitespace() {
+            let (k, v) = part.split_once('=')?;
+            kv.insert(k, v);
+        }
+        let method = Method::parse(kv.get("method")?)?;
+        let samples = kv.get("samples")?.parse().ok()?;
+        let seed = kv.get("seed")?.parse().ok()?;
+        let bases: Vec<f64> = kv
+            .get("base")?
+            .split(',')
+            .filter(|s| !s.is_empty())
+            .map(|s| s.parse().ok())
+            .collect::<Option<_>>()?;
+        // params: path=lo..hi separated by ',' — a path holds no ',' or '='
+        let text = kv.get("params")?;
+        let mut params = Vec::new();
+        for (i, p) in split_params(s, text).into_iter().enumerate() {
+            let (path, r) = p.split_once('=')?;
+            let (lo, hi) = r.split_once("..")?;
+            let (lo, hi): (f64, f64) = (lo.parse().ok()?, hi.parse().ok()?);
+            params.push(Param {
+                path: path.to_string(),
+                lo,
+                hi,
+                log: lo > 0.0 && hi / lo > 10.0,
+                base: *bases.get(i)?,
+            });
+        }
+        let metrics = kv
+            .get("metrics")?
+            .split(',')
+            .map(|m| Metric::parse(m).ok())
+            .collect::<Option<_>>()?;
+        Some(StudySpec {
+            method,
+            samples,
+            seed,
+            params,
+            metrics,
+        })
+    }
+}
+
+/// `params=` of a fingerprint: entries `path=lo..hi` joined by ','.
+fn split_params<'a>(_whole: &str, text: &'a str) -> Vec<&'a str> {
+    // the value after the first '=' of `params=` is `a=1..2,b=3..4`: split on ',' before a
+    // segment that contains '='
+    let mut out = Vec::new();
+    let mut start = 0;
+    let bytes: Vec<(usize, char)> = text.char_indices().collect();
+    for &(i, c) in &bytes {
+        if c == ','
+            && text[i + 1..]
+                .split(',')
+                .next()
+                .is_some_and(|s| s.contains('='))
+        {
+            out.push(&text[start..i]);
+            start = i + 1;
+        }
+    }
+    if start < text.len() {
+        out.push(&text[start..]);
+    }
+    out
+}
+
+/// A number as the shortest decimal that reads back to the same `f64` (plain between 1e-3
+/// and 1e7, else in exponent form: `0.014`, `60`, `2.5e-9`).
+pub fn num(v: f64) -> String {
+    let a = v.abs();
+    if a == 0.0 || !v.is_finite() || (1e-3..1e7).contains(&a) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
+}

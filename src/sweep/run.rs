@@ -1,0 +1,490 @@
+//! Running a design: in parallel over runs (rayon), with a journal `DIR.partial/` beside the
+//! output folder that every finished run is appended to (a restarted study with the same
+//! settings skips the runs already there), shards (`--shard I/N`: runs
+//! ⌊I·n/N⌋ … ⌊(I+1)·n/N⌋ − 1 of the n) and the merge of shard folders.
+
+use super::{num, report, StudySpec};
+use crate::error::{Error, InputError};
+use crate::fit::data::build_params;
+use crate::fit::model::run_one;
+use crate::fit::paths;
+use crate::profile::PressureHistory;
+use crate::report::output::OutputSet;
+use rayon::prelude::*;
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::Mutex;
+
+/// Points kept of each run's radius time course (for the report's plots).
+const COURSE_POINTS: usize = 200;
+
+/// A study: its design, the phantom document and the profile.
+#[derive(Debug, Clone)]
+pub struct Study {
+    /// What fixes the design.
+    pub spec: StudySpec,
+    /// The phantom as a TOML document.
+    pub doc: toml::Table,
+    /// The phantom file (for messages).
+    pub phantom_path: PathBuf,
+    /// The pressure profile.
+    pub profile: PressureHistory,
+}
+
+/// The I-th of N slices of a design.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Shard {
+    /// 0-based slice.
+    pub index: usize,
+    /// Number of slices.
+    pub count: usize,
+}
+
+impl Shard {
+    /// The whole design.
+    pub const WHOLE: Shard = Shard { index: 0, count: 1 };
+
+    /// Parse `I/N` with 0 ≤ I < N.
+    pub fn parse(text: &str) -> Result<Shard, InputError> {
+        let bad = || {
+            InputError::new(format!(
+                "'{text}': a shard is I/N with 0 ≤ I < N, e.g. 3/64 (the 4th of 64 slices)"
+            ))
+            .in_file("<command line>")
+            .field("--shard")
+        };
+        let (i, n) = text.split_once('/').ok_or_else(bad)?;
+        let (i, n): (usize, usize) = (
+            i.trim().parse().map_err(|_| bad())?,
+            n.trim().parse().map_err(|_| bad())?,
+        );
+        if n == 0 || i >= n {
+            return Err(bad());
+        }
+        Ok(Shard { index: i, count: n })
+    }
+
+    /// The runs of this slice of a design of `n` runs.
+    pub fn range(&self, n: usize) -> std::ops::Range<usize> {
+        (self.index * n / self.count)..((self.index + 1) * n / self.count)
+    }
+}
+
+/// A radius time course: (time s, radius m).
+pub type Course = Vec<(f64, f64)>;
+
+/// One finished run.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Row {
+    /// Run index in the design.
+    pub index: usize,
+    /// Parameter values.
+    pub values: Vec<f64>,
+    /// Metric values (NaN where undefined or the run failed).
+    pub metrics: Vec<f64>,
+}
+
+/// Rows and radius courses of a design (or a shard of one).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Results {
+    /// The design.
+    pub spec: StudySpec,
+    /// Finished runs, by index.
+    pub rows: Vec<Row>,
+    /// Radius time course (the largest bubble) of each run, by index.
+    pub courses: Vec<(usize, Vec<(f64, f64)>)>,
+    /// Runs skipped because the journal already held them.
+    pub resumed: usize,
+}
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+    move |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// The `sensitivity.csv` header.
+pub fn header(spec: &StudySpec) -> String {
+    let mut h = vec!["index".to_string()];
+    h.extend(spec.params.iter().map(|p| p.path.clone()));
+    h.extend(spec.metrics.iter().map(|m| m.name()));
+    h.join(",")
+}
+
+/// One `sensitivity.csv` line (shortest round-trip decimal, so reading it back gives the
+/// same numbers bit for bit).
+pub fn row_line(r: &Row) -> String {
+    let mut s = r.index.to_string();
+    for v in r.values.iter().chain(&r.metrics) {
+        s.push(',');
+        s.push_str(&num(*v));
+    }
+    s
+}
+
+fn parse_row(line: &str, k: usize, m: usize) -> Option<Row> {
+    let f: Vec<&str> = line.split(',').collect();
+    if f.len() != 1 + k + m {
+        return None;
+    }
+    let nums: Option<Vec<f64>> = f[1..].iter().map(|s| s.trim().parse().ok()).collect();
+    let nums = nums?;
+    Some(Row {
+        index: f[0].trim().parse().ok()?,
+        values: nums[..k].to_vec(),
+        metrics: nums[k..].to_vec(),
+    })
+}
+
+/// Read `sensitivity.csv` rows (a line that does not parse — e.g. cut by a kill — is dropped).
+pub fn parse_rows(text: &str, spec: &StudySpec) -> Vec<Row> {
+    text.lines()
+        .filter(|l| !l.starts_with('#') && !l.starts_with("index"))
+        .filter_map(|l| parse_row(l, spec.params.len(), spec.metrics.len()))
+        .collect()
+}
+
+/// `courses.csv` text: index,time_s,radius_m.
+pub fn courses_text(courses: &[(usize, Vec<(f64, f64)>)]) -> String {
+    let mut s = String::from("index,time_s,radius_m\n");
+    for (i, c) in courses {
+        for (t, r) in c {
+            s.push_str(&format!("{i},{},{}\n", num(*t), num(*r)));
+        }
+    }
+    s
+}
+
+/// Read `courses.csv`, grouped by run index (ascending).
+pub fn parse_courses(text: &str) -> Vec<(usize, Vec<(f64, f64)>)> {
+    let mut map: std::collections::BTreeMap<usize, Vec<(f64, f64)>> = Default::default();
+    for l in text.lines().skip(1) {
+        let f: Vec<&str> = l.split(',').collect();
+        if let (3, Some(i), Some(t), Some(r)) = (
+            f.len(),
+            f.first().and_then(|s| s.parse::<usize>().ok()),
+            f.get(1).and_then(|s| s.parse::<f64>().ok()),
+            f.get(2).and_then(|s| s.parse::<f64>().ok()),
+        ) {
+            map.entry(i).or_default().push((t, r));
+        }
+    }
+    map.into_iter().collect()
+}
+
+/// The journal folder of an output folder: `DIR.partial` beside it.
+pub fn journal_dir(out: &Path) -> PathBuf {
+    let name = out
+        .file_name()
+        .map_or("sweep".into(), |n| n.to_string_lossy().into_owned());
+    out.with_file_name(format!("{name}.partial"))
+}
+
+fn thin(points: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
+    if points.len() <= COURSE_POINTS {
+        return points;
+    }
+    let step = points.len().div_ceil(COURSE_POINTS);
+    let last = points.len() - 1;
+    points
+        .into_iter()
+        .enumerate()
+        .filter(|(i, _)| i % step == 0 || *i == last)
+        .map(|p| p.1)
+        .collect()
+}
+
+/// Check before any run that every parameter can be set at both ends of its range in the
+/// phantom, and that every metric's bubble exists.
+pub fn validate(study: &Study) -> Result<(), Error> {
+    let base = build_params(&study.doc, &study.phantom_path)?;
+    let bubbles = crate::fit::data::bubble_count(&base);
+    for p in &study.spec.params {
+        for v in [p.lo, p.hi] {
+            let mut t = study.doc.clone();
+            paths::apply(&mut t, &p.path, v).map_err(|m| {
+                InputError::new(m)
+                    .in_file(&study.phantom_path)
+                    .field(format!("--param {}", p.path))
+            })?;
+            build_params(&t, &study.phantom_path).map_err(|e| {
+                InputError::new(format!("{} = {v}: {}", p.path, e.message))
+                    .in_file(&study.phantom_path)
+                    .field(format!("--param {}", p.path))
+            })?;
+        }
+    }
+    for m in &study.spec.metrics {
+        if let Some(b) = m.bubble.filter(|b| *b >= bubbles) {
+            return Err(InputError::new(format!(
+                "metric '{}': the phantom has {bubbles} bubble(s), 0-based, so there is no bubble {b}",
+                m.name()
+            ))
+            .in_file("<command line>")
+            .field("--metric")
+            .into());
+        }
+    }
+    Ok(())
+}
+
+/// One run of the design: its metrics and radius course (NaN metrics if the solver failed).
+fn one(study: &Study, index: usize, values: &[f64]) -> (Row, Vec<(f64, f64)>) {
+    let mut doc = study.doc.clone();
+    let ok = study
+        .spec
+        .params
+        .iter()
+        .zip(values)
+        .try_for_each(|(p, v)| paths::apply(&mut doc, &p.path, *v));
+    let run = ok
+        .ok()
+        .and_then(|_| build_params(&doc, &study.phantom_path).ok())
+        .and_then(|params| run_one(&params, &study.profile).ok());
+    let nan = vec![f64::NAN; study.spec.metrics.len()];
+    let (metrics, course) = match &run {
+        Some(r) => (
+            study.spec.metrics.iter().map(|m| m.of(r)).collect(),
+            thin(super::metric::track(r, None)),
+        ),
+        None => (nan, Vec::new()),
+    };
+    (
+        Row {
+            index,
+            values: values.to_vec(),
+            metrics,
+        },
+        course,
+    )
+}
+
+/// Run the study's shard: skip the runs the journal holds, run the rest in parallel (each
+/// appended to the journal as it finishes), write `out` whole (sensitivity.csv, courses.csv,
+/// design.toml; for the whole design also indices.csv and the report) and remove the journal.
+pub fn run_study(
+    study: &Study,
+    shard: Shard,
+    out: &Path,
+    command: &str,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<Results, Error> {
+    validate(study)?;
+    let spec = &study.spec;
+    let values = spec.values();
+    let range = shard.range(values.len());
+    let fp = format!(
+        "# {} shard={}/{}",
+        spec.fingerprint(),
+        shard.index,
+        shard.count
+    );
+    let jdir = journal_dir(out);
+    let (jruns, jcourses) = (jdir.join("sensitivity.csv"), jdir.join("courses.csv"));
+    let mut done: Vec<Row> = Vec::new();
+    let mut courses: Vec<(usize, Vec<(f64, f64)>)> = Vec::new();
+    if let Ok(text) = std::fs::read_to_string(&jruns) {
+        if text.lines().next() != Some(fp.as_str()) {
+            return Err(InputError::new(format!(
+                "'{}' holds the journal of a different study ({}); resume with the same settings, or delete that folder to start afresh",
+                jdir.display(),
+                text.lines().next().unwrap_or("no header")
+            ))
+            .field("--out")
+            .into());
+        }
+        done = parse_rows(&text, spec);
+        done.retain(|r| range.contains(&r.index));
+        done.sort_by_key(|r| r.index);
+        done.dedup_by_key(|r| r.index);
+        let ids: std::collections::HashSet<usize> = done.iter().map(|r| r.index).collect();
+        courses = parse_courses(&std::fs::read_to_string(&jcourses).unwrap_or_default());
+        courses.retain(|c| ids.contains(&c.0));
+    }
+    // rewrite the journal whole (drops a line cut by a kill, and courses of unfinished runs)
+    std::fs::create_dir_all(&jdir).map_err(io(&jdir))?;
+    let mut text = format!("{fp}\n{}\n", header(spec));
+    for r in &done {
+        text.push_str(&row_line(r));
+        text.push('\n');
+    }
+    std::fs::write(&jruns, text).map_err(io(&jruns))?;
+    std::fs::write(&jcourses, courses_text(&courses)).map_err(io(&jcourses))?;
+
+    let resumed = done.len();
+    let have: std::collections::HashSet<usize> = done.iter().map(|r| r.index).collect();
+    let pending: Vec<usize> = range.clone().filter(|i| !have.contains(i)).collect();
+    let total = range.len();
+    let count = AtomicUsize::new(resumed);
+    progress(resumed, total);
+    let files = Mutex::new((
+        std::fs::OpenOptions::new()
+            .append(true)
+            .open(&jruns)
+            .map_err(io(&jruns))?,
+        std::fs::OpenOptions::new()
+            .append(true)
+            .open(&jcourses)
+            .map_err(io(&jcourses))?,
+    ));
+    let fresh: Vec<Result<(Row, Course), Error>> = pending
+        .par_iter()
+        .map(|&i| {
+            let (row, course) = one(study, i, &values[i]);
+            {
+                let mut f = files
+                    .lock()
+                    .map_err(|_| Error::Solver("journal lock poisoned".into()))?;
+                // the course first: a run counts as done once its row is in
+                let c: String = course
+                    .iter()
+                    .map(|(t, r)| format!("{i},{},{}\n", num(*t), num(*r)))
+                    .collect();
+                f.1.write_all(c.as_bytes()).map_err(io(&jcourses))?;
+                f.1.flush().map_err(io(&jcourses))?;
+                f.0.write_all(format!("{}\n", row_line(&row)).as_bytes())
+                    .map_err(io(&jruns))?;
+                f.0.flush().map_err(io(&jruns))?;
+            }
+            progress(count.fetch_add(1, Ordering::Relaxed) + 1, total);
+            Ok((row, course))
+        })
+        .collect();
+    for r in fresh {
+        let (row, course) = r?;
+        courses.push((row.index, course));
+        done.push(row);
+    }
+    done.sort_by_key(|r| r.index);
+    courses.sort_by_key(|c| c.0);
+    let results = Results {
+        spec: spec.clone(),
+        rows: done,
+        courses,
+        resumed,
+    };
+    let set = outputs(&results, shard, command)?;
+    set.commit(out)?;
+    let _ = std::fs::remove_dir_all(&jdir);
+    Ok(results)
+}
+
+/// The files of a finished shard (or whole study).
+pub fn outputs(res: &Results, shard: Shard, command: &str) -> Result<OutputSet, Error> {
+    let spec = &res.spec;
+    let mut set = OutputSet::new();
+    let mut csv = format!("{}\n", header(spec));
+    for r in &res.rows {
+        csv.push_str(&row_line(r));
+        csv.push('\n');
+    }
+    set.add("sensitivity.csv", csv);
+    set.add("courses.csv", courses_text(&res.courses));
+    let mut d = toml::Table::new();
+    d.insert("design".into(), spec.fingerprint().into());
+    d.insert(
+        "shard".into(),
+        format!("{}/{}", shard.index, shard.count).into(),
+    );
+    d.insert("runs".into(), (spec.values().len() as i64).into());
+    d.insert("command".into(), command.to_string().into());
+    set.add(
+        "design.toml",
+        toml::to_string(&d).map_err(|e| Error::Solver(format!("design.toml: {e}")))?,
+    );
+    if shard.count == 1 {
+        report::add_indices_and_report(&mut set, res, command)?;
+    }
+    Ok(set)
+}
+
+/// Merge shard folders (each with design.toml, sensitivity.csv, courses.csv) of one design
+/// into a whole study, and write it with its indices and report to `out`.
+pub fn merge(dirs: &[PathBuf], out: &Path, command: &str) -> Result<Results, Error> {
+    let bad = |d: &Path, m: String| -> Error {
+        InputError::new(m).in_file(d).field("design.toml").into()
+    };
+    let mut spec: Option<(String, StudySpec)> = None;
+    let mut rows: Vec<Row> = Vec::new();
+    let mut courses = Vec::new();
+    if dirs.is_empty() {
+        return Err(InputError::new("give the shard folders to merge")
+            .in_file("<command line>")
+            .field("DIR")
+            .into());
+    }
+    for d in dirs {
+        let dt = d.join("design.toml");
+        let text = std::fs::read_to_string(&dt)
+            .map_err(|e| bad(d, format!("not a sensitivity output folder: {e}")))?;
+        let t: toml::Table = text
+            .parse()
+            .map_err(|e| bad(&dt, format!("cannot read: {e}")))?;
+        let fp = t
+            .get("design")
+            .and_then(|v| v.as_str())
+            .ok_or_else(|| bad(&dt, "no 'design' entry".into()))?
+            .to_string();
+        let s = StudySpec::from_fingerprint(&fp)
+            .ok_or_else(|| bad(&dt, format!("cannot read the design '{fp}'")))?;
+        if let Some((f0, _)) = &spec {
+            if *f0 != fp {
+                return Err(bad(
+                    &dt,
+                    format!("a different design from the first folder's:\n  {fp}\n  {f0}"),
+                ));
+            }
+        }
+        let s = &spec.get_or_insert((fp, s)).1;
+        let csv = d.join("sensitivity.csv");
+        rows.extend(parse_rows(
+            &std::fs::read_to_string(&csv).map_err(io(&csv))?,
+            s,
+        ));
+        courses.extend(parse_courses(
+            &std::fs::read_to_string(d.join("courses.csv")).unwrap_or_default(),
+        ));
+    }
+    let Some((_, spec)) = spec else {
+        unreachable!("dirs is not empty")
+    };
+    rows.sort_by_key(|r| r.index);
+    courses.sort_by_key(|c| c.0);
+    let n = spec.values().len();
+    let dup = rows.windows(2).find(|w| w[0].index == w[1].index);
+    if let Some(w) = dup {
+        return Err(InputError::new(format!(
+            "run {} is in more than one shard folder",
+            w[0].index
+        ))
+        .in_file("<command line>")
+        .field("DIR")
+        .into());
+    }
+    if rows.len() != n {
+        let have: std::collections::HashSet<usize> = rows.iter().map(|r| r.index).collect();
+        let missing: Vec<String> = (0..n)
+            .filter(|i| !have.contains(i))
+            .take(10)
+            .map(|i| i.to_string())
+            .collect();
+        return Err(InputError::new(format!(
+            "the shards hold {} of the design's {n} runs; missing runs {}…: merge every shard's folder",
+            rows.len(),
+            missing.join(", ")
+        ))
+        .in_file("<command line>")
+        .field("DIR")
+        .into());
+    }
+    let res = Results {
+        spec,
+        rows,
+        courses,
+        resumed: 0,
+    };
+    outputs(&res, Shard::WHOLE, command)?.commit(out)?;
+    Ok(res)
+}

@@ -1,0 +1,376 @@
+//! `decophantom sensitivity` and `merge`: sharding, resuming, one-at-a-time against direct
+//! simulations, and bad input. Small grids (3.2 mm cube at h = 400 µm, one bubble, a 60 s
+//! decompression from 60 psi gauge) so a run takes milliseconds.
+
+use crate::common::{bin, tempdir};
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+const PHANTOM: &str = r#"
+[geometry]
+shape = "box"
+size_m = [3.2e-3, 3.2e-3, 3.2e-3]
+grid_step_m = 400e-6
+
+[material]
+surface_tension = 0.07
+
+[material.elasticity]
+law = "hyperelastic"
+shear_modulus = 40.0
+
+[gases.n2]
+diffusivity = 2.5e-9
+ostwald = 0.014
+
+[gases.o2]
+diffusivity = 2.5e-9
+ostwald = 0.027
+
+[nuclei]
+min_radius_m = 20e-6
+
+[[bubbles]]
+position_m = [1.6e-3, 1.6e-3, 1.6e-3]
+initial_radius_m = 60e-6
+"#;
+
+const PROFILE: &str = r#"
+name = "decompression"
+time_unit = "s"
+pressure_unit = "psi-gauge"
+gas = "air"
+points = [[0, 60], [10, 0], [60, 0]]
+"#;
+
+fn lab(name: &str) -> (PathBuf, PathBuf, PathBuf) {
+    let d = tempdir(name);
+    std::fs::write(d.join("phantom.toml"), PHANTOM).unwrap();
+    std::fs::write(d.join("profile.toml"), PROFILE).unwrap();
+    (d.join("phantom.toml"), d.join("profile.toml"), d)
+}
+
+fn sensitivity(ph: &Path, pr: &Path, extra: &[&str]) -> std::process::Output {
+    let mut c = Command::new(bin());
+    c.arg("sensitivity")
+        .arg("--phantom")
+        .arg(ph)
+        .arg("--profile")
+        .arg(pr)
+        .args(extra);
+    c.output().unwrap()
+}
+
+fn ok(o: &std::process::Output) -> String {
+    assert!(
+        o.status.success(),
+        "exit {:?}: {}",
+        o.status.code(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+const SOBOL: [&str; 14] = [
+    "--param",
+    "gases.n2.ostwald=0.01..0.03",
+    "--param",
+    "gases.n2.diffusivity=1e-10..5e-9",
+    "--metric",
+    "r_max",
+    "--metric",
+    "plateau",
+    "--method",
+    "sobol",
+    "--samples",
+    "8",
+    "--seed",
+    "3",
+];
+
+#[test]
+fn sweep_sharded_three_ways_and_merged_gives_byte_identical_indices() {
+    let (ph, pr, d) = lab("sweep-shards");
+    let whole = d.join("whole");
+    let t = std::time::Instant::now();
+    let mut a: Vec<&str> = SOBOL.to_vec();
+    let w = whole.to_str().unwrap();
+    a.extend(["--out", w]);
+    ok(&sensitivity(&ph, &pr, &a));
+    eprintln!(
+        "sobol, 8 × (2 + 2) = 32 runs: {:.2} s",
+        t.elapsed().as_secs_f64()
+    );
+    let mut shards = Vec::new();
+    for i in 0..3 {
+        let s = d.join(format!("shard{i}"));
+        let spec = format!("{i}/3");
+        let mut a: Vec<&str> = SOBOL.to_vec();
+        a.extend(["--shard", &spec, "--out", s.to_str().unwrap()]);
+        ok(&sensitivity(&ph, &pr, &a));
+        // a shard has its runs but no indices
+        assert!(!s.join("indices.csv").exists());
+        shards.push(s);
+    }
+    let merged = d.join("merged");
+    let o = Command::new(bin())
+        .arg("merge")
+        .args(&shards)
+        .arg("--out")
+        .arg(&merged)
+        .output()
+        .unwrap();
+    ok(&o);
+    for f in ["indices.csv", "sensitivity.csv", "courses.csv"] {
+        let (x, y) = (
+            std::fs::read(whole.join(f)).unwrap(),
+            std::fs::read(merged.join(f)).unwrap(),
+        );
+        assert!(x == y, "{f} differs between the whole and the merged study");
+    }
+    let idx = std::fs::read_to_string(whole.join("indices.csv")).unwrap();
+    assert_eq!(idx.lines().count(), 1 + 2 * 2);
+    assert!(idx.starts_with("metric,parameter,s1,s1_lo95,s1_hi95,st,st_lo95,st_hi95\n"));
+    // 32 runs, each row index once
+    let rows = std::fs::read_to_string(whole.join("sensitivity.csv")).unwrap();
+    assert_eq!(rows.lines().count(), 1 + 32);
+    // merging only two of the three shards is refused, naming the missing runs
+    let o = Command::new(bin())
+        .arg("merge")
+        .args(&shards[..2])
+        .arg("--out")
+        .arg(d.join("bad"))
+        .output()
+        .unwrap();
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("missing runs"));
+}
+
+#[test]
+fn sweep_resumes_from_its_journal_and_refuses_another_studys() {
+    let (ph, pr, d) = lab("sweep-resume");
+    let args = [
+        "--param",
+        "gases.n2.ostwald=0.01..0.03",
+        "--metric",
+        "r_max",
+        "--method",
+        "oat",
+        "--samples",
+        "6",
+    ];
+    let first = d.join("first");
+    let mut a = args.to_vec();
+    a.extend(["--out", first.to_str().unwrap()]);
+    ok(&sensitivity(&ph, &pr, &a));
+    // a journal as a killed run leaves it: the first 4 runs and half a line
+    let design = std::fs::read_to_string(first.join("design.toml")).unwrap();
+    let fp = design
+        .parse::<toml::Table>()
+        .unwrap()
+        .get("design")
+        .and_then(|v| v.as_str())
+        .unwrap()
+        .to_string();
+    let rows = std::fs::read_to_string(first.join("sensitivity.csv")).unwrap();
+    let second = d.join("second");
+    let j = d.join("second.partial");
+    std::fs::create_dir_all(&j).unwrap();
+    let kept: Vec<&str> = rows.lines().take(5).collect();
+    std::fs::write(
+        j.join("sensitivity.csv"),
+        format!("# {fp} shard=0/1\n{}\n5,0.0", kept.join("\n")),
+    )
+    .unwrap();
+    let mut a = args.to_vec();
+    a.extend(["--out", second.to_str().unwrap()]);
+    let out = ok(&sensitivity(&ph, &pr, &a));
+    assert!(out.contains("7 runs (4 resumed"), "{out}");
+    assert_eq!(
+        std::fs::read(first.join("sensitivity.csv")).unwrap(),
+        std::fs::read(second.join("sensitivity.csv")).unwrap()
+    );
+    assert_eq!(
+        std::fs::read(first.join("indices.csv")).unwrap(),
+        std::fs::read(second.join("indices.csv")).unwrap()
+    );
+    assert!(
+        !j.exists(),
+        "the journal is removed once the output is written"
+    );
+    // a journal of another design (other seed → other header) is refused, not mixed in
+    std::fs::create_dir_all(&j).unwrap();
+    std::fs::write(j.join("sensitivity.csv"), "# method=oat samples=3\nindex\n").unwrap();
+    let o = sensitivity(&ph, &pr, &a);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("journal of a different study"));
+}
+
+#[test]
+fn sweep_oat_matches_direct_simulations_and_the_solubility_direction() {
+    use decophantom::fit::data::build_params;
+    use decophantom::fit::model::run_one;
+    let (ph, pr, d) = lab("sweep-oat");
+    let out = d.join("oat");
+    ok(&sensitivity(
+        &ph,
+        &pr,
+        &[
+            "--param",
+            "gases.n2.ostwald=0.01..0.03",
+            "--metric",
+            "r_max",
+            "--metric",
+            "final_radius:0",
+            "--method",
+            "oat",
+            "--samples",
+            "3",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    ));
+    let rows: Vec<Vec<f64>> = std::fs::read_to_string(out.join("sensitivity.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(|x| x.parse().unwrap()).collect())
+        .collect();
+    assert_eq!(rows.len(), 4);
+    // each row against a simulation run here, its peak radius read from the frames
+    let profile = decophantom::app::simulate::load_profile_or_schedule(
+        &pr,
+        &decophantom::profile::LoadOptions::default(),
+    )
+    .unwrap();
+    let doc: toml::Table = PHANTOM.parse().unwrap();
+    for r in &rows {
+        let mut t = doc.clone();
+        t["gases"]["n2"]
+            .as_table_mut()
+            .unwrap()
+            .insert("ostwald".into(), toml::Value::Float(r[1]));
+        let run = run_one(&build_params(&t, &ph).unwrap(), &profile).unwrap();
+        let peak = run
+            .frames
+            .iter()
+            .flat_map(|f| f.bubbles.iter().map(|b| b.radius))
+            .fold(0.0, f64::max);
+        let last = run.frames.last().unwrap().bubbles[0].radius;
+        assert_eq!((r[2], r[3]), (peak, last), "run {}", r[0]);
+    }
+    // levels 0.01, 0.02, 0.03: more dissolved N2 (Henry's law, c = L·p/(R_u T)) → larger
+    // bubbles (the paper's Fig. 3: R_max increases with L_N2)
+    for (r, v) in rows[1..].iter().zip([0.01, 0.02, 0.03]) {
+        assert!((r[1] - v).abs() < 1e-15, "{} vs {v}", r[1]);
+    }
+    assert!(rows[1][2] < rows[2][2] && rows[2][2] < rows[3][2]);
+    // the normalised sensitivity in indices.csv, recomputed here from the rows
+    let want = (rows[3][2] - rows[1][2]) / (0.03 - 0.01) * 0.014 / rows[0][2];
+    let idx = std::fs::read_to_string(out.join("indices.csv")).unwrap();
+    let line = idx.lines().nth(1).unwrap();
+    let got: f64 = line.rsplit(',').next().unwrap().parse().unwrap();
+    assert!((got - want).abs() < 1e-12 * want.abs(), "{got} vs {want}");
+    let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(md.contains("courses-0.svg") && md.contains("bars-0.svg"));
+}
+
+#[test]
+fn sweep_morris_on_the_phantom_ranks_solubility_with_a_positive_effect() {
+    let (ph, pr, d) = lab("sweep-morris");
+    let out = d.join("morris");
+    ok(&sensitivity(
+        &ph,
+        &pr,
+        &[
+            "--param",
+            "gases.n2.ostwald=0.01..0.03",
+            "--param",
+            "material.surface_tension=0.03..0.1",
+            "--metric",
+            "r_max",
+            "--method",
+            "morris",
+            "--samples",
+            "4",
+            "--out",
+            out.to_str().unwrap(),
+        ],
+    ));
+    let idx = std::fs::read_to_string(out.join("indices.csv")).unwrap();
+    let ost: Vec<f64> = idx
+        .lines()
+        .find(|l| l.contains("ostwald"))
+        .unwrap()
+        .split(',')
+        .skip(2)
+        .map(|x| x.parse().unwrap())
+        .collect();
+    // every elementary effect of L_N2 on R_max is positive, so μ* = μ > 0
+    assert!(ost[1] > 0.0 && (ost[0] - ost[1]).abs() < 1e-15 * ost[0].abs().max(1.0));
+}
+
+#[test]
+fn sweep_refuses_bad_input_with_exit_2_naming_the_field() {
+    let (ph, pr, d) = lab("sweep-bad");
+    let out = d.join("o");
+    let o = out.to_str().unwrap();
+    let cases: [(&[&str], &str); 6] = [
+        (
+            &[
+                "--param",
+                "gases.n2.ostwald=0.03..0.01",
+                "--metric",
+                "r_max",
+            ],
+            "--param",
+        ),
+        (
+            &["--param", "gases.n2.ostwald", "--metric", "r_max"],
+            "--param",
+        ),
+        (
+            &["--param", "geometry.size_m.7=1..2", "--metric", "r_max"],
+            "--param",
+        ),
+        (
+            &[
+                "--param",
+                "gases.n2.ostwald=0.01..0.03",
+                "--metric",
+                "radius",
+            ],
+            "--metric",
+        ),
+        (
+            &[
+                "--param",
+                "gases.n2.ostwald=0.01..0.03",
+                "--metric",
+                "r_max:3",
+            ],
+            "--metric",
+        ),
+        (
+            &[
+                "--param",
+                "gases.n2.ostwald=0.01..0.03",
+                "--metric",
+                "r_max",
+                "--shard",
+                "3/3",
+            ],
+            "--shard",
+        ),
+    ];
+    for (args, field) in cases {
+        let mut a = args.to_vec();
+        a.extend(["--out", o]);
+        let r = sensitivity(&ph, &pr, &a);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{args:?}: {err}");
+        assert!(err.contains(field), "{args:?}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(!out.exists());
+    }
+}
