@@ -32,10 +32,12 @@ pub fn run(
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Discovery, Error> {
     if !(req.alpha > 0.0 && req.alpha < 1.0) {
-        return Err(InputError::new(format!("must be in (0, 1) (got {})", req.alpha))
-            .in_file("<command line>")
-            .field("--alpha")
-            .into());
+        return Err(
+            InputError::new(format!("must be in (0, 1) (got {})", req.alpha))
+                .in_file("<command line>")
+                .field("--alpha")
+                .into(),
+        );
     }
     let data = read_measurements(&req.measured)?;
     let experiments = read_experiments(&req.experiments)?;
@@ -49,7 +51,14 @@ pub fn run(
     let d = discover(&experiments, &data, &opts, progress)?;
     let base_runs = d.baseline.model.run(&experiments, &d.baseline.values)?;
     let final_runs = d.final_fit.model.run(&experiments, &d.final_fit.values)?;
-    let set = discover_outputs(&d, &base_runs, &final_runs, &experiments, &data, &req.command)?;
+    let set = discover_outputs(
+        &d,
+        &base_runs,
+        &final_runs,
+        &experiments,
+        &data,
+        &req.command,
+    )?;
     set.commit(&req.out)?;
     Ok(d)
 }
@@ -78,6 +87,16 @@ pub fn summary_text(d: &Discovery) -> String {
                 .collect::<Vec<_>>()
                 .join("; ")
         ));
+        if !a.alternatives.is_empty() {
+            s.push_str(&format!(
+                "  not uniquely identified: {} fit(s) as well within the numerical error\n",
+                a.alternatives
+                    .iter()
+                    .map(|x| x.0.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
+        }
     }
     s.push_str(&format!(
         "RMSE {} → {} µm (numerical error {} µm)\n",

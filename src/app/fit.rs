@@ -48,7 +48,9 @@ pub fn run(req: &FitRequest) -> Result<Fitted, Error> {
         for (d, e) in model.docs.iter().zip(&experiments.list) {
             let mut t = d.clone();
             paths::apply(&mut t, &spec.path, spec.start).map_err(|m| {
-                InputError::new(m).in_file(&e.phantom_path).field(spec.path.clone())
+                InputError::new(m)
+                    .in_file(&e.phantom_path)
+                    .field(spec.path.clone())
             })?;
             crate::fit::data::build_params(&t, &e.phantom_path)?;
         }
@@ -65,9 +67,19 @@ pub fn run(req: &FitRequest) -> Result<Fitted, Error> {
     let weights: Vec<f64> = data
         .series
         .iter()
-        .flat_map(|s| s.points.iter().map(|p| p.sd.map_or(1.0, |sd| 1.0 / (sd * sd))))
+        .flat_map(|s| {
+            s.points
+                .iter()
+                .map(|p| p.sd.map_or(1.0, |sd| 1.0 / (sd * sd)))
+        })
         .collect();
-    let fitted = fit(&model, &experiments, &data, &weights, &LsqOptions::default())?;
+    let fitted = fit(
+        &model,
+        &experiments,
+        &data,
+        &weights,
+        &LsqOptions::default(),
+    )?;
     let start_runs = model.run(&experiments, &model.start())?;
     let fitted_runs = model.run(&experiments, &fitted.values)?;
     let set = fit_outputs(

@@ -2,8 +2,8 @@
 //! return. Nothing here touches the terminal.
 
 pub mod check;
-pub mod discover;
 pub mod demo;
+pub mod discover;
 pub mod elasticity;
 pub mod evaluate;
 pub mod fit;

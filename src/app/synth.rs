@@ -29,12 +29,9 @@ pub fn run(req: &SynthRequest) -> Result<usize, Error> {
     let experiments = read_experiments(&req.experiments)?;
     // never overwrite an input
     let same = |a: &std::path::Path| {
-        a.canonicalize().ok().is_some_and(|a| {
-            req.out
-                .canonicalize()
-                .ok()
-                .is_some_and(|b| a == b)
-        })
+        a.canonicalize()
+            .ok()
+            .is_some_and(|a| req.out.canonicalize().ok().is_some_and(|b| a == b))
     };
     if same(&req.experiments) || experiments.list.iter().any(|e| same(&e.phantom_path)) {
         return Err(crate::error::InputError::new(

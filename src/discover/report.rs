@@ -40,6 +40,7 @@ struct AddedOut {
     parameters: Vec<String>,
     values: Vec<f64>,
     ci95_all: Vec<[f64; 2]>,
+    alternatives: Vec<String>,
 }
 
 #[derive(Serialize)]
@@ -94,6 +95,7 @@ pub fn discover_toml(d: &Discovery) -> Result<String, Error> {
                     parameters: a.parameters.iter().map(|e| e.name.clone()).collect(),
                     values: a.parameters.iter().map(|e| e.value).collect(),
                     ci95_all: a.parameters.iter().map(|e| e.ci95).collect(),
+                    alternatives: a.alternatives.iter().map(|x| x.0.clone()).collect(),
                 }
             })
             .collect(),
@@ -238,7 +240,11 @@ pub fn discover_outputs(
             sig(d.baseline.rmse * 1e6, 4),
             sig(d.final_fit.rmse * 1e6, 4),
         ),
-        ("SSR (weighted)", sig(d.baseline.ssr, 5), sig(d.final_fit.ssr, 5)),
+        (
+            "SSR (weighted)",
+            sig(d.baseline.ssr, 5),
+            sig(d.final_fit.ssr, 5),
+        ),
         ("AICc", sig(d.baseline.aicc, 6), sig(d.final_fit.aicc, 6)),
         (
             "free parameters",
@@ -255,7 +261,10 @@ pub fn discover_outputs(
     } else {
         format!(
             "a measurement sd of {} µm estimated from the baseline fit (no sd_m column)",
-            sig(d.measurement_sd.first().copied().unwrap_or(f64::NAN) * 1e6, 3)
+            sig(
+                d.measurement_sd.first().copied().unwrap_or(f64::NAN) * 1e6,
+                3
+            )
         )
     };
     page.text(format!(
@@ -273,7 +282,10 @@ pub fn discover_outputs(
             sig(a.delta_ssr, 4),
             sig(a.delta_aicc, 4)
         ));
-        page.table(&estimates_table(&format!("{} parameters", a.effect), &a.parameters)?);
+        page.table(&estimates_table(
+            &format!("{} parameters", a.effect),
+            &a.parameters,
+        )?);
     }
     if !d.final_fit.inference.estimates.is_empty() {
         page.table(&estimates_table(
@@ -296,7 +308,11 @@ pub fn discover_outputs(
             ),
         );
         let mut t = Table::new(
-            format!("Round {}: candidates (Bonferroni threshold α/m = {})", i + 1, sig(r.threshold, 3)),
+            format!(
+                "Round {}: candidates (Bonferroni threshold α/m = {})",
+                i + 1,
+                sig(r.threshold, 3)
+            ),
             vec![
                 Column::plain("candidate"),
                 Column::plain("df"),

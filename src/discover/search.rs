@@ -2,7 +2,8 @@
 //!
 //! 1. fit the baseline (the experiments as configured, `[fit] free` free);
 //! 2. estimate the simulation's own numerical error: the baseline re-run with the grid step and
-//!    every step limit halved; e_b = RMS over each bubble's observations of the change;
+//!    every step limit halved; the Richardson estimate of a first-order scheme, 2 × the change,
+//!    and e_b = its RMS over each bubble's observations;
 //! 3. fix the weights once: σ_i² = sd_i² + e_b² (sd from the file, or, without one, the
 //!    measurement variance estimated from the baseline fit, less the numerical part), so grid
 //!    error is never read as physics;
@@ -107,12 +108,17 @@ pub struct Added {
     pub delta_ssr: f64,
     /// ΔAICc then.
     pub delta_aicc: f64,
+    /// Other candidates of that round that were significant too and fitted within the numerical
+    /// error of the added one (RMSE difference below it): these data, at this numerical
+    /// accuracy, cannot tell them apart from the added effect. With their estimates.
+    pub alternatives: Vec<(String, Vec<Estimate>)>,
 }
 
 /// The numerical-error estimate.
 #[derive(Debug, Clone, PartialEq)]
 pub struct NumericalError {
-    /// Refined minus coarse radius at every observation, m.
+    /// Estimated error of the run at every observation, m: the Richardson factor × (refined −
+    /// coarse radius).
     pub difference: Vec<f64>,
     /// Per-observation e_b (the RMS over its bubble), m.
     pub per_observation: Vec<f64>,
@@ -160,7 +166,13 @@ pub fn diagnose_fit(
     Ok(diagnose(experiments, data, &f.predicted, &first))
 }
 
-/// The numerical error of a fitted model: refined run minus the run itself.
+/// Richardson factor of the numerical-error estimate: the error of the run itself is
+/// |f_{h/2} − f_h|·2^p/(2^p − 1) for a scheme of order p; the time stepping and the sub-grid
+/// coupling are first order (p = 1), so the factor is 2.
+pub const RICHARDSON_FACTOR: f64 = 2.0;
+
+/// The numerical error of a fitted model: the Richardson estimate from the run refined in space
+/// and time, RICHARDSON_FACTOR × (refined − coarse).
 pub fn numerical_error(
     f: &Fitted,
     experiments: &Experiments,
@@ -171,7 +183,11 @@ pub fn numerical_error(
         refine(d).map_err(|m| Error::Input(crate::error::InputError::new(m)))?;
     }
     let pf = fine.predict(experiments, data, &f.values)?;
-    let difference: Vec<f64> = pf.iter().zip(&f.predicted).map(|(a, b)| a - b).collect();
+    let difference: Vec<f64> = pf
+        .iter()
+        .zip(&f.predicted)
+        .map(|(a, b)| RICHARDSON_FACTOR * (a - b))
+        .collect();
     let mut per_observation = Vec::with_capacity(difference.len());
     let mut k = 0;
     for s in &data.series {
@@ -441,6 +457,18 @@ pub fn discover(
             for (_, paths) in added.iter_mut() {
                 paths.retain(|p| !claimed.contains(p));
             }
+            let alternatives = round
+                .outcomes
+                .iter()
+                .enumerate()
+                .filter(|(i, o)| {
+                    *i != bi
+                        && o.error.is_none()
+                        && o.f_test.p_value < threshold
+                        && o.rmse - b.rmse < numerical.rms
+                })
+                .map(|(_, o)| (o.name.clone(), o.estimates.clone()))
+                .collect();
             added.push((
                 Added {
                     effect: name.clone(),
@@ -449,6 +477,7 @@ pub fn discover(
                     f: b.f_test.f,
                     delta_ssr: b.delta_ssr,
                     delta_aicc: b.delta_aicc,
+                    alternatives,
                 },
                 claimed,
             ));

@@ -54,7 +54,11 @@ pub fn estimates_table(title: &str, est: &[Estimate]) -> Result<Table, Error> {
             cell(e.std_error),
             Cell::text(format!("[{}, {}]", sig(e.ci95[0], 4), sig(e.ci95[1], 4))),
             Cell::text(if e.log { "log space" } else { "linear" }),
-            Cell::text(if e.at_bound { "at a bound: interval not reliable" } else { "" }),
+            Cell::text(if e.at_bound {
+                "at a bound: interval not reliable"
+            } else {
+                ""
+            }),
         ])
         .map_err(Error::Solver)?;
     }
@@ -68,7 +72,10 @@ pub fn simulated_line(run: &SimRun, bubble: usize) -> Vec<(f64, f64)> {
     (0..=n)
         .map(|i| {
             let t = end * i as f64 / n as f64;
-            (t, radius_at(&run.frames, &run.summary.events, bubble, t) * 1e6)
+            (
+                t,
+                radius_at(&run.frames, &run.summary.events, bubble, t) * 1e6,
+            )
         })
         .collect()
 }
@@ -350,7 +357,10 @@ pub fn fit_outputs(
         ("residual variance s² = SSR/(n − p)", sig(f.inference.s2, 5)),
         ("RMSE (unweighted)", format!("{} µm", sig(f.rmse * 1e6, 4))),
         ("AICc", sig(f.aicc, 6)),
-        ("converged", format!("{} ({})", f.lsq.converged, f.lsq.termination)),
+        (
+            "converged",
+            format!("{} ({})", f.lsq.converged, f.lsq.termination),
+        ),
         ("model evaluations", f.lsq.evaluations.to_string()),
     ] {
         t.push(vec![Cell::text(k), Cell::text(v)])
@@ -366,13 +376,13 @@ pub fn fit_outputs(
         &mut page,
         experiments,
         data,
-        &[("simulated, fitted", fitted_runs), ("simulated, start values", start_runs)],
+        &[
+            ("simulated, fitted", fitted_runs),
+            ("simulated, start values", start_runs),
+        ],
         "",
     )?;
-    set.add(
-        "report.md",
-        page.to_markdown().map_err(Error::Solver)?,
-    );
+    set.add("report.md", page.to_markdown().map_err(Error::Solver)?);
     set.add("report.html", page.to_html().map_err(Error::Solver)?);
     Ok(set)
 }

@@ -169,7 +169,14 @@ fn parse<T: for<'de> Deserialize<'de> + ElasticityLaw + 'static>(
 
 /// The registry: TOML name → constructor from the law's parameter table.
 pub const REGISTRY: &[(&str, Build)] = &[
-    ("none", |_| Ok(Box::new(NoElasticity))),
+    ("none", |v| {
+        match v.as_table().and_then(|t| t.keys().next()) {
+            Some(k) => Err(format!(
+                "unknown field `{k}`: law \"none\" takes no parameters"
+            )),
+            None => Ok(Box::new(NoElasticity)),
+        }
+    }),
     ("bulk-modulus", parse::<BulkModulus>),
     (
         "continuity-of-displacement",

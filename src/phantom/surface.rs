@@ -119,9 +119,23 @@ fn parse<T: for<'de> Deserialize<'de> + SurfacePermeability + 'static>(
         .map_err(|e| e.message().to_string())
 }
 
+/// A law without parameters refuses any (a `fold` under `law = "equal"` would otherwise be
+/// silently ignored).
+fn no_params(law: &str, v: &toml::Value) -> Result<(), String> {
+    match v.as_table().and_then(|t| t.keys().next()) {
+        Some(k) => Err(format!(
+            "unknown field `{k}`: law \"{law}\" takes no parameters (set law = \"fold\" or \"area\" to use a fold)"
+        )),
+        None => Ok(()),
+    }
+}
+
 /// The registry: TOML name → constructor.
 pub const REGISTRY: &[(&str, Build)] = &[
-    ("equal", |_| Ok(Box::new(EqualToBulk))),
+    ("equal", |v| {
+        no_params("equal", &v)?;
+        Ok(Box::new(EqualToBulk))
+    }),
     ("fold", parse::<Fold>),
     ("area", parse::<AreaLaw>),
     ("authors-code", parse::<AuthorsCodeLaw>),
