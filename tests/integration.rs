@@ -15,10 +15,14 @@ mod discover;
 mod evaluate;
 #[path = "integration/events.rs"]
 mod events;
+#[path = "integration/fixed_gases.rs"]
+mod fixed_gases;
 #[path = "integration/growth.rs"]
 mod growth;
 #[path = "integration/paper_findings.rs"]
 mod paper_findings;
+#[path = "integration/perfusion.rs"]
+mod perfusion;
 #[path = "integration/profiles.rs"]
 mod profiles;
 #[path = "integration/report.rs"]

@@ -57,6 +57,7 @@ pub fn compare(req: &ElasticityRequest) -> Result<Vec<ElasticityRow>, Error> {
                 law: law.as_ref(),
                 initial_radius: r0,
                 initial_ambient: req.p0,
+                fixed_gases: 0.0,
             };
             let nrt = at(req.p0).pv(r0);
             let rf = if nrt > 0.0 {

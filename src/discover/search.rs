@@ -13,13 +13,16 @@
 //! 5. the candidate with the smallest p is added only if p < α/m (Bonferroni over the m
 //!    candidates tried in that round) AND it lowers the RMSE by more than the numerical error;
 //!    repeat until none qualifies.
+//!
+//! The intervals of every fit here are heteroscedasticity-consistent (sandwich, HC1): the
+//! weights carry the estimated numerical error, which the measurements need not contain.
 
 use super::diagnose::{diagnose, Diagnostics};
 use super::{all_candidates, Prepared};
 use crate::error::Error;
 use crate::fit::data::{Experiments, Measurements};
 use crate::fit::lsq::{Estimate, LsqOptions};
-use crate::fit::model::{fit, observed, refine, Fitted, Model};
+use crate::fit::model::{fit_with, observed, refine, Fitted, Model};
 use crate::fit::stats::{aicc, extra_ss_f_test, FTest};
 use rayon::prelude::*;
 
@@ -43,9 +46,9 @@ impl Default for DiscoverOptions {
             alpha: 0.01,
             max_effects: 3,
             lsq: LsqOptions {
-                fd_step: 1e-2,
-                ftol: 1e-5,
-                xtol: 1e-4,
+                fd_step: 2e-3,
+                ftol: 1e-7,
+                xtol: 1e-6,
                 patience: 12,
             },
             only: Vec::new(),
@@ -312,7 +315,7 @@ fn try_candidate(
     }
     let n_effect = specs.len();
     model.free.extend(specs);
-    let f = match fit(&model, experiments, data, weights, &opts.lsq) {
+    let f = match fit_with(&model, experiments, data, weights, &opts.lsq, true) {
         Ok(f) => f,
         Err(e) => return failed(e.to_string()),
     };
@@ -358,7 +361,7 @@ pub fn discover(
                 .map(|p| p.sd.map_or(1.0, |sd| 1.0 / (sd * sd)))
         })
         .collect();
-    let first = fit(&base, experiments, data, &unit, &opts.lsq)?;
+    let first = fit_with(&base, experiments, data, &unit, &opts.lsq, true)?;
     let numerical = numerical_error(&first, experiments, data)?;
     // measurement sd: from the file, else from the baseline residuals less the numerical part
     let measurement_sd: Vec<f64> = if sd_given {
@@ -385,7 +388,7 @@ pub fn discover(
     for (s, v) in base_w.free.iter_mut().zip(&first.values) {
         s.start = *v;
     }
-    let baseline = fit(&base_w, experiments, data, &weights, &opts.lsq)?;
+    let baseline = fit_with(&base_w, experiments, data, &weights, &opts.lsq, true)?;
     let diagnostics_before = diagnose_fit(&baseline, experiments, data)?;
     let mut current = baseline.clone();
     let mut effects: Vec<String> = Vec::new();

@@ -225,8 +225,17 @@ pub fn t975(dof: usize) -> f64 {
     StudentsT::new(0.0, 1.0, dof as f64).map_or(1.96, |t| t.inverse_cdf(0.975))
 }
 
-/// Estimates, intervals and correlations at `fit` for parameters `specs`.
+/// Estimates, intervals and correlations at `fit` for parameters `specs`, with the classical
+/// covariance s²(JᵀJ)⁻¹ (the weights are the inverse variances up to one common factor).
 pub fn infer(fit: &LsqResult, specs: &[ParamSpec]) -> Inference {
+    infer_with(fit, specs, false)
+}
+
+/// As [`infer`]; with `robust`, the heteroscedasticity-consistent sandwich covariance (HC1,
+/// MacKinnon & White 1985): (JᵀJ)⁻¹ (Σ_i r_i² J_iᵀJ_i) (JᵀJ)⁻¹ · n/(n − p), valid when the
+/// weights are not exactly the inverse variances (as in `discover`, whose weights include the
+/// simulation's estimated numerical error, present in some data and not in others).
+pub fn infer_with(fit: &LsqResult, specs: &[ParamSpec], robust: bool) -> Inference {
     let n = fit.residuals.len();
     let p = specs.len();
     let dof = n.saturating_sub(p);
@@ -252,14 +261,23 @@ pub fn infer(fit: &LsqResult, specs: &[ParamSpec]) -> Inference {
         c /= d;
     }
     let jtj = jv.transpose() * &jv;
-    let (cov, singular) = match jtj.clone().try_inverse() {
-        Some(inv) if inv.iter().all(|x| x.is_finite()) => (inv * s2, false),
+    let (inv, singular) = match jtj.clone().try_inverse() {
+        Some(inv) if inv.iter().all(|x| x.is_finite()) => (inv, false),
         _ => (
             jtj.pseudo_inverse(1e-12)
-                .unwrap_or_else(|_| DMatrix::zeros(p, p))
-                * s2,
+                .unwrap_or_else(|_| DMatrix::zeros(p, p)),
             true,
         ),
+    };
+    let cov = if robust && dof > 0 {
+        let mut meat = DMatrix::<f64>::zeros(p, p);
+        for (i, r) in fit.residuals.iter().enumerate() {
+            let row = jv.row(i);
+            meat += row.transpose() * row * (r * r);
+        }
+        &inv * meat * &inv * (n as f64 / dof as f64)
+    } else {
+        inv * s2
     };
     let t = t975(dof);
     let estimates = specs
@@ -375,5 +393,16 @@ mod tests {
         assert!((t975(18) - 2.100922).abs() < 1e-5);
         let half = inf.estimates[1].ci95[1] - b;
         assert!((half / (2.100922 * se_b) - 1.0).abs() < 1e-4);
+        // HC1 for the slope, by hand: Σ (x−x̄)² e² / (Σ (x−x̄)²)² · n/(n−2)
+        let rob = infer_with(&fit, &specs, true);
+        let hc: f64 = xs
+            .iter()
+            .zip(&ys)
+            .map(|(x, y)| (x - mx).powi(2) * (y - a - b * x).powi(2))
+            .sum::<f64>()
+            / (sxx * sxx)
+            * n
+            / (n - 2.0);
+        assert!((rob.estimates[1].std_error / hc.sqrt() - 1.0).abs() < 1e-4);
     }
 }

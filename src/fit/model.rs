@@ -7,7 +7,7 @@
 //! phantom that has the path, or in every phantom if none has it (a setting at its default).
 
 use super::data::{build_params, Experiments, Measurements};
-use super::lsq::{infer, minimize, Inference, LsqOptions, LsqResult};
+use super::lsq::{infer_with, minimize, Inference, LsqOptions, LsqResult};
 use super::paths::{self, ParamSpec};
 use super::stats::aicc;
 use crate::app::simulate::{simulate, SimRun};
@@ -250,13 +250,26 @@ impl Fitted {
     }
 }
 
-/// Fit `model` to `data` with observation weights `weights` (1/σ², measurement order).
+/// Fit `model` to `data` with observation weights `weights` (1/σ², measurement order); classical
+/// intervals.
 pub fn fit(
     model: &Model,
     experiments: &Experiments,
     data: &Measurements,
     weights: &[f64],
     opts: &LsqOptions,
+) -> Result<Fitted, Error> {
+    fit_with(model, experiments, data, weights, opts, false)
+}
+
+/// [`fit`], with heteroscedasticity-consistent (sandwich) intervals when `robust`.
+pub fn fit_with(
+    model: &Model,
+    experiments: &Experiments,
+    data: &Measurements,
+    weights: &[f64],
+    opts: &LsqOptions,
+    robust: bool,
 ) -> Result<Fitted, Error> {
     let y = observed(data);
     let sw: Vec<f64> = weights.iter().map(|w| w.sqrt()).collect();
@@ -290,7 +303,7 @@ pub fn fit(
         .sum::<f64>()
         / n.max(1) as f64)
         .sqrt();
-    let inference = infer(&lsq, &specs);
+    let inference = infer_with(&lsq, &specs, robust);
     Ok(Fitted {
         model: model.clone(),
         ssr: lsq.ssr,

@@ -1,6 +1,8 @@
 //! A bubble's state is the amount of each gas it holds (mol). Its radius follows from the
 //! ideal-gas law with the Young–Laplace balance, eq. (2.4):
-//! (P_amb + 2γ/R + Ω(R))·(4/3)πR³ = n_total·R_u·T,
+//! (P_amb + 2γ/R + Ω(R) − p_fixed)·(4/3)πR³ = n_total·R_u·T,
+//! where p_fixed is the fixed partial pressure of gases that are not simulated (water vapour,
+//! CO2, unsimulated O2; 0 by default), so n_total counts the simulated gases only.
 //! solved by a bracketed, safeguarded secant root find. (Eq. 2.5 is the derivative of this
 //! balance; the printed 2.5 and 2.10 carry sign/term misprints and are not used.)
 
@@ -74,6 +76,8 @@ pub struct Balance<'a> {
     pub initial_radius: f64,
     /// P_0, Pa.
     pub initial_ambient: f64,
+    /// Fixed partial pressure of the gases that are not simulated, p_fixed, Pa (0 = none).
+    pub fixed_gases: f64,
 }
 
 impl Balance<'_> {
@@ -88,9 +92,15 @@ impl Balance<'_> {
         self.ambient + 2.0 * self.surface_tension / r + self.law.omega(&s)
     }
 
-    /// Gas amount × R_u·T (J) that a bubble of radius `r` holds: P_B(R)·(4/3)πR³.
+    /// Partial pressure of the simulated gases in a bubble of radius `r`: P_B(R) − p_fixed, Pa.
+    pub fn simulated_pressure(&self, r: f64) -> f64 {
+        self.internal_pressure(r) - self.fixed_gases
+    }
+
+    /// Amount of simulated gas × R_u·T (J) that a bubble of radius `r` holds:
+    /// (P_B(R) − p_fixed)·(4/3)πR³.
     pub fn pv(&self, r: f64) -> f64 {
-        self.internal_pressure(r) * 4.0 / 3.0 * PI * r.powi(3)
+        self.simulated_pressure(r) * 4.0 / 3.0 * PI * r.powi(3)
     }
 
     /// The radius at which P_B·V = `nrt` (J), searched upward from 1e-9 m to 10 m starting
@@ -190,7 +200,7 @@ mod tests {
                 Box::new(ReferenceConfiguration { shear_modulus: mu, bulk_modulus: 2.2e9 }),
                 Box::new(Hyperelastic { shear_modulus: mu }),
             ];
-            let b = Balance { ambient: p, surface_tension: gamma, law: laws[law_i].as_ref(), initial_radius: r0, initial_ambient: p };
+            let b = Balance { ambient: p, surface_tension: gamma, law: laws[law_i].as_ref(), initial_radius: r0, initial_ambient: p, fixed_gases: 0.0 };
             let nrt = b.pv(r);
             // a state with non-positive internal pressure holds no gas: not a physical bubble
             prop_assume!(nrt > 0.0);
@@ -208,6 +218,7 @@ mod tests {
             law: &law,
             initial_radius: 1e-4,
             initial_ambient: 1e5,
+            fixed_gases: 0.0,
         };
         let nrt = 1e5 * 4.0 / 3.0 * PI * 1e-12; // R = 1e-4 m at 1e5 Pa
         let r = b.radius_for(nrt, 5e-5).unwrap();

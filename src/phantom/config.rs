@@ -29,7 +29,15 @@ struct RawPhantom {
     bubbles: Vec<RawBubble>,
     population: Option<RawPopulation>,
     #[serde(default)]
+    perfusion: RawPerfusion,
+    #[serde(default)]
     numerics: RawNumerics,
+}
+
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawPerfusion {
+    rate_per_s: Option<f64>,
 }
 
 #[derive(Debug, Deserialize)]
@@ -48,6 +56,7 @@ struct RawGeometry {
 struct RawMaterial {
     temperature_k: Option<f64>,
     surface_tension: Option<f64>,
+    bubble_fixed_gases_pa: Option<f64>,
     elasticity: Option<toml::Table>,
     surface: Option<toml::Table>,
 }
@@ -230,6 +239,20 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
             format!("must be ≥ 0 N/m (got {surface_tension})"),
         ));
     }
+    let bubble_fixed_gases = m.bubble_fixed_gases_pa.unwrap_or(0.0);
+    if !(bubble_fixed_gases >= 0.0 && bubble_fixed_gases.is_finite()) {
+        return Err(err(
+            "material.bubble_fixed_gases_pa",
+            format!("must be a finite pressure ≥ 0 Pa (got {bubble_fixed_gases})"),
+        ));
+    }
+    let perfusion_rate = raw.perfusion.rate_per_s.unwrap_or(0.0);
+    if !(perfusion_rate >= 0.0 && perfusion_rate.is_finite()) {
+        return Err(err(
+            "perfusion.rate_per_s",
+            format!("must be a finite rate ≥ 0 per second (got {perfusion_rate})"),
+        ));
+    }
     let law_of = |t: &Option<toml::Table>, key: &str, default: &str| -> (String, toml::Table) {
         let mut t = t.clone().unwrap_or_default();
         let name = t
@@ -368,6 +391,8 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
         gases,
         min_radius,
         bubbles,
+        perfusion_rate,
+        bubble_fixed_gases,
         numerics,
     };
     // geometry checks that need the grid (bubbles inside, cell count) happen here so that the

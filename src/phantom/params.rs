@@ -116,6 +116,17 @@ pub struct PhantomParams {
     pub min_radius: f64,
     /// Bubbles at t = 0.
     pub bubbles: BubblePlacement,
+    /// Perfusion rate k, 1/s (TOML `[perfusion] rate_per_s`). Default 0 (a gel has no blood
+    /// flow). Every gel cell exchanges gas with blood in equilibrium with the inspired gas,
+    /// the paper's §5 extension: ∂C/∂t = D∇²C − k·(C − L·p_insp(t)/(R_u·T)), with p_insp the
+    /// partial pressure held at the open faces.
+    pub perfusion_rate: f64,
+    /// Fixed partial pressure of gases that are not simulated (water vapour, CO2, O2 when it is
+    /// not a simulated gas) inside every bubble, Pa (TOML `[material] bubble_fixed_gases_pa`).
+    /// Default 0 (a lab gel under chamber gas). The simulated gases then fill the bubble at
+    /// P_B − p_fixed: (P_amb + 2γ/R + Ω(R) − p_fixed)·V = n·R_u·T and Henry's law at the
+    /// interface is C_s,g = L_g·x_g·(P_B − p_fixed)/(R_u·T).
+    pub bubble_fixed_gases: f64,
     /// Time-loop settings.
     pub numerics: Numerics,
 }
@@ -155,6 +166,8 @@ impl PhantomParams {
             ],
             min_radius: h,
             bubbles: BubblePlacement::Explicit(Vec::new()),
+            perfusion_rate: 0.0,
+            bubble_fixed_gases: 0.0,
             numerics: Numerics::default(),
         }
     }

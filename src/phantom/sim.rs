@@ -148,7 +148,7 @@ pub struct RunSummary {
     pub final_radii: Vec<f64>,
     /// Peak total bubble volume, m³, and its time, s.
     pub peak_total_volume: (f64, f64),
-    /// |gas now − gas at start − gas in through open faces| / gas at start, at the end.
+    /// |gas now − gas at start − gas in through open faces and perfusion| / gas at start, at the end.
     pub gas_balance_error: f64,
     /// Steps taken (explicit, implicit).
     pub steps: (usize, usize),
@@ -176,6 +176,7 @@ pub struct Simulation<'a> {
     pub bubbles: Vec<Bubble>,
     rt: f64,
     time: f64,
+    /// Gas that entered through open faces and by perfusion since the balance reference, mol.
     inflow: f64,
     initial_total: f64,
     sphere: Vec<[f64; 3]>,
@@ -254,11 +255,14 @@ impl<'a> Simulation<'a> {
                 law: params.elasticity.as_ref(),
                 initial_radius: r0,
                 initial_ambient: p0,
+                fixed_gases: params.bubble_fixed_gases,
             };
             let n_total = bal.pv(r0) / rt;
             if !(n_total > 0.0) {
                 return Err(input(format!(
-                    "bubble {id}: no gas at Laplace equilibrium with R0 = {r0} m (internal pressure ≤ 0)"
+                    "bubble {id}: no simulated gas at Laplace equilibrium with R0 = {r0} m: the pressure in the bubble, {:.0} Pa, is not above the fixed partial pressure of the other gases (material.bubble_fixed_gases_pa = {:.0} Pa)",
+                    bal.internal_pressure(r0),
+                    params.bubble_fixed_gases
                 )));
             }
             bubbles.push(Bubble {
@@ -341,6 +345,7 @@ impl<'a> Simulation<'a> {
             law: self.params.elasticity.as_ref(),
             initial_radius: b.initial_radius,
             initial_ambient: b.initial_ambient,
+            fixed_gases: self.params.bubble_fixed_gases,
         }
     }
 
@@ -396,7 +401,8 @@ impl<'a> Simulation<'a> {
             return tension;
         }
         let b = &self.bubbles[i];
-        let pb = self.balance_for(b, ambient).internal_pressure(r);
+        // the simulated gases' share of P_B (eq. 2.4 less the fixed partial pressure)
+        let pb = self.balance_for(b, ambient).simulated_pressure(r);
         let n = b.total_moles();
         let outer = r + self.params.surface_layer_thickness;
         for g in 0..ng {
@@ -587,6 +593,8 @@ impl<'a> Simulation<'a> {
             } else {
                 steps.0 += 1;
             }
+            // 4b. perfusion
+            self.perfuse(profile, t, dt);
             self.time = t1;
             // 5. radii at the new pressure
             for i in 0..nb {
@@ -595,9 +603,10 @@ impl<'a> Simulation<'a> {
                 }
                 let nrt = self.bubbles[i].total_moles() * self.rt;
                 let guess = self.bubbles[i].radius;
+                let fixed = self.params.bubble_fixed_gases;
                 let r = self.balance_for(&self.bubbles[i], p1).radius_for(nrt, guess).ok_or_else(|| {
                     Error::Solver(format!(
-                        "bubble {i} at t = {t1:.3} s: no radius satisfies the Laplace balance (P_amb = {p1:.0} Pa, n = {:.3e} mol); the elasticity law has no physical root here",
+                        "bubble {i} at t = {t1:.3} s: no radius satisfies the Laplace balance (P_amb = {p1:.0} Pa, fixed partial pressure of other gases {fixed:.0} Pa, n = {:.3e} mol); the elasticity law has no physical root here, or P_B − p_fixed ≤ 0",
                         nrt / self.rt
                     ))
                 })?;
@@ -669,7 +678,7 @@ impl<'a> Simulation<'a> {
         let balance = ((total - self.initial_total - self.inflow) / self.initial_total).abs();
         if !(balance < BALANCE_LIMIT) {
             return Err(Error::Solver(format!(
-                "gas balance lost: |gas now − gas at start − gas in through open faces| is {balance:.3e} of the start; the run is not trustworthy"
+                "gas balance lost: |gas now − gas at start − gas in through open faces and perfusion| is {balance:.3e} of the start; the run is not trustworthy"
             )));
         }
         Ok(RunSummary {
@@ -688,6 +697,26 @@ impl<'a> Simulation<'a> {
             events,
             cells: self.grid.n_inside,
         })
+    }
+
+    /// The perfusion phase, operator-split after diffusion: every inside cell relaxes toward the
+    /// blood value C_b,g(t) = L_g·p_insp,g(t)/(R_u·T) at rate k (`perfusion_rate`), integrated
+    /// exactly over the step with C_b linear in time ([`diffusion::PerfusionWeights`]). The gas
+    /// perfusion adds or removes is counted with the open-face inflow in the gas balance.
+    fn perfuse(&mut self, profile: &PressureHistory, t: f64, dt: f64) {
+        let k = self.params.perfusion_rate;
+        if !(k > 0.0) {
+            return;
+        }
+        let w = diffusion::PerfusionWeights::new(k, dt);
+        let h3 = self.grid.cell_volume();
+        for g in 0..self.gases.len() {
+            let gas = self.gases[g];
+            let cb0 = self.ostwald[g] * profile.inspired_partial_pressure(gas, t) / self.rt;
+            let cb1 = self.ostwald[g] * profile.inspired_partial_pressure(gas, t + dt) / self.rt;
+            let added = diffusion::perfusion_step(&self.grid, &mut self.fields[g], w, cb0, cb1);
+            self.inflow += added * h3;
+        }
     }
 
     fn coalesce(&mut self, t: f64, p: f64, events: &mut Vec<Event>) -> Result<(), Error> {
@@ -818,7 +847,7 @@ impl<'a> Simulation<'a> {
         let balance = ((total - self.initial_total - self.inflow) / self.initial_total).abs();
         if !(balance < BALANCE_LIMIT) {
             return Err(Error::Solver(format!(
-                "gas balance lost at t = {:.3} s: |gas now − gas at start − gas in through open faces| is {balance:.3e} of the start; the run is not trustworthy",
+                "gas balance lost at t = {:.3} s: |gas now − gas at start − gas in through open faces and perfusion| is {balance:.3e} of the start; the run is not trustworthy",
                 self.time
             )));
         }

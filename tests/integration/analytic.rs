@@ -10,7 +10,13 @@ use decophantom::profile::PressureHistory;
 /// dR/dt = −D·L·(1 − f)·(1/R + 1/√(πDt)), L the Ostwald coefficient (the bubble's gas density
 /// over the saturation concentration) and f = C_∞/C_s. Integrated here with RK4 in s = √t,
 /// where the right-hand side is smooth. Returns (t, R) pairs until R reaches zero.
-fn epstein_plesset(r0: f64, d: f64, l: f64, f: f64, dt_out: f64) -> (Vec<(f64, f64)>, f64) {
+pub(crate) fn epstein_plesset(
+    r0: f64,
+    d: f64,
+    l: f64,
+    f: f64,
+    dt_out: f64,
+) -> (Vec<(f64, f64)>, f64) {
     let k = d * l * (1.0 - f);
     let rhs =
         |s: f64, r: f64| -2.0 * k * (s / r.max(1e-30) + 1.0 / (std::f64::consts::PI * d).sqrt());
@@ -39,6 +45,18 @@ fn epstein_plesset(r0: f64, d: f64, l: f64, f: f64, dt_out: f64) -> (Vec<(f64, f
 }
 
 fn ep_case(r0: f64, h: f64, half_width: f64, duration: f64) -> (Vec<(f64, f64)>, f64) {
+    ep_case_with(r0, h, half_width, duration, 0.0)
+}
+
+/// The Epstein–Plesset set-up of [`epstein_plesset_dissolution`] with `p_fixed` Pa of
+/// non-simulated gases in the bubble (`bubble_fixed_gases`): the gel's N2 tension stays 0.2·P.
+pub(crate) fn ep_case_with(
+    r0: f64,
+    h: f64,
+    half_width: f64,
+    duration: f64,
+    p_fixed: f64,
+) -> (Vec<(f64, f64)>, f64) {
     let (d, l, f, p) = (2e-9, 0.014, 0.2, 1e5);
     let mut params = PhantomParams::box_phantom([2.0 * half_width; 3], h);
     params.surface_tension = 0.0;
@@ -51,6 +69,7 @@ fn ep_case(r0: f64, h: f64, half_width: f64, duration: f64) -> (Vec<(f64, f64)>,
     params.open_faces = params.shape.faces().to_vec();
     let e = 2.0 * half_width;
     params.bubbles = BubblePlacement::Explicit(vec![([e / 2.0; 3], r0)]);
+    params.bubble_fixed_gases = p_fixed;
     params.numerics.record_interval = 0.5;
     // Pure N2 in the bubble at P; the gel (and the open faces) at f·L·P/(R_u T): the profile's
     // "water vapour" of (1 − f)·P lowers the dissolved N2 tension to f·P.

@@ -101,6 +101,7 @@ fn fig2_balance<'a>(
         law,
         initial_radius: r0,
         initial_ambient: FIG2_P0,
+        fixed_gases: 0.0,
     }
 }
 
