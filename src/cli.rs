@@ -499,7 +499,10 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 only: a.only,
                 command: command_line(),
             };
-            let bar = std::sync::Mutex::new(Progress::runs());
+            let bar = std::sync::Mutex::new(Progress {
+                runs: Some("candidate fits (estimated total)"),
+                ..Progress::new()
+            });
             let d = decophantom::app::discover::run(&req, &|done, total| {
                 if let Ok(mut b) = bar.lock() {
                     b.update(done as f64, total as f64);
@@ -526,8 +529,8 @@ fn command_line() -> String {
 struct Progress {
     start: std::time::Instant,
     bar: Option<indicatif::ProgressBar>,
-    /// Counting phantom runs (evaluate, check) rather than simulated seconds.
-    runs: bool,
+    /// What is counted ("phantom runs", "candidate fits"); None: simulated seconds.
+    runs: Option<&'static str>,
 }
 
 impl Progress {
@@ -535,12 +538,12 @@ impl Progress {
         Progress {
             start: std::time::Instant::now(),
             bar: None,
-            runs: false,
+            runs: None,
         }
     }
     fn runs() -> Self {
         Progress {
-            runs: true,
+            runs: Some("phantom runs"),
             ..Progress::new()
         }
     }
@@ -561,8 +564,8 @@ impl Progress {
         if let Some(b) = &self.bar {
             if end > 0.0 {
                 b.set_position(((t / end) * 1000.0).clamp(0.0, 1000.0) as u64);
-                if self.runs {
-                    b.set_message(format!("{t:.1} of {end:.0} phantom runs"));
+                if let Some(what) = self.runs {
+                    b.set_message(format!("{t:.1} of {end:.0} {what}"));
                 } else {
                     b.set_message(format!("t = {t:.0} of {end:.0} s"));
                 }
