@@ -8,6 +8,23 @@ use clap::{Parser, Subcommand};
 pub struct Cli {
     #[command(subcommand)]
     pub command: Command,
+    /// No progress bar and no "wrote ..." lines (results, errors and --json still print).
+    #[arg(long, short = 'q', global = true)]
+    pub quiet: bool,
+}
+
+/// Set by --quiet: progress bars stay hidden.
+static QUIET: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+fn quiet() -> bool {
+    QUIET.load(std::sync::atomic::Ordering::Relaxed)
+}
+
+/// Print a "wrote ..." line unless --quiet.
+fn wrote(path: &std::path::Path) {
+    if !quiet() {
+        println!("wrote {}", path.display());
+    }
 }
 
 #[derive(Subcommand, Debug)]
@@ -24,6 +41,10 @@ pub enum Command {
     Check(CheckArgs),
     /// Plan a dive with several algorithms, run each schedule (× elasticity law) through the phantom, rank, report.
     Evaluate(EvaluateArgs),
+    /// Print a shell completion script (bash, zsh, fish, elvish, powershell) to stdout.
+    Completions(CompletionsArgs),
+    /// Print the man page (roff) to stdout, e.g. `decophantom man > decophantom.1`.
+    Man,
     /// Fit phantom parameters (by TOML path) to measured bubble radii: estimates, intervals, report.
     Fit(FitArgs),
     /// Measured-like radius data from the model, with candidate effects switched on and noise.
@@ -77,6 +98,14 @@ pub struct MergeArgs {
     /// Output folder.
     #[arg(long)]
     pub out: std::path::PathBuf,
+}
+
+/// Arguments of `completions`.
+#[derive(clap::Args, Debug)]
+pub struct CompletionsArgs {
+    /// The shell.
+    #[arg(value_enum)]
+    pub shell: clap_complete::Shell,
 }
 
 /// Arguments of `fit`.
@@ -168,6 +197,9 @@ pub struct CheckArgs {
     /// Write the report folder here (replaced whole).
     #[arg(long)]
     pub out: Option<std::path::PathBuf>,
+    /// Print the result as JSON (schema decophantom.check/1, docs/json.md) instead of text.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// The dive to plan (shared by `plan` and `evaluate`).
@@ -230,6 +262,9 @@ pub struct EvaluateArgs {
     /// Output folder (replaced whole; created if missing).
     #[arg(long)]
     pub out: std::path::PathBuf,
+    /// Print the scores and ranking as JSON (schema decophantom.evaluate/1, docs/json.md).
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Arguments of `simulate`.
@@ -312,11 +347,26 @@ pub struct PlanArgs {
     /// Write the schedule here (readable by check, simulate, evaluate --schedule).
     #[arg(long)]
     pub out: Option<std::path::PathBuf>,
+    /// Print the plan as JSON (schema decophantom.plan/1, docs/json.md) instead of the table.
+    #[arg(long)]
+    pub json: bool,
 }
 
 /// Run a parsed command; returns the process exit code.
 pub fn run(cli: Cli) -> anyhow::Result<i32> {
+    QUIET.store(cli.quiet, std::sync::atomic::Ordering::Relaxed);
     match cli.command {
+        Command::Completions(a) => {
+            use clap::CommandFactory;
+            let mut cmd = Cli::command();
+            clap_complete::generate(a.shell, &mut cmd, "decophantom", &mut std::io::stdout());
+            Ok(0)
+        }
+        Command::Man => {
+            use clap::CommandFactory;
+            clap_mangen::Man::new(Cli::command()).render(&mut std::io::stdout())?;
+            Ok(0)
+        }
         Command::Plan(a) => {
             let req = decophantom::app::plan::PlanRequest {
                 algorithm: a.algorithm,
@@ -335,7 +385,13 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                     .and_then(decophantom::app::plan::PlanFormat::parse),
                 out: a.out,
             };
-            print!("{}", decophantom::app::plan::run(&req)?.text);
+            let algorithm = req.algorithm.display().to_string();
+            let outcome = decophantom::app::plan::run(&req)?;
+            if a.json {
+                print!("{}", decophantom::app::json::plan(&outcome, &algorithm));
+            } else {
+                print!("{}", outcome.text);
+            }
             Ok(0)
         }
         Command::Simulate(a) => {
@@ -372,7 +428,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             bar.finish();
             let run = run?;
             print!("{}", decophantom::app::simulate::describe(&run));
-            println!("wrote {}", a.out.display());
+            wrote(&a.out);
             // interrupted runs wrote what they had, and say so with the usual SIGINT code
             Ok(match run.summary.ending {
                 decophantom::phantom::sim::Ending::Interrupted { .. } => 130,
@@ -416,9 +472,13 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             let outcome = decophantom::app::check::run(&req, &mut |t, e| bar.update(t, e));
             bar.finish();
             let outcome = outcome?;
-            print!("{}", outcome.text);
-            if let Some(out) = &a.out {
-                println!("wrote {}", out.display());
+            if a.json {
+                print!("{}", decophantom::app::json::check(&outcome.evaluation));
+            } else {
+                print!("{}", outcome.text);
+                if let Some(out) = &a.out {
+                    wrote(out);
+                }
             }
             Ok(if outcome.all_pass { 0 } else { 1 })
         }
@@ -441,8 +501,13 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             let mut bar = Progress::runs();
             let ev = decophantom::app::evaluate::run(&req, &mut |t, e| bar.update(t, e));
             bar.finish();
-            print!("{}", decophantom::app::evaluate::summary_text(&ev?));
-            println!("wrote {}", a.out.display());
+            let ev = ev?;
+            if a.json {
+                print!("{}", decophantom::app::json::evaluate(&ev));
+            } else {
+                print!("{}", decophantom::app::evaluate::summary_text(&ev));
+                wrote(&a.out);
+            }
             Ok(0)
         }
         Command::Fit(a) => {
@@ -562,6 +627,9 @@ impl Progress {
         }
     }
     fn update(&mut self, t: f64, end: f64) {
+        if quiet() {
+            return;
+        }
         if self.bar.is_none() && self.start.elapsed().as_secs_f64() > 1.0 {
             let b = indicatif::ProgressBar::new(1000);
             b.set_style(

@@ -7,6 +7,7 @@ pub mod discover;
 pub mod elasticity;
 pub mod evaluate;
 pub mod fit;
+pub mod json;
 pub mod plan;
 pub mod sensitivity;
 pub mod simulate;

@@ -530,3 +530,124 @@ fn dive_logs_are_checked_and_evaluated_as_schedules() {
     assert_eq!(code, 2, "{stderr}");
     assert!(stderr.contains("--depth"), "{stderr}");
 }
+
+/// `--json` (docs/json.md) on check, evaluate and plan; `--quiet`; completions and man page.
+/// The JSON is checked against the command's own definitions, not against a previous output:
+/// every score has margin = limit − value and pass = (value ≤ limit); the kinds are the
+/// criteria file's, in its order; the exit code agrees with all_pass.
+#[test]
+fn json_output_quiet_completions_and_man() {
+    let d = tempdir("evaluate-json");
+    let ph = write(&d, "phantom.toml", PHANTOM);
+    let tight = write(&d, "tight.toml", &criteria(1.0));
+    let fast = write(&d, "fast.csv", FAST);
+    let out = d.join("check");
+    let (code, stdout, stderr) = run(&[
+        "check",
+        "--schedule",
+        s(&fast),
+        "--criteria",
+        s(&tight),
+        "--phantom",
+        s(&ph),
+        "--json",
+        "--quiet",
+        "--out",
+        s(&out),
+    ]);
+    assert!(code == 0 || code == 1, "{stdout}{stderr}");
+    assert!(!stdout.contains("wrote"), "{stdout}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).expect("check --json is JSON");
+    assert_eq!(v["schema"], "decophantom.check/1");
+    assert_eq!(v["all_pass"].as_bool(), Some(code == 0));
+    let kinds: Vec<&str> = v["run"]["scores"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["kind"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        kinds,
+        [
+            "peak-total-volume",
+            "peak-radius",
+            "peak-area-growth-rate",
+            "volume-time-above-threshold",
+            "peak-supersaturation",
+            "hazard"
+        ]
+    );
+    for sc in v["run"]["scores"].as_array().unwrap() {
+        let (val, lim) = (sc["value"].as_f64().unwrap(), sc["limit"].as_f64().unwrap());
+        assert_eq!(sc["margin"].as_f64().unwrap(), lim - val);
+        assert_eq!(sc["pass"].as_bool().unwrap(), val <= lim);
+    }
+    assert_eq!(v["run"]["scores"][2]["label"], "dA/dt after surfacing");
+    // the fast CSV schedule: 12.5 min to the surface, 30 m deep
+    assert_eq!(
+        v["candidate"]["schedule"]["runtime_min"].as_f64(),
+        Some(12.5)
+    );
+    assert_eq!(
+        v["candidate"]["schedule"]["max_depth_m"].as_f64(),
+        Some(30.0)
+    );
+
+    let (code, stdout, stderr) = run(&[
+        "evaluate",
+        "--schedule",
+        s(&fast),
+        "--criteria",
+        s(&tight),
+        "--phantom",
+        s(&ph),
+        "--json",
+        "--out",
+        s(&d.join("eval")),
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).expect("evaluate --json is JSON");
+    assert_eq!(v["schema"], "decophantom.evaluate/1");
+    assert_eq!(v["runs"].as_array().unwrap().len(), 1);
+    assert_eq!(v["ranking"][0]["rank"].as_u64(), Some(1));
+
+    // plan --json: the stops add up to stop_time_min, and the runtime is the last stop's
+    // runtime plus the final ascent (3 m at 10 m/min = 0.3 min in DecoTengu's conventions)
+    let (code, stdout, stderr) = run(&[
+        "plan",
+        "--algorithm",
+        root()
+            .join("algorithms/zhl16b-gf30-85.toml")
+            .to_str()
+            .unwrap(),
+        "--depth",
+        "35",
+        "--time",
+        "40",
+        "--json",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let v: serde_json::Value = serde_json::from_str(&stdout).expect("plan --json is JSON");
+    assert_eq!(v["schema"], "decophantom.plan/1");
+    let stops = v["schedule"]["stops"].as_array().unwrap();
+    let sum: f64 = stops.iter().map(|s| s["stop_min"].as_f64().unwrap()).sum();
+    assert!((sum - v["schedule"]["stop_time_min"].as_f64().unwrap()).abs() < 1e-9);
+    let last = stops.last().unwrap();
+    assert_eq!(last["depth_m"].as_f64(), Some(3.0));
+    let runtime = v["schedule"]["runtime_min"].as_f64().unwrap();
+    assert!((runtime - (last["runtime_min"].as_f64().unwrap() + 0.3)).abs() < 1e-9);
+    assert!(v["cns_percent"].as_f64().unwrap() > 0.0);
+
+    // completions and man page come from the clap definitions
+    let (code, bash, _) = run(&["completions", "bash"]);
+    assert_eq!(code, 0);
+    assert!(bash.contains("_decophantom()") && bash.contains("--schedule"));
+    let (code, man, _) = run(&["man"]);
+    assert_eq!(code, 0);
+    assert!(
+        man.starts_with(".ie") || man.starts_with(".TH"),
+        "{}",
+        &man[..80]
+    );
+    assert!(man.contains("decophantom"));
+}
