@@ -64,15 +64,7 @@ pub fn run(req: &FitRequest) -> Result<Fitted, Error> {
         .field("--param")
         .into());
     }
-    let weights: Vec<f64> = data
-        .series
-        .iter()
-        .flat_map(|s| {
-            s.points
-                .iter()
-                .map(|p| p.sd.map_or(1.0, |sd| 1.0 / (sd * sd)))
-        })
-        .collect();
+    let weights = data.weights();
     let fitted = fit(
         &model,
         &experiments,

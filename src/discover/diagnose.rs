@@ -175,11 +175,7 @@ pub fn diagnose(
     let mut runs = Vec::new();
     let mut k = 0;
     for s in &data.series {
-        let ei = experiments
-            .list
-            .iter()
-            .position(|e| e.name == s.experiment)
-            .unwrap_or(0);
+        let ei = experiments.index_of(&s.experiment);
         let profile = &experiments.list[ei].profile;
         let (df, dn) = distances(
             experiments,

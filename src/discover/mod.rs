@@ -76,6 +76,46 @@ pub fn find(docs: &[toml::Table], name: &str) -> Option<Box<dyn CandidateEffect>
     all_candidates(docs).into_iter().find(|c| c.name() == name)
 }
 
+/// An effect switched on by one phantom setting whose null value is 0 (perfusion, fixed gases):
+/// the setting is written as 0 in every phantom, fitted in log space from `start` (≈ the null),
+/// after a scan of `scan`. Does not apply where a phantom already has the setting above 0.
+pub struct ZeroNullSetting {
+    /// Candidate name.
+    pub name: &'static str,
+    /// Phantom TOML path.
+    pub path: &'static str,
+    /// Start of the local fit (negligible against the effects the scan covers).
+    pub start: f64,
+    /// Scan range (log-spaced, 5 values).
+    pub scan: (f64, f64),
+}
+
+impl CandidateEffect for ZeroNullSetting {
+    fn name(&self) -> String {
+        self.name.into()
+    }
+    fn prepare(&self, docs: &mut [toml::Table]) -> Result<Option<Prepared>, String> {
+        use crate::fit::paths;
+        if docs
+            .iter()
+            .any(|d| paths::get(d, self.path).is_some_and(|k| k > 0.0))
+        {
+            return Ok(None);
+        }
+        for d in docs.iter_mut() {
+            paths::set(d, self.path, 0.0)?;
+        }
+        Ok(Some(Prepared {
+            params: vec![EffectParam {
+                spec: ParamSpec::positive(self.path, self.start),
+                null: 0.0,
+                scan: log_scan(self.scan.0, self.scan.1, 5),
+            }],
+            dof: 1,
+        }))
+    }
+}
+
 /// Log-spaced values from `lo` to `hi` (n ≥ 2).
 pub fn log_scan(lo: f64, hi: f64, n: usize) -> Vec<f64> {
     (0..n)

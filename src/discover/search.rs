@@ -352,15 +352,7 @@ pub fn discover(
     let base = Model::baseline(experiments)?;
     let n = data.len();
     let sd_given = data.has_sd();
-    let unit: Vec<f64> = data
-        .series
-        .iter()
-        .flat_map(|s| {
-            s.points
-                .iter()
-                .map(|p| p.sd.map_or(1.0, |sd| 1.0 / (sd * sd)))
-        })
-        .collect();
+    let unit = data.weights();
     let first = fit_with(&base, experiments, data, &unit, &opts.lsq, true)?;
     let numerical = numerical_error(&first, experiments, data)?;
     // measurement sd: from the file, else from the baseline residuals less the numerical part

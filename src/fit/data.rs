@@ -67,6 +67,17 @@ impl Measurements {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
+    /// Weights 1/sd² in measurement order (1 where a row has no sd).
+    pub fn weights(&self) -> Vec<f64> {
+        self.series
+            .iter()
+            .flat_map(|s| {
+                s.points
+                    .iter()
+                    .map(|p| p.sd.map_or(1.0, |sd| 1.0 / (sd * sd)))
+            })
+            .collect()
+    }
     /// Whether every row carries `sd_m`.
     pub fn has_sd(&self) -> bool {
         self.series
@@ -280,6 +291,11 @@ impl Experiments {
     /// The experiment of this name.
     pub fn get(&self, name: &str) -> Option<&Experiment> {
         self.list.iter().find(|e| e.name == name)
+    }
+    /// Position of the experiment of this name (0 if there is none: measurements are checked
+    /// against the experiments before they are used).
+    pub fn index_of(&self, name: &str) -> usize {
+        self.list.iter().position(|e| e.name == name).unwrap_or(0)
     }
 }
 

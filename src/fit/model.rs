@@ -190,11 +190,7 @@ pub fn run_one(
 pub fn sample(experiments: &Experiments, data: &Measurements, runs: &[SimRun]) -> Vec<f64> {
     let mut out = Vec::with_capacity(data.len());
     for s in &data.series {
-        let k = experiments
-            .list
-            .iter()
-            .position(|e| e.name == s.experiment)
-            .unwrap_or(0);
+        let k = experiments.index_of(&s.experiment);
         let run = &runs[k];
         for p in &s.points {
             out.push(radius_at(

@@ -92,11 +92,7 @@ pub fn add_overlays(
     prefix: &str,
 ) -> Result<(), Error> {
     for s in &data.series {
-        let k = experiments
-            .list
-            .iter()
-            .position(|e| e.name == s.experiment)
-            .unwrap_or(0);
+        let k = experiments.index_of(&s.experiment);
         let o = Overlay {
             title: format!("{}: bubble {}", s.experiment, s.bubble),
             x_label: "time (s)".into(),

@@ -129,7 +129,9 @@ impl Overlay {
                         )))
                         .map_err(|e| draw_err(e.to_string()))?
                         .label(name.as_str())
-                        .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 20, y)], style));
+                        .legend(move |(x, y)| {
+                            DashedPathElement::new(vec![(x, y), (x + 24, y)], 8, 5, style)
+                        });
                 }
             }
             let black = ShapeStyle {

@@ -441,90 +441,97 @@ fn outside_the_model_the_null_control_holds_and_a_hidden_surface_fold_is_found()
     assert!(d.final_fit.rmse <= 1.2 * NOISE);
 }
 
+/// Run the binary with `args`.
+fn cmd(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(bin())
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn ok(out: &std::process::Output) {
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 #[test]
 fn fit_and_discover_commands_write_their_reports_and_refuse_bad_data() {
     let dir = tempdir("discover-cli");
     let e = lab(&dir, "air", 3.2e-3, 200e-6, false);
+    let e = e.to_str().unwrap();
     let m = dir.join("m.csv");
-    let out = std::process::Command::new(bin())
-        .args(["synth", "--experiments"])
-        .arg(&e)
-        .args([
-            "--effect",
-            "surface-permeability=30",
-            "--noise-sd",
-            "2e-6",
-            "--seed",
-            "5",
-            "--out",
-        ])
-        .arg(&m)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let m = m.to_str().unwrap();
     let fit_dir = dir.join("fit");
-    let out = std::process::Command::new(bin())
-        .args(["fit", "--measured"])
-        .arg(&m)
-        .arg("--experiments")
-        .arg(&e)
-        .args(["--param", "material.surface.fold=1..1000", "--out"])
-        .arg(&fit_dir)
-        .output()
-        .unwrap();
-    // the phantoms have no surface law yet: the fold is not settable on the default law
+    let f = fit_dir.to_str().unwrap();
+    let disc = dir.join("disc");
+    let (x, me, out) = ("--experiments", "--measured", "--out");
+    ok(&cmd(&[
+        "synth",
+        x,
+        e,
+        "--effect",
+        "surface-permeability=30",
+        "--noise-sd",
+        "2e-6",
+        "--seed",
+        "5",
+        out,
+        m,
+    ]));
+    // the phantoms have no surface law: a fold is not a setting of the default law (exit 2)
+    let o = cmd(&[
+        "fit",
+        me,
+        m,
+        x,
+        e,
+        "--param",
+        "material.surface.fold=1..1000",
+        out,
+        f,
+    ]);
     assert_eq!(
-        out.status.code(),
+        o.status.code(),
         Some(2),
         "{}",
-        String::from_utf8_lossy(&out.stderr)
+        String::from_utf8_lossy(&o.stderr)
     );
-    let out = std::process::Command::new(bin())
-        .args(["fit", "--measured"])
-        .arg(&m)
-        .arg("--experiments")
-        .arg(&e)
-        .args(["--param", "scale:gases.*.diffusivity=0.01..10", "--out"])
-        .arg(&fit_dir)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ok(&cmd(&[
+        "fit",
+        me,
+        m,
+        x,
+        e,
+        "--param",
+        "scale:gases.*.diffusivity=0.01..10",
+        out,
+        f,
+    ]));
     let fit: toml::Table = std::fs::read_to_string(fit_dir.join("fit.toml"))
         .unwrap()
         .parse()
         .unwrap();
     assert!(fit["parameter"].as_array().unwrap().len() == 1);
-    for f in [
+    for name in [
         "report.md",
         "report.html",
         "overlay-osc-b0.svg",
         "overlay-dec-b0.svg",
     ] {
-        assert!(fit_dir.join(f).exists(), "{f}");
+        assert!(fit_dir.join(name).exists(), "{name}");
     }
-    let disc = dir.join("disc");
-    let out = std::process::Command::new(bin())
-        .args(["discover", "--measured"])
-        .arg(&m)
-        .arg("--experiments")
-        .arg(&e)
-        .arg("--out")
-        .arg(&disc)
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ok(&cmd(&[
+        "discover",
+        me,
+        m,
+        x,
+        e,
+        out,
+        disc.to_str().unwrap(),
+    ]));
     let t: toml::Table = std::fs::read_to_string(disc.join("discover.toml"))
         .unwrap()
         .parse()
@@ -560,22 +567,22 @@ fn fit_and_discover_commands_write_their_reports_and_refuse_bad_data() {
     for (i, (text, field)) in cases.iter().enumerate() {
         let bad = dir.join(format!("bad{i}.csv"));
         std::fs::write(&bad, text).unwrap();
-        let o = dir.join(format!("never{i}"));
-        let out = std::process::Command::new(bin())
-            .args(["discover", "--measured"])
-            .arg(&bad)
-            .arg("--experiments")
-            .arg(&e)
-            .arg("--out")
-            .arg(&o)
-            .output()
-            .unwrap();
-        let err = String::from_utf8_lossy(&out.stderr);
-        assert_eq!(out.status.code(), Some(2), "case {i}: {err}");
+        let never = dir.join(format!("never{i}"));
+        let o = cmd(&[
+            "discover",
+            me,
+            bad.to_str().unwrap(),
+            x,
+            e,
+            out,
+            never.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "case {i}: {err}");
         assert!(
             err.contains(&format!("bad{i}.csv")) && err.contains(field),
             "case {i}: {err}"
         );
-        assert!(!o.exists(), "case {i}: output written");
+        assert!(!never.exists(), "case {i}: output written");
     }
 }
