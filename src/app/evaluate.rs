@@ -628,7 +628,51 @@ pub fn schedule_table(ev: &Evaluation) -> Result<Table, Error> {
     Ok(t)
 }
 
-/// The scores, one row per run and criterion (also written as `scores.csv`).
+/// `scores.csv`: one row per run and criterion, keyed by the criterion's registry `kind`
+/// (stable) with the criteria file's `label` in its own column, numbers at full precision
+/// (the shortest text that reads back to the same f64): `schedule,elasticity,kind,label,unit,
+/// value,limit,margin,value_over_limit,result`.
+pub fn scores_csv(ev: &Evaluation) -> Result<String, Error> {
+    let mut w = csv::Writer::from_writer(Vec::new());
+    let csv_err = |e: csv::Error| Error::Solver(format!("scores.csv: {e}"));
+    w.write_record([
+        "schedule",
+        "elasticity",
+        "kind",
+        "label",
+        "unit",
+        "value",
+        "limit",
+        "margin",
+        "value_over_limit",
+        "result",
+    ])
+    .map_err(csv_err)?;
+    for r in &ev.runs {
+        for s in &r.scores {
+            w.write_record([
+                ev.candidates[r.candidate].label.as_str(),
+                r.law,
+                s.kind,
+                s.label.as_str(),
+                s.unit,
+                &s.value.to_string(),
+                &s.limit.to_string(),
+                &s.margin.to_string(),
+                &s.ratio().to_string(),
+                if s.pass { "pass" } else { "FAIL" },
+            ])
+            .map_err(csv_err)?;
+        }
+    }
+    let bytes = w
+        .into_inner()
+        .map_err(|e| Error::Solver(format!("scores.csv: {e}")))?;
+    String::from_utf8(bytes).map_err(|e| Error::Solver(format!("scores.csv: {e}")))
+}
+
+/// The scores, one row per run and criterion, rounded for reading (the report's table;
+/// `scores.csv` has them at full precision, [`scores_csv`]).
 pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
     let mut t = Table::new(
         "Criteria per schedule",
@@ -904,10 +948,7 @@ pub fn add_report(
 
     page.section("Scores");
     let scores = scores_table(ev)?;
-    set.add(
-        format!("{prefix}scores.csv"),
-        scores.to_csv().map_err(Error::Solver)?,
-    );
+    set.add(format!("{prefix}scores.csv"), scores_csv(ev)?);
     let mut crit = String::from("Criteria (value ≤ limit passes; margin = limit − value):\n");
     for c in &ev.criteria.criteria {
         crit.push_str(&format!(
