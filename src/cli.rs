@@ -99,9 +99,13 @@ pub struct DiscoverArgs {
 /// Arguments of `check`.
 #[derive(clap::Args, Debug)]
 pub struct CheckArgs {
-    /// Schedule: TOML from `plan --out`, or CSV `time_min,depth_m[,gas]`.
+    /// Schedule: TOML from `plan --out`, CSV `time_min,depth_m[,gas]`, the paper's two-column
+    /// .txt, or a Subsurface (.xml, .ssrf) / UDDF (.uddf) dive log.
     #[arg(long)]
     pub schedule: std::path::PathBuf,
+    /// Which dive of a dive log (1-based; required when the log holds more than one).
+    #[arg(long)]
+    pub dive: Option<usize>,
     /// Criteria TOML (algorithms/criteria/*.toml).
     #[arg(long)]
     pub criteria: std::path::PathBuf,
@@ -139,11 +143,28 @@ pub struct DiveArgs {
 /// Arguments of `evaluate`.
 #[derive(clap::Args, Debug)]
 pub struct EvaluateArgs {
-    #[command(flatten)]
-    pub dive: DiveArgs,
+    /// Maximum depth, m (to plan with --algorithm).
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "schedule")]
+    pub depth: Option<f64>,
+    /// Bottom time, min (to plan with --algorithm).
+    #[arg(long, allow_hyphen_values = true, required_unless_present = "schedule")]
+    pub time: Option<f64>,
+    /// Bottom gas: air, 32 (nitrox), 18/45 (trimix O2/He).
+    #[arg(long)]
+    pub gas: Option<String>,
+    /// Deco gas, MIX@SWITCH_DEPTH_M or MIX (switch at its MOD at 1.6 bar); repeatable.
+    #[arg(long = "deco-gas")]
+    pub deco_gas: Vec<String>,
     /// Algorithm TOML; repeat for each algorithm to compare.
-    #[arg(long, required = true)]
+    #[arg(long, required_unless_present = "schedule")]
     pub algorithm: Vec<std::path::PathBuf>,
+    /// Schedule compared as it is: plan --out TOML, CSV time_min,depth_m[,gas], the paper's
+    /// two-column .txt, or a Subsurface (.xml, .ssrf) / UDDF (.uddf) dive log; repeatable.
+    #[arg(long)]
+    pub schedule: Vec<std::path::PathBuf>,
+    /// Which dive of a dive log given with --schedule (1-based).
+    #[arg(long)]
+    pub dive: Option<usize>,
     /// Elasticity laws: all, or names (comma-separated or repeated); default the phantom's own.
     #[arg(long)]
     pub elasticity: Vec<String>,
@@ -237,10 +258,11 @@ pub struct PlanArgs {
     pub algorithm: std::path::PathBuf,
     #[command(flatten)]
     pub dive: DiveArgs,
-    /// Output format: md, csv or toml.
-    #[arg(long, default_value = "md", value_parser = ["md", "csv", "toml"])]
-    pub format: String,
-    /// Write the schedule TOML here (readable by every later command).
+    /// Format of the printed table and of --out: md, csv or toml (default md printed; --out
+    /// by its extension: .csv the waypoints `check` reads, .md the table, else the schedule TOML).
+    #[arg(long, value_parser = ["md", "csv", "toml"])]
+    pub format: Option<String>,
+    /// Write the schedule here (readable by check, simulate, evaluate --schedule).
     #[arg(long)]
     pub out: Option<std::path::PathBuf>,
 }
@@ -255,7 +277,15 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 time_min: a.dive.time,
                 gas: a.dive.gas,
                 deco_gases: a.dive.deco_gas,
-                format: decophantom::app::plan::PlanFormat::parse(&a.format).unwrap_or_default(),
+                format: a
+                    .format
+                    .as_deref()
+                    .and_then(decophantom::app::plan::PlanFormat::parse)
+                    .unwrap_or_default(),
+                out_format: a
+                    .format
+                    .as_deref()
+                    .and_then(decophantom::app::plan::PlanFormat::parse),
                 out: a.out,
             };
             print!("{}", decophantom::app::plan::run(&req)?.text);
@@ -328,6 +358,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Check(a) => {
             let req = decophantom::app::check::CheckRequest {
                 schedule: a.schedule,
+                dive: a.dive,
                 criteria: a.criteria,
                 phantom: a.phantom,
                 grid_step_m: a.grid_step,
@@ -346,11 +377,13 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
         }
         Command::Evaluate(a) => {
             let req = decophantom::app::evaluate::EvaluateRequest {
-                depth_m: a.dive.depth,
-                time_min: a.dive.time,
-                gas: a.dive.gas,
-                deco_gases: a.dive.deco_gas,
+                depth_m: a.depth,
+                time_min: a.time,
+                gas: a.gas,
+                deco_gases: a.deco_gas,
                 algorithms: a.algorithm,
+                schedules: a.schedule,
+                dive: a.dive,
                 elasticity: a.elasticity,
                 phantom: a.phantom,
                 grid_step_m: a.grid_step,
@@ -401,7 +434,10 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 only: a.only,
                 command: command_line(),
             };
-            let bar = std::sync::Mutex::new(Progress::runs());
+            let bar = std::sync::Mutex::new(Progress {
+                runs: Some("candidate fits (estimated total)"),
+                ..Progress::new()
+            });
             let d = decophantom::app::discover::run(&req, &|done, total| {
                 if let Ok(mut b) = bar.lock() {
                     b.update(done as f64, total as f64);
@@ -428,8 +464,8 @@ fn command_line() -> String {
 struct Progress {
     start: std::time::Instant,
     bar: Option<indicatif::ProgressBar>,
-    /// Counting phantom runs (evaluate, check) rather than simulated seconds.
-    runs: bool,
+    /// What is counted ("phantom runs", "candidate fits"); None: simulated seconds.
+    runs: Option<&'static str>,
 }
 
 impl Progress {
@@ -437,12 +473,12 @@ impl Progress {
         Progress {
             start: std::time::Instant::now(),
             bar: None,
-            runs: false,
+            runs: None,
         }
     }
     fn runs() -> Self {
         Progress {
-            runs: true,
+            runs: Some("phantom runs"),
             ..Progress::new()
         }
     }
@@ -460,8 +496,8 @@ impl Progress {
         if let Some(b) = &self.bar {
             if end > 0.0 {
                 b.set_position(((t / end) * 1000.0).clamp(0.0, 1000.0) as u64);
-                if self.runs {
-                    b.set_message(format!("{t:.1} of {end:.0} phantom runs"));
+                if let Some(what) = self.runs {
+                    b.set_message(format!("{t:.1} of {end:.0} {what}"));
                 } else {
                     b.set_message(format!("t = {t:.0} of {end:.0} s"));
                 }

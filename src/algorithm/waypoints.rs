@@ -11,6 +11,7 @@ use std::path::Path;
 
 /// Read any schedule a later command may be given: `.toml` (as `plan --out` writes it) or
 /// `.csv` waypoints (`time_min,depth_m[,gas]`, in `conventions`, starting on `default_gas`).
+/// Dive logs: [`read_schedule_with_notes`].
 pub fn read_schedule(
     path: &Path,
     conventions: &Conventions,
@@ -30,6 +31,80 @@ pub fn read_schedule(
         )
         .in_file(path)),
     }
+}
+
+/// A schedule read from a file, with what was assumed or repaired while reading it (import
+/// notes of a dive log; empty for the other formats).
+#[derive(Debug, Clone)]
+pub struct ScheduleImport {
+    /// The schedule.
+    pub schedule: Schedule,
+    /// Import notes, to print and to write into reports.
+    pub notes: Vec<String>,
+}
+
+/// [`read_schedule`], and dive logs too (`.xml`, `.ssrf`: Subsurface; `.uddf`; dive `dive`,
+/// 1-based, required when the log holds more than one), with their import notes.
+pub fn read_schedule_with_notes(
+    path: &Path,
+    conventions: &Conventions,
+    default_gas: GasMix,
+    dive: Option<usize>,
+) -> Result<ScheduleImport, InputError> {
+    if crate::profile::is_dive_log(path) {
+        return read_divelog_schedule(path, conventions, dive);
+    }
+    if dive.is_some() {
+        return Err(InputError::new(
+            "a dive number applies only to dive logs (.xml, .ssrf, .uddf); leave out --dive",
+        )
+        .in_file(path)
+        .field("--dive"));
+    }
+    Ok(ScheduleImport {
+        schedule: read_schedule(path, conventions, default_gas)?,
+        notes: Vec::new(),
+    })
+}
+
+/// One dive of a Subsurface or UDDF log as a schedule: its samples (and gas switches) become
+/// the waypoints; surface pressure and water density are the log's (pressure per metre =
+/// ρ·g); the water vapour is the conventions' (the gas is breathed). A dive that ends below
+/// the surface is brought up at the conventions' ascent rate (noted). Closed-circuit dives
+/// are refused.
+pub fn read_divelog_schedule(
+    path: &Path,
+    conventions: &Conventions,
+    dive: Option<usize>,
+) -> Result<ScheduleImport, InputError> {
+    use crate::profile::{divelog, select_dive};
+    let d = select_dive(path, divelog::read(path)?, dive)?;
+    let h = d.history(0.0).map_err(|e| e.in_file(path))?;
+    let pa_per_m = d.density_kg_m3 * crate::units::STANDARD_GRAVITY;
+    let mut notes = d.notes.clone();
+    let mut pts: Vec<(f64, f64, GasMix, usize)> = Vec::with_capacity(h.times_s.len() + 1);
+    for (i, (&t, &p)) in h.times_s.iter().zip(&h.ambient_pa).enumerate() {
+        let gas = h.gas[i.min(h.gas.len() - 1)];
+        let depth = ((p - d.surface_pa) / pa_per_m).max(0.0);
+        pts.push((t / 60.0, depth, gas, 0));
+    }
+    let (t_end, d_end, gas_end, _) = *pts.last().expect("a history has points");
+    if d_end > 0.0 {
+        let rate = conventions.ascent_rate_m_min;
+        pts.push((t_end + d_end / rate, 0.0, gas_end, 0));
+        notes.push(format!(
+            "the last sample is at {d_end:.2} m; an ascent to the surface at {rate} m/min was added"
+        ));
+    }
+    notes.push(format!(
+        "water vapour {} Pa at the open faces (alveolar, for a breathed gas)",
+        conventions.water_vapour_pa
+    ));
+    let mut schedule = schedule_from_points(&pts, path, conventions);
+    schedule.label = d.label.clone();
+    schedule.surface_pressure_pa = d.surface_pa;
+    schedule.pa_per_m = pa_per_m;
+    Ok(ScheduleImport { schedule, notes })
 }
 
 /// Read one of the paper's legacy two-column dive files (`time depth`, minutes and metres of sea
@@ -171,6 +246,16 @@ pub fn parse_waypoints_csv(
         .at_line(last_line)
         .field("depth_m"));
     }
+    Ok(schedule_from_points(&pts, path, conventions))
+}
+
+/// Legs and stops through waypoints (time min, depth m, gas from this point, line), which
+/// start at time 0, increase in time and end at the surface (checked by the callers).
+fn schedule_from_points(
+    pts: &[(f64, f64, GasMix, usize)],
+    path: &Path,
+    conventions: &Conventions,
+) -> Schedule {
     let max_d = pts.iter().map(|p| p.1).fold(0.0, f64::max);
     let first_at_max = pts.iter().position(|p| p.1 == max_d).unwrap_or(0);
     let mut left_bottom = false;
@@ -206,7 +291,7 @@ pub fn parse_waypoints_csv(
             gas: g,
         });
     }
-    Ok(Schedule {
+    Schedule {
         label: path
             .file_stem()
             .map_or_else(|| "waypoints".into(), |s| s.to_string_lossy().into_owned()),
@@ -215,7 +300,7 @@ pub fn parse_waypoints_csv(
         water_vapour_pa: conventions.water_vapour_pa,
         legs,
         stops,
-    })
+    }
 }
 
 #[cfg(test)]

@@ -1,14 +1,17 @@
 //! `decophantom check`: run one candidate schedule through the phantom and score it against
 //! a criteria file. The schedule comes from `plan --out` (TOML), a CSV of waypoints
 //! `time_min,depth_m[,gas]` (DecoTengu conventions: 1.01325 bar at the surface, 9 985 Pa/m,
-//! alveolar water vapour 6 270 Pa; air unless a gas column says otherwise) or is written by hand.
+//! alveolar water vapour 6 270 Pa; air unless a gas column says otherwise), the paper's
+//! two-column `.txt`, a dive of a Subsurface or UDDF log (its own surface pressure and water
+//! density; import notes printed and reported), or is written by hand. Every schedule is
+//! watched at the surface after it for the criteria protocol's time.
 
 use super::evaluate::{
     add_report, dive_history, finish_page, run_matrix, Candidate, Evaluation, PhantomSpec,
     ReportContext,
 };
 use crate::algorithm::conventions::DECOTENGU;
-use crate::algorithm::waypoints::read_schedule;
+use crate::algorithm::waypoints::read_schedule_with_notes;
 use crate::error::Error;
 use crate::gas::GasMix;
 use crate::report::html::Page;
@@ -20,8 +23,10 @@ use std::path::PathBuf;
 /// What `check` needs.
 #[derive(Debug, Clone)]
 pub struct CheckRequest {
-    /// Schedule file (`.toml` or `.csv`).
+    /// Schedule file (`.toml`, `.csv`, legacy `.txt`, or a Subsurface/UDDF dive log).
     pub schedule: PathBuf,
+    /// Which dive of a dive log (1-based; required when the log holds more than one).
+    pub dive: Option<usize>,
     /// Criteria file.
     pub criteria: PathBuf,
     /// Phantom file (built-in hydrogel-dive if absent).
@@ -52,7 +57,8 @@ pub fn run(
 ) -> Result<CheckOutcome, Error> {
     let criteria = load_criteria(&req.criteria)?;
     let phantom = PhantomSpec::load(req.phantom.as_deref(), req.grid_step_m)?;
-    let schedule = read_schedule(&req.schedule, &DECOTENGU, GasMix::AIR)?;
+    let imp = read_schedule_with_notes(&req.schedule, &DECOTENGU, GasMix::AIR, req.dive)?;
+    let schedule = imp.schedule;
     let history = dive_history(&schedule, &criteria.protocol, req.repeat_after_min)
         .map_err(|e| e.in_file(&req.schedule))?;
     let law = phantom.own_law();
@@ -61,10 +67,14 @@ pub fn run(
         source: req.schedule.display().to_string(),
         schedule,
         history,
+        notes: imp.notes,
     };
     let ev = run_matrix(vec![cand], phantom, vec![law], criteria, progress)?;
     let all_pass = ev.all_pass();
     let mut text = String::new();
+    for n in &ev.candidates[0].notes {
+        let _ = writeln!(text, "note: {n}");
+    }
     let _ = writeln!(
         text,
         "{} through {} ({law}):",

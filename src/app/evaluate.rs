@@ -194,6 +194,8 @@ pub struct Candidate {
     pub schedule: Schedule,
     /// The pressure history that drives the phantom ([`dive_history`]).
     pub history: PressureHistory,
+    /// What was assumed or repaired importing it (dive logs); printed and reported.
+    pub notes: Vec<String>,
 }
 
 /// The pressure history a schedule drives the phantom with (see the module documentation);
@@ -368,16 +370,20 @@ pub fn run_matrix(
 /// What `evaluate` needs.
 #[derive(Debug, Clone)]
 pub struct EvaluateRequest {
-    /// Maximum depth, m.
-    pub depth_m: f64,
-    /// Bottom time, min.
-    pub time_min: f64,
+    /// Maximum depth, m (required with algorithms).
+    pub depth_m: Option<f64>,
+    /// Bottom time, min (required with algorithms).
+    pub time_min: Option<f64>,
     /// Bottom gas (air if absent).
     pub gas: Option<String>,
     /// Deco gases (`50@21`, `O2`).
     pub deco_gases: Vec<String>,
-    /// Algorithm files (at least one).
+    /// Algorithm files (at least one algorithm or schedule).
     pub algorithms: Vec<PathBuf>,
+    /// Schedule files compared as they are (TOML, CSV, legacy .txt, dive logs).
+    pub schedules: Vec<PathBuf>,
+    /// Which dive of a dive log given as a schedule (1-based).
+    pub dive: Option<usize>,
     /// Elasticity laws (`all`, names; empty → the phantom's own).
     pub elasticity: Vec<String>,
     /// Phantom file (built-in hydrogel-dive if absent).
@@ -418,6 +424,50 @@ pub fn plan_candidates(
             source: source.clone(),
             schedule,
             history,
+            notes: Vec::new(),
+        });
+    }
+    Ok(out)
+}
+
+/// Candidates from schedule files (plan --out TOML, waypoint CSV, legacy .txt, or a dive of a
+/// Subsurface/UDDF log, `dive` 1-based), in DecoTengu conventions where the file states none;
+/// each watched after surfacing as the protocol says. Labels are made unique with the file
+/// stem.
+pub fn schedule_candidates(
+    files: &[PathBuf],
+    dive: Option<usize>,
+    protocol: &Protocol,
+    repeat_after_min: Option<f64>,
+    taken: &[Candidate],
+) -> Result<Vec<Candidate>, InputError> {
+    use crate::algorithm::conventions::DECOTENGU;
+    use crate::algorithm::waypoints::read_schedule_with_notes;
+    use crate::profile::is_dive_log;
+    if dive.is_some() && !files.iter().any(|f| is_dive_log(f)) {
+        return Err(InputError::new(
+            "--dive applies to a dive log (.xml, .ssrf, .uddf) given with --schedule; there is none",
+        )
+        .in_file("<command line>")
+        .field("--dive"));
+    }
+    let mut out: Vec<Candidate> = Vec::new();
+    for path in files {
+        // the dive number is for the logs among the schedules
+        let d = if is_dive_log(path) { dive } else { None };
+        let imp = read_schedule_with_notes(path, &DECOTENGU, crate::gas::GasMix::AIR, d)?;
+        let history =
+            dive_history(&imp.schedule, protocol, repeat_after_min).map_err(|e| e.in_file(path))?;
+        let mut label = imp.schedule.label.clone();
+        if taken.iter().chain(&out).any(|c| c.label == label) {
+            label = format!("{label} ({})", path.display());
+        }
+        out.push(Candidate {
+            label,
+            source: path.display().to_string(),
+            schedule: imp.schedule,
+            history,
+            notes: imp.notes,
         });
     }
     Ok(out)
@@ -428,12 +478,26 @@ pub fn run(
     req: &EvaluateRequest,
     progress: &mut (dyn FnMut(f64, f64) + Send),
 ) -> Result<Evaluation, Error> {
-    if req.algorithms.is_empty() {
-        return Err(InputError::new("give at least one --algorithm FILE")
-            .in_file("<command line>")
-            .field("--algorithm")
-            .into());
+    if req.algorithms.is_empty() && req.schedules.is_empty() {
+        return Err(
+            InputError::new("give at least one --algorithm FILE or --schedule FILE")
+                .in_file("<command line>")
+                .field("--algorithm")
+                .into(),
+        );
     }
+    let planned = if req.algorithms.is_empty() {
+        None
+    } else {
+        let need = |v: Option<f64>, flag: &str| {
+            v.ok_or_else(|| {
+                InputError::new(format!("planning with --algorithm needs {flag}"))
+                    .in_file("<command line>")
+                    .field(flag)
+            })
+        };
+        Some((need(req.depth_m, "--depth")?, need(req.time_min, "--time")?))
+    };
     let criteria = load_criteria(&req.criteria)?;
     let phantom = PhantomSpec::load(req.phantom.as_deref(), req.grid_step_m)?;
     let laws = phantom.resolve_laws(&req.elasticity)?;
@@ -442,27 +506,45 @@ pub fn run(
         .iter()
         .map(|p| load_algorithm(p).map(|a| (a, p.display().to_string())))
         .collect::<Result<Vec<_>, _>>()?;
-    let candidates = plan_candidates(
-        &algs,
-        req.depth_m,
-        req.time_min,
-        req.gas.as_deref(),
-        &req.deco_gases,
+    let mut candidates = match planned {
+        Some((depth_m, time_min)) => plan_candidates(
+            &algs,
+            depth_m,
+            time_min,
+            req.gas.as_deref(),
+            &req.deco_gases,
+            &criteria.protocol,
+            req.repeat_after_min,
+        )?,
+        None => Vec::new(),
+    };
+    let from_files = schedule_candidates(
+        &req.schedules,
+        req.dive,
         &criteria.protocol,
         req.repeat_after_min,
+        &candidates,
     )?;
+    candidates.extend(from_files);
     let ev = run_matrix(candidates, phantom, laws, criteria, progress)?;
-    let dive = format!(
-        "{} m for {} min on {}{}",
-        req.depth_m,
-        req.time_min,
-        req.gas.as_deref().unwrap_or("air"),
-        if req.deco_gases.is_empty() {
-            String::new()
-        } else {
-            format!(", deco gases {}", req.deco_gases.join(", "))
-        }
-    );
+    let mut parts: Vec<String> = Vec::new();
+    if let Some((depth_m, time_min)) = planned {
+        parts.push(format!(
+            "{} m for {} min on {}{}",
+            depth_m,
+            time_min,
+            req.gas.as_deref().unwrap_or("air"),
+            if req.deco_gases.is_empty() {
+                String::new()
+            } else {
+                format!(", deco gases {}", req.deco_gases.join(", "))
+            }
+        ));
+    }
+    for f in &req.schedules {
+        parts.push(format!("schedule {}", f.display()));
+    }
+    let dive = parts.join("; ");
     let mut page = Page::new(format!("Decompression report: {dive}"));
     let mut set = OutputSet::new();
     let ctx = ReportContext {
@@ -769,6 +851,12 @@ pub fn add_report(
     if let Some(cmd) = &ctx.command {
         inputs.push_str(&format!("\n- Produced by: `{cmd}`"));
     }
+    for c in ev.candidates.iter().filter(|c| !c.notes.is_empty()) {
+        inputs.push_str(&format!("\n- Import notes for {}:", c.label));
+        for n in &c.notes {
+            inputs.push_str(&format!("\n    - {n}"));
+        }
+    }
     page.text(inputs);
 
     page.section("Schedules");
@@ -1032,6 +1120,11 @@ pub fn finish_page(page: &mut Page, set: &mut OutputSet, prefix: &str) -> Result
 /// A short text summary: the ranking under each law with failures and worst criterion.
 pub fn summary_text(ev: &Evaluation) -> String {
     let mut s = String::new();
+    for c in &ev.candidates {
+        for n in &c.notes {
+            s.push_str(&format!("note ({}): {n}\n", c.label));
+        }
+    }
     for r in ranking(ev) {
         s.push_str(&format!(
             "{:<26} {:>2}. {:<28} failures {}  worst {} ({:.3} of limit)\n",

@@ -31,6 +31,15 @@ impl PlanFormat {
             _ => None,
         }
     }
+
+    /// `md`, `csv` or `toml`.
+    pub fn name(self) -> &'static str {
+        match self {
+            PlanFormat::Md => "md",
+            PlanFormat::Csv => "csv",
+            PlanFormat::Toml => "toml",
+        }
+    }
 }
 
 /// What the user asked for.
@@ -46,10 +55,36 @@ pub struct PlanRequest {
     pub gas: Option<String>,
     /// Deco gases, `50@21` or `50` (switch at the MOD at 1.6 bar).
     pub deco_gases: Vec<String>,
-    /// Output format.
+    /// Format of the printed table.
     pub format: PlanFormat,
-    /// Where to write the schedule TOML, if anywhere.
+    /// Where to write the schedule, if anywhere (whole or not at all).
     pub out: Option<PathBuf>,
+    /// Format of `out` when given explicitly (`--format`); else from its extension
+    /// (`.csv` waypoints, `.md` the table, anything else the schedule TOML).
+    pub out_format: Option<PlanFormat>,
+}
+
+/// The format `--out` is written in: the explicit one, else from the extension. An explicit
+/// format that contradicts a known extension (`--format toml --out s.csv`) is refused.
+pub fn out_format(
+    out: &std::path::Path,
+    given: Option<PlanFormat>,
+) -> Result<PlanFormat, InputError> {
+    let by_ext = out
+        .extension()
+        .and_then(|e| PlanFormat::parse(&e.to_string_lossy()));
+    match (given, by_ext) {
+        (Some(g), Some(e)) if g != e => Err(InputError::new(format!(
+            "--format {} contradicts the file name's extension; name the file .{} or drop --format",
+            g.name(),
+            g.name()
+        ))
+        .in_file(out)
+        .field("--out")),
+        (Some(g), _) => Ok(g),
+        (None, Some(e)) => Ok(e),
+        (None, None) => Ok(PlanFormat::Toml),
+    }
 }
 
 /// The planned dive and its formatted table.
@@ -109,6 +144,22 @@ pub fn plan_dive(
 
 /// Plan the dive; write `--out` if asked. Bad input → [`InputError`] (exit code 2).
 pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
+    // check the output before planning: its format, and that it is not an input
+    let out = match &req.out {
+        Some(o) => {
+            let f = out_format(o, req.out_format)?;
+            if same_file(o, &req.algorithm) {
+                return Err(InputError::new(
+                    "--out names the algorithm file; give another file name (outputs never replace inputs)",
+                )
+                .in_file(o)
+                .field("--out")
+                .into());
+            }
+            Some((o, f))
+        }
+        None => None,
+    };
     let alg = load_algorithm(&req.algorithm)?;
     let (plan, schedule) = plan_dive(
         &alg,
@@ -125,11 +176,13 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
         algorithm: Some(req.algorithm.display().to_string()),
     };
     let toml_text = schedule.to_toml_string(Some(&summary));
-    if let Some(out) = &req.out {
-        std::fs::write(out, &toml_text).map_err(|e| crate::error::Error::Io {
-            path: out.clone(),
-            source: e,
-        })?;
+    if let Some((path, f)) = out {
+        let bytes = match f {
+            PlanFormat::Toml => toml_text.clone(),
+            PlanFormat::Csv => waypoints_csv(&schedule),
+            PlanFormat::Md => markdown(&schedule, &plan, &oxygen),
+        };
+        crate::report::output::write_file_atomic(path, bytes.as_bytes())?;
     }
     let text = match req.format {
         PlanFormat::Toml => toml_text,
@@ -141,6 +194,34 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
         oxygen,
         text,
     })
+}
+
+/// Whether two paths name the same existing file.
+fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
+}
+
+/// The schedule as the waypoint CSV `check` reads: `time_min,depth_m,gas`, one row per leg
+/// boundary from (0, 0) to the surface; the gas on a row is breathed from that waypoint to the
+/// next (the last row's cell is empty). Full precision, so reading it back gives the same legs.
+/// The CSV carries no conventions: `check` reads it in DecoTengu's (1.01325 bar, 9 985 Pa/m,
+/// 6 270 Pa water vapour); the TOML form keeps the algorithm's own.
+pub fn waypoints_csv(s: &Schedule) -> String {
+    let mut out = String::from("time_min,depth_m,gas\n");
+    let legs: Vec<_> = s.legs.iter().filter(|l| l.duration_s > 0.0).collect();
+    let mut t_s = 0.0;
+    let start = legs.first().map_or(0.0, |l| l.start_depth_m);
+    let mut depth = start;
+    for l in &legs {
+        let _ = writeln!(out, "{},{},{}", t_s / 60.0, depth, gas_text(l.gas));
+        t_s += l.duration_s;
+        depth = l.end_depth_m;
+    }
+    let _ = writeln!(out, "{},{},", t_s / 60.0, depth);
+    out
 }
 
 /// Minutes for tables: whole numbers without decimals, others to 0.01.

@@ -41,6 +41,8 @@ pub struct SimRun {
     pub frames: Vec<Frame>,
     /// Wall-clock seconds.
     pub wall_seconds: f64,
+    /// Import notes of the profile (dive logs: defaults used, repairs, watch time).
+    pub notes: Vec<String>,
 }
 
 struct WithProgress<'a> {
@@ -89,6 +91,7 @@ pub fn simulate_until(
         summary,
         frames: obs.rec.frames,
         wall_seconds: start.elapsed().as_secs_f64(),
+        notes: Vec::new(),
     })
 }
 
@@ -132,6 +135,8 @@ struct SummaryFile<'a> {
     steps_implicit: usize,
     cells: usize,
     events: Vec<String>,
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    import_notes: Vec<String>,
 }
 
 /// A one-line description of how a run ended.
@@ -191,6 +196,7 @@ pub fn summary_toml(run: &SimRun, profile: &str, phantom: &str) -> Result<String
         steps_implicit: s.steps.1,
         cells: s.cells,
         events: s.events.iter().map(event_text).collect(),
+        import_notes: run.notes.clone(),
     };
     toml::to_string(&f).map_err(|e| Error::Solver(format!("summary.toml: {e}")))
 }
@@ -297,9 +303,17 @@ pub fn add_run_files(
 
 /// Run `simulate` and write its outputs; returns the run.
 pub fn run(req: &SimulateRequest, progress: &mut dyn FnMut(f64, f64)) -> Result<SimRun, Error> {
-    let profile = load_profile_or_schedule(&req.profile, &req.load)?;
+    let (profile, notes) = if crate::profile::is_dive_log(&req.profile) {
+        crate::profile::load_with_notes(&req.profile, &req.load)?
+    } else {
+        (
+            load_profile_or_schedule(&req.profile, &req.load)?,
+            Vec::new(),
+        )
+    };
     let phantom = load_phantom(&req.phantom)?;
-    let run = simulate_until(&phantom.params, &profile, progress, req.stop.as_deref())?;
+    let mut run = simulate_until(&phantom.params, &profile, progress, req.stop.as_deref())?;
+    run.notes = notes;
     let mut set = OutputSet::new();
     add_run_files(&mut set, "", &run, &profile.label, &phantom.params.name)?;
     set.commit(&req.out)?;
@@ -341,7 +355,8 @@ pub fn describe(run: &SimRun) -> String {
 /// which must not change when regenerated from the same inputs).
 pub fn describe_results(run: &SimRun) -> String {
     let s = &run.summary;
-    format!(
+    let notes: String = run.notes.iter().map(|n| format!("note: {n}\n")).collect();
+    notes + &format!(
         "{}\nmax radius {:.1} µm (bubble {}, t = {:.1} s); peak total volume {:.4e} m³ (t = {:.1} s)\nsteps {} explicit + {} implicit on {} cells; gas-balance error {:.2e}\n",
         ending_text(&s.ending),
         s.max_radius.0 * 1e6,

@@ -268,7 +268,7 @@ pub fn discover_outputs(
         )
     };
     page.text(format!(
-        "How an effect is accepted: each round every candidate is refitted on top of the current model; the extra sum-of-squares F-test (nested least-squares models, independent Gaussian errors) compares it with the current model. The best is added only if p < α/m (Bonferroni over the m candidates tried in that round, α = {}) and it lowers the RMSE by more than the simulation's numerical error, {} µm (RMS change of the simulated radii when the grid step and every step limit are halved). Every test weights an observation by 1/(sd² + e²), with sd {} and e its bubble's numerical error, so grid error is never read as physics.",
+        "How an effect is accepted: each round every candidate is refitted on top of the current model; the extra sum-of-squares F-test (nested least-squares models, independent Gaussian errors) compares it with the current model. The best is added only if p < α/m (Bonferroni over the m candidates tried in that round, α = {}) and it lowers the RMSE by more than the simulation's numerical error, {} µm (the Richardson estimate of a first-order scheme: twice the RMS change of the simulated radii when the grid step and every step limit are halved). Every test weights an observation by 1/(sd² + e²), with sd {} and e its bubble's numerical error, so grid error is never read as physics.",
         d.options.alpha,
         sig(d.numerical.rms * 1e6, 3),
         sd_text

@@ -401,7 +401,7 @@ pub fn discover(
             .into_iter()
             .filter(|c| {
                 let name = c.name();
-                !effects.iter().any(|e| *e == name)
+                !effects.contains(&name)
                     && (opts.only.is_empty() || opts.only.iter().any(|o| name.starts_with(o)))
             })
             .collect();

@@ -262,7 +262,7 @@ impl ParamSpec {
                 (Some(lo), Some(hi))
             }
         };
-        let positive = base.map_or(true, |b| b > 0.0) && lower.map_or(true, |l| l > 0.0);
+        let positive = base.is_none_or(|b| b > 0.0) && lower.is_none_or(|l| l > 0.0);
         let start = match (base, lower, upper) {
             (Some(b), _, _) => b,
             (None, Some(lo), Some(hi)) if positive => (lo * hi).sqrt(),

@@ -157,25 +157,52 @@ pub struct GrowthRow {
     pub note: String,
 }
 
-/// The paper's growth metrics for every measured bubble and its simulation at `predicted`.
-pub fn growth_rows(data: &Measurements, predicted: &[f64]) -> Vec<GrowthRow> {
+/// The paper's growth metrics for every measured bubble and its simulation at `predicted`, fitted
+/// (as the paper did, §4.2) to the growth after the profile's last pressure change: the points
+/// from the time the profile reaches its final pressure on.
+pub fn growth_rows(
+    experiments: &Experiments,
+    data: &Measurements,
+    predicted: &[f64],
+) -> Vec<GrowthRow> {
     let mut k = 0;
     let mut rows = Vec::new();
     for s in &data.series {
         let n = s.points.len();
-        let m: Vec<(f64, f64)> = s.points.iter().map(|p| (p.time, p.radius)).collect();
-        let w: Option<Vec<f64>> = s
-            .points
+        let start = experiments
+            .get(&s.experiment)
+            .map_or(0.0, |e| e.profile.final_arrival_s());
+        let keep: Vec<usize> = (0..n).filter(|i| s.points[*i].time >= start).collect();
+        let m: Vec<(f64, f64)> = keep
             .iter()
-            .map(|p| p.sd.map(|sd| 1.0 / (sd * sd)))
+            .map(|i| (s.points[*i].time, s.points[*i].radius))
             .collect();
-        let sim: Vec<(f64, f64)> = s
-            .points
+        let w: Option<Vec<f64>> = keep
             .iter()
-            .zip(&predicted[k..k + n])
-            .map(|(p, r)| (p.time, *r))
+            .map(|i| s.points[*i].sd.map(|sd| 1.0 / (sd * sd)))
+            .collect();
+        let sim: Vec<(f64, f64)> = keep
+            .iter()
+            .map(|i| (s.points[*i].time, predicted[k + i]))
             .collect();
         k += n;
+        if m.len() < 4 {
+            rows.push(GrowthRow {
+                experiment: s.experiment.clone(),
+                bubble: s.bubble,
+                measured_plateau_m: None,
+                measured_plateau_ci95_m: None,
+                measured_half_life_s: None,
+                measured_half_life_ci95_s: None,
+                simulated_plateau_m: None,
+                simulated_half_life_s: None,
+                same_curve_p_value: None,
+                note: format!(
+                    "fewer than 4 points after the profile's last pressure change (t ≥ {start} s)"
+                ),
+            });
+            continue;
+        }
         let fm: Option<GrowthFit> = fit_growth(&m, w.as_deref()).ok().filter(|g| g.converged);
         let fs: Option<GrowthFit> = fit_growth(&sim, None).ok().filter(|g| g.converged);
         let p = compare_growth(&m, &sim).ok().map(|t| t.p_value);
@@ -213,6 +240,7 @@ pub fn growth_table(rows: &[GrowthRow]) -> Result<Table, Error> {
             Column::new("simulated R_p", "µm"),
             Column::new("simulated half-life", "s"),
             Column::plain("same curve? F-test p"),
+            Column::plain("note"),
         ],
     );
     let o = |v: Option<f64>, f: f64| v.map_or(Cell::Empty, |x| cell(x * f));
@@ -228,6 +256,7 @@ pub fn growth_table(rows: &[GrowthRow]) -> Result<Table, Error> {
             o(r.simulated_plateau_m, 1e6),
             o(r.simulated_half_life_s, 1.0),
             o(r.same_curve_p_value, 1.0),
+            Cell::text(&r.note),
         ])
         .map_err(Error::Solver)?;
     }
@@ -315,7 +344,7 @@ pub fn fit_outputs(
     data: &Measurements,
     command: &str,
 ) -> Result<OutputSet, Error> {
-    let growth = growth_rows(data, &f.predicted);
+    let growth = growth_rows(experiments, data, &f.predicted);
     let mut set = OutputSet::new();
     set.add("fit.toml", fit_toml(f, experiments, data, &growth)?);
     let mut page = Page::new("Fit of the phantom model to measured bubble radii");
@@ -368,7 +397,7 @@ pub fn fit_outputs(
     }
     page.table(&t);
     page.section("Growth metrics (the paper's §4.2)");
-    page.text("Each measured series and its simulation at the same times fitted to R(t) = R_p − (R_p − R_0)·e^(−k(t − t₀)); the last column is the extra sum-of-squares F-test of one curve for both (3 parameters) against one each (6), the comparison of the paper's Fig. 5. Series that are not growth curves (oscillations) have no converged fit.");
+    page.text("The growth after the profile's last pressure change (as the paper fitted it, §4.2): each measured series and its simulation at the same times fitted to R(t) = R_p − (R_p − R_0)·e^(−k(t − t₀)); the last column is the extra sum-of-squares F-test of one curve for both (3 parameters) against one each (6), the comparison of the paper's Fig. 5. Series without such a phase (an oscillation that ends where it changes) have no metrics.");
     page.table(&growth_table(&growth)?);
     page.section("Measured and simulated radii");
     add_overlays(

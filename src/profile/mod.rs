@@ -31,9 +31,115 @@ pub struct LoadOptions {
     pub dive: Option<usize>,
 }
 
+/// How long a logged dive is watched at the surface after its last sample, s: the default
+/// watch time of the criteria protocol (`risk::Protocol`, 60 min), so that a dive-log run
+/// records the bubbles growing after surfacing and not only up to the last sample.
+pub const DIVE_LOG_WATCH_S: f64 = 3600.0;
+
+/// Whether a path names a dive log (`.xml`, `.ssrf`: Subsurface; `.uddf`).
+pub fn is_dive_log(path: &Path) -> bool {
+    path.extension()
+        .map(|e| e.to_string_lossy().to_ascii_lowercase())
+        .is_some_and(|e| matches!(e.as_str(), "xml" | "ssrf" | "uddf"))
+}
+
+/// Choose dive `dive` (1-based) of a log; required when the log holds more than one.
+pub fn select_dive(
+    path: &Path,
+    mut dives: Vec<divelog::ImportedDive>,
+    dive: Option<usize>,
+) -> Result<divelog::ImportedDive, InputError> {
+    let k = match (dive, dives.len()) {
+        (None, 1) => 0,
+        (None, n) => {
+            return Err(InputError::new(format!(
+                "the log holds {n} dives; choose one with a dive number 1..={n}"
+            ))
+            .in_file(path)
+            .field("dive"))
+        }
+        (Some(k), n) if k >= 1 && k <= n => k - 1,
+        (Some(k), n) => {
+            return Err(InputError::new(format!(
+                "dive {k} does not exist: the log holds {n} dive(s), numbered from 1"
+            ))
+            .in_file(path)
+            .field("dive"))
+        }
+    };
+    Ok(dives.swap_remove(k))
+}
+
+/// A logged dive as a pressure history followed by `watch_s` at the surface (on air), with
+/// the import notes. A dive whose last sample is below the surface is first brought up at
+/// 10 m/min (noted).
+pub fn dive_log_history(
+    dive: &divelog::ImportedDive,
+    vapour_pa: f64,
+    watch_s: f64,
+) -> Result<(PressureHistory, Vec<String>), InputError> {
+    let mut notes = dive.notes.clone();
+    let mut h = dive.history(vapour_pa)?;
+    let bad = |m: String| InputError::new(format!("dive '{}': {m}", dive.label));
+    let last_p = *h.ambient_pa.last().unwrap_or(&dive.surface_pa);
+    let last_depth =
+        (last_p - dive.surface_pa) / (dive.density_kg_m3 * crate::units::STANDARD_GRAVITY);
+    let gas = h.gas_at(h.duration_s());
+    if last_depth > 1e-9 {
+        let up_s = last_depth / 10.0 * 60.0;
+        notes.push(format!(
+            "the last sample is at {last_depth:.2} m; an ascent to the surface at 10 m/min ({up_s:.0} s) was added"
+        ));
+        let ascent = PressureHistory::with_gas(
+            "ascent",
+            vec![0.0, up_s],
+            vec![last_p, dive.surface_pa],
+            gas,
+            vapour_pa,
+        )
+        .map_err(bad)?;
+        h = h.then(&ascent).map_err(bad)?;
+    }
+    if watch_s > 0.0 {
+        notes.push(format!(
+            "watched {} min at the surface after the dive",
+            watch_s / 60.0
+        ));
+        let surface = PressureHistory::with_gas(
+            "surface",
+            vec![0.0, watch_s],
+            vec![dive.surface_pa, dive.surface_pa],
+            GasMix::AIR,
+            vapour_pa,
+        )
+        .map_err(bad)?;
+        h = h.then(&surface).map_err(bad)?;
+    }
+    h.label = dive.label.clone();
+    Ok((h, notes))
+}
+
+/// [`load`], and the import notes of a dive log (defaults used, repairs, the watch time at
+/// the surface); empty for the other formats.
+pub fn load_with_notes(
+    path: &Path,
+    opts: &LoadOptions,
+) -> Result<(PressureHistory, Vec<String>), InputError> {
+    let h = load(path, opts)?;
+    let notes = if is_dive_log(path) {
+        let d = select_dive(path, divelog::read(path)?, opts.dive)?;
+        dive_log_history(&d, opts.vapour_pa.unwrap_or(0.0), DIVE_LOG_WATCH_S)
+            .map_err(|e| e.in_file(path))?
+            .1
+    } else {
+        Vec::new()
+    };
+    Ok((h, notes))
+}
+
 /// Load a pressure profile: `.toml` files with [`toml::read`] (their units are in the file);
 /// dive logs (`.xml`, `.ssrf`: Subsurface; `.uddf`) with [`divelog::read`], choosing
-/// `opts.dive`; anything else as a legacy two-column file with [`legacy::read`], which needs
+/// `opts.dive`, followed by [`DIVE_LOG_WATCH_S`] at the surface; anything else as a legacy two-column file with [`legacy::read`], which needs
 /// `opts.time_unit` and `opts.pressure_unit`.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputError> {
     let ext = path
@@ -63,28 +169,10 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputErr
             .in_file(path)
             .field(*what));
         }
-        let dives = divelog::read(path)?;
-        let k = match (opts.dive, dives.len()) {
-            (None, 1) => 0,
-            (None, n) => {
-                return Err(InputError::new(format!(
-                    "the log holds {n} dives; choose one with a dive number 1..={n}"
-                ))
-                .in_file(path)
-                .field("dive"))
-            }
-            (Some(k), n) if k >= 1 && k <= n => k - 1,
-            (Some(k), n) => {
-                return Err(InputError::new(format!(
-                    "dive {k} does not exist: the log holds {n} dive(s), numbered from 1"
-                ))
-                .in_file(path)
-                .field("dive"))
-            }
-        };
-        return dives[k]
-            .history(opts.vapour_pa.unwrap_or(0.0))
-            .map_err(|e| e.in_file(path));
+        let dive = select_dive(path, divelog::read(path)?, opts.dive)?;
+        let (h, _) = dive_log_history(&dive, opts.vapour_pa.unwrap_or(0.0), DIVE_LOG_WATCH_S)
+            .map_err(|e| e.in_file(path))?;
+        return Ok(h);
     }
     if ext == "toml" {
         let given = [

@@ -217,32 +217,6 @@ fn is_ours_or_empty(dir: &Path) -> Result<bool, Error> {
     Ok(it.next().is_none())
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn bad_relative_paths_are_refused() {
-        for p in ["/etc/x", "../x", "a/../b", "", MARKER] {
-            let mut s = OutputSet::new();
-            s.add(p, "x");
-            assert!(s.check_paths().is_err(), "{p}");
-        }
-        let mut s = OutputSet::new();
-        s.add("a", "x");
-        s.add("a/b", "y");
-        assert!(s.check_paths().is_err());
-        let mut s = OutputSet::new();
-        s.add("a/b.csv", "x");
-        s.add("a/b.csv", "y");
-        assert!(s.check_paths().is_err());
-        let mut s = OutputSet::new();
-        s.add("plots/a.svg", "x");
-        s.add("plots/b.svg", "y");
-        assert!(s.check_paths().is_ok());
-    }
-}
-
 /// Write one file whole or not at all: the bytes go to a temporary file beside the target,
 /// are flushed to disk, and the temporary file is renamed over the target.
 pub fn write_file_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
@@ -278,4 +252,30 @@ pub fn write_file_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn bad_relative_paths_are_refused() {
+        for p in ["/etc/x", "../x", "a/../b", "", MARKER] {
+            let mut s = OutputSet::new();
+            s.add(p, "x");
+            assert!(s.check_paths().is_err(), "{p}");
+        }
+        let mut s = OutputSet::new();
+        s.add("a", "x");
+        s.add("a/b", "y");
+        assert!(s.check_paths().is_err());
+        let mut s = OutputSet::new();
+        s.add("a/b.csv", "x");
+        s.add("a/b.csv", "y");
+        assert!(s.check_paths().is_err());
+        let mut s = OutputSet::new();
+        s.add("plots/a.svg", "x");
+        s.add("plots/b.svg", "y");
+        assert!(s.check_paths().is_ok());
+    }
 }

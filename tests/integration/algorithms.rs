@@ -230,8 +230,6 @@ fn plan_command_prints_table_and_writes_a_readable_schedule() {
         "40",
         "--format",
         "csv",
-        "--out",
-        out.to_str().unwrap(),
     ]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = String::from_utf8(o.stdout).unwrap();
@@ -242,6 +240,18 @@ fn plan_command_prints_table_and_writes_a_readable_schedule() {
     );
     assert!(text.contains("\n3,22,"), "{text}");
     assert!(text.trim_end().ends_with("0,0,87.50,air"), "{text}");
+    // --out without --format: the format follows the extension (.toml: the schedule TOML)
+    let o = plan_cmd(&[
+        "--algorithm",
+        "algorithms/zhl16b-gf30-85.toml",
+        "--depth",
+        "35",
+        "--time",
+        "40",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let s = Schedule::read(&out).unwrap();
     assert_eq!(s.stops.len(), 6);
     let md = plan_cmd(&[
@@ -428,4 +438,87 @@ fn legacy_two_column_dive_file_reads_as_a_schedule() {
     let e = decophantom::algorithm::waypoints::read_schedule(&bad, &DECOTENGU, GasMix::AIR)
         .unwrap_err();
     assert_eq!(e.line, Some(2), "{e}");
+}
+
+/// `plan --format csv --out s.csv` writes the waypoint CSV that `check` reads
+/// (`time_min,depth_m,gas`), and reading it back gives the planned schedule leg for leg (the
+/// algorithm file uses DecoTengu's conventions, which the CSV reader assumes); a `--format`
+/// that contradicts the extension, or an `--out` naming the algorithm file, is refused with
+/// exit 2 and nothing written.
+#[test]
+fn plan_out_follows_format_and_round_trips_through_the_csv_check_reads() {
+    let dir = tempdir("plan-out-csv");
+    let (csv, toml) = (dir.join("s.csv"), dir.join("s.toml"));
+    let dive = [
+        "--algorithm",
+        "algorithms/zhl16c-gf30-85.toml",
+        "--depth",
+        "45",
+        "--time",
+        "25",
+        "--deco-gas",
+        "50@21",
+        "--deco-gas",
+        "100@6",
+    ];
+    let o = plan_cmd(
+        &[
+            &dive[..],
+            &["--format", "csv", "--out", csv.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let o = plan_cmd(&[&dive[..], &["--out", toml.to_str().unwrap()]].concat());
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(
+        text.starts_with("time_min,depth_m,gas\n0,0,air\n"),
+        "{text}"
+    );
+    let planned = Schedule::read(&toml).unwrap();
+    let back =
+        decophantom::algorithm::waypoints::read_schedule(&csv, &DECOTENGU, GasMix::AIR).unwrap();
+    let legs: Vec<_> = planned.legs.iter().filter(|l| l.duration_s > 0.0).collect();
+    assert_eq!(back.legs.len(), legs.len());
+    for (a, b) in back.legs.iter().zip(&legs) {
+        assert!(
+            (a.start_depth_m - b.start_depth_m).abs() < 1e-9,
+            "{a:?} {b:?}"
+        );
+        assert!((a.end_depth_m - b.end_depth_m).abs() < 1e-9, "{a:?} {b:?}");
+        assert!((a.duration_s - b.duration_s).abs() < 1e-6, "{a:?} {b:?}");
+        assert_eq!(a.gas, b.gas);
+    }
+    assert!((back.runtime_min() - planned.runtime_min()).abs() < 1e-9);
+    assert_eq!(back.gas_switches().len(), planned.gas_switches().len());
+
+    // --format toml with a .csv name: refused, nothing written
+    let bad = dir.join("t.csv");
+    let o = plan_cmd(
+        &[
+            &dive[..],
+            &["--format", "toml", "--out", bad.to_str().unwrap()],
+        ]
+        .concat(),
+    );
+    assert_eq!(o.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&o.stderr).contains("--out"));
+    assert!(!bad.exists());
+    // --out naming the algorithm file: refused, the file unchanged
+    let alg = dir.join("alg.toml");
+    std::fs::copy(root().join("algorithms/zhl16c-gf30-85.toml"), &alg).unwrap();
+    let before = std::fs::read(&alg).unwrap();
+    let o = plan_cmd(&[
+        "--algorithm",
+        alg.to_str().unwrap(),
+        "--depth",
+        "30",
+        "--time",
+        "20",
+        "--out",
+        alg.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert_eq!(std::fs::read(&alg).unwrap(), before);
 }

@@ -382,3 +382,52 @@ fn an_interrupted_run_keeps_what_it_simulated() {
         "the last recorded frame is the moment it stopped"
     );
 }
+
+/// A logged dive is watched at the surface after its last sample (the criteria protocol's
+/// default 60 min, `profile::DIVE_LOG_WATCH_S`), and its import notes reach summary.toml and
+/// the terminal. tests/data/divelogs/legacy-v1.xml ends at 24:30 min on the 6 m stop: the
+/// run adds an ascent at 10 m/min (36 s) and then 3600 s at the surface, so it ends at
+/// 1470 + 36 + 3600 = 5106 s.
+#[test]
+fn a_dive_log_run_watches_the_surface_after_the_dive() {
+    let d = tempdir("simulate-divelog");
+    let ph = d.join("p.toml");
+    // the dive is trimix: the phantom needs helium too
+    let he = "[gases.he]\ndiffusivity = 8.35e-9\nostwald = 0.0098\n";
+    std::fs::write(&ph, format!("{SMALL_PHANTOM}{he}")).unwrap();
+    let out = d.join("out");
+    let o = Command::new(bin())
+        .args(["simulate", "--profile"])
+        .arg(root().join("tests/data/divelogs/legacy-v1.xml"))
+        .arg("--phantom")
+        .arg(&ph)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        o.status.success(),
+        "{stdout}{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(
+        stdout.contains("note: watched 60 min at the surface"),
+        "{stdout}"
+    );
+    let summary: toml::Table = std::fs::read_to_string(out.join("summary.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let end = summary["end_time_s"].as_float().unwrap();
+    if summary["ending"].as_str() == Some("completed") {
+        assert!((end - 5106.0).abs() < 1e-6, "{end}");
+    }
+    let notes = summary["import_notes"].as_array().unwrap();
+    assert!(notes
+        .iter()
+        .any(|n| n.as_str().unwrap().contains("an ascent to the surface")));
+    assert!(notes
+        .iter()
+        .any(|n| n.as_str().unwrap().contains("no water density")));
+}

@@ -400,3 +400,133 @@ fn bad_input_exits_2_and_writes_nothing() {
         .iter()
         .any(|n| n.to_string_lossy().contains("staging")));
 }
+
+/// Dive logs are schedules for `check` and `evaluate` (issue 9 §2). Reference numbers from
+/// tests/data/divelogs/repetitive-logged.xml, dive 2 (read off the file): last sample 38:00
+/// at 0.0 m, deepest 17.4 m, surface pressure 1.011 bar, no salinity (1030 kg/m³ assumed).
+#[test]
+fn dive_logs_are_checked_and_evaluated_as_schedules() {
+    use decophantom::algorithm::conventions::DECOTENGU;
+    use decophantom::algorithm::waypoints::read_schedule_with_notes;
+    use decophantom::units::STANDARD_GRAVITY;
+    let log = root().join("tests/data/divelogs/repetitive-logged.xml");
+    // the schedule and its history: the log's own surface and density, then the protocol's
+    // watch time at the surface (30 min in these criteria), so the run goes on after the
+    // last sample
+    let imp =
+        read_schedule_with_notes(&log, &DECOTENGU, decophantom::gas::GasMix::AIR, Some(2)).unwrap();
+    assert!((imp.schedule.runtime_min() - 38.0).abs() < 1e-9);
+    assert!(imp.notes.iter().any(|n| n.contains("water density")));
+    let protocol = decophantom::risk::Protocol {
+        observe_after_surfacing_s: 1800.0,
+        ..Default::default()
+    };
+    let h = decophantom::app::evaluate::dive_history(&imp.schedule, &protocol, None).unwrap();
+    assert!(
+        (h.duration_s() - (2280.0 + 1800.0)).abs() < 1e-6,
+        "{}",
+        h.duration_s()
+    );
+    let top = h.ambient_pa.iter().cloned().fold(0.0, f64::max);
+    let want = 1.011e5 + 17.4 * 1030.0 * STANDARD_GRAVITY;
+    assert!((top - want).abs() < 1e-6, "{top} vs {want}");
+
+    let d = tempdir("evaluate-divelog");
+    let ph = write(&d, "phantom.toml", PHANTOM);
+    let loose = write(&d, "loose.toml", &criteria(1e6));
+    let out = d.join("check");
+    let (code, stdout, stderr) = run(&[
+        "check",
+        "--schedule",
+        s(&log),
+        "--dive",
+        "2",
+        "--criteria",
+        s(&loose),
+        "--phantom",
+        s(&ph),
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    // import notes printed and in the report
+    assert!(stdout.contains("note: no water density"), "{stdout}");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    assert!(
+        report.contains("Import notes for repetitive-logged #2"),
+        "{report}"
+    );
+    assert!(report.contains("no water density in the file"), "{report}");
+    // simulated 38 min of dive + 30 min watched at the surface
+    assert!(report.contains("| 68.0 |"), "{report}");
+    // a log with two dives needs --dive; a dive number on a CSV is refused
+    let (code, _, stderr) = run(&[
+        "check",
+        "--schedule",
+        s(&log),
+        "--criteria",
+        s(&loose),
+        "--phantom",
+        s(&ph),
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("2 dives"), "{stderr}");
+    let stops = write(&d, "stops.csv", STOPS);
+    let (code, _, stderr) = run(&[
+        "check",
+        "--schedule",
+        s(&stops),
+        "--dive",
+        "1",
+        "--criteria",
+        s(&loose),
+        "--phantom",
+        s(&ph),
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("--dive"), "{stderr}");
+
+    // evaluate: a logged dive next to a CSV schedule, no algorithm (so no --depth/--time)
+    let out = d.join("eval");
+    let (code, stdout, stderr) = run(&[
+        "evaluate",
+        "--schedule",
+        s(&log),
+        "--dive",
+        "1",
+        "--schedule",
+        s(&stops),
+        "--criteria",
+        s(&loose),
+        "--phantom",
+        s(&ph),
+        "--out",
+        s(&out),
+    ]);
+    assert_eq!(code, 0, "{stdout}{stderr}");
+    assert!(
+        stdout.contains("note (repetitive-logged #1 2019-06-14 09:12:00)"),
+        "{stdout}"
+    );
+    let rows = scores(&out);
+    assert!(rows
+        .iter()
+        .any(|r| r[0].starts_with("repetitive-logged #1")));
+    assert!(rows.iter().any(|r| r[0] == "stops"), "{rows:?}");
+    // an algorithm without a dive to plan is refused with the missing option named
+    let (code, _, stderr) = run(&[
+        "evaluate",
+        "--schedule",
+        s(&stops),
+        "--algorithm",
+        "algorithms/zhl16c-gf30-85.toml",
+        "--criteria",
+        s(&loose),
+        "--phantom",
+        s(&ph),
+        "--out",
+        s(&d.join("eval2")),
+    ]);
+    assert_eq!(code, 2, "{stderr}");
+    assert!(stderr.contains("--depth"), "{stderr}");
+}
