@@ -9,6 +9,8 @@ mod cli_simulate;
 mod common;
 #[path = "integration/convergence.rs"]
 mod convergence;
+#[path = "integration/defects.rs"]
+mod defects;
 #[path = "integration/discover.rs"]
 mod discover;
 #[path = "integration/evaluate.rs"]

@@ -12,8 +12,10 @@
 //!   the flux leaving the gel always equals the flux entering the bubble.
 //! - J·dt is removed from (or returned to) the 3-D cells with a spherically symmetric kernel
 //!   of radius a ≤ ρ, whose exterior field is that of a point sink (Newton's shell theorem),
-//!   so the field sampled at ρ sees the bubble as the continuum does. Total gas (grid +
-//!   bubbles) changes only through open faces: conserved to round-off.
+//!   so the field sampled at ρ sees the bubble as the continuum does. A cell never gives more
+//!   than it holds: what the kernel cannot supply comes from the sphere of radius ρ, and what
+//!   that cannot supply is not taken (no gel cell goes negative). Total gas (grid + bubbles)
+//!   changes only through open faces and perfusion: conserved to round-off.
 //!
 //! Bubbles whose radius is at or below R_min are impermeable (section 2.1.4) and follow
 //! Boyle/Laplace only. Touching bubbles coalesce; a bubble reaching a face ends the run.
@@ -150,6 +152,9 @@ pub struct RunSummary {
     pub peak_total_volume: (f64, f64),
     /// |gas now − gas at start − gas in through open faces and perfusion| / gas at start, at the end.
     pub gas_balance_error: f64,
+    /// Lowest concentration of any gas in any inside cell over the recorded frames, mol/m³
+    /// (the sink kernel never overdraws a cell, so this is ≥ 0 up to round-off).
+    pub min_concentration: f64,
     /// Steps taken (explicit, implicit).
     pub steps: (usize, usize),
     /// Simulated end time, s.
@@ -160,6 +165,17 @@ pub struct RunSummary {
     pub events: Vec<Event>,
     /// Cells inside the phantom.
     pub cells: usize,
+}
+
+/// What the time loop accumulates over a run.
+struct RunLog {
+    max_radius: (f64, f64, usize),
+    peak_volume: (f64, f64),
+    min_concentration: f64,
+    steps: (usize, usize),
+    events: Vec<Event>,
+    ending: Ending,
+    next_record: f64,
 }
 
 /// The simulation state.
@@ -418,7 +434,12 @@ impl<'a> Simulation<'a> {
         tension
     }
 
-    /// Run the profile to its end (or until a bubble reaches a face).
+    /// Run the profile to its end (or until a bubble reaches a face). Each step is the physics
+    /// in order: the bubbles' fluxes at the start of the step ([`Self::bubble_fluxes`]), the step
+    /// the physics allows ([`Self::choose_step`]), the gas exchange between bubbles and gel
+    /// ([`Self::exchange`]), diffusion ([`Self::diffuse`]), perfusion ([`Self::perfuse`]), the
+    /// radii at the new pressure ([`Self::update_radii`]), coalescence, health checks, and the
+    /// record ([`Self::observe`]).
     pub fn run(
         &mut self,
         profile: &PressureHistory,
@@ -427,250 +448,50 @@ impl<'a> Simulation<'a> {
         let end = profile.duration_s();
         let nb = self.bubbles.len();
         let ng = self.gases.len();
-        let num = self.params.numerics;
-        let mut max_radius = (0.0f64, 0.0, 0usize);
-        let mut peak_volume;
-        let mut steps = (0usize, 0usize);
-        let mut events = Vec::new();
-        let mut ending = Ending::Completed;
-        let mut next_record = self.time;
+        let mut log = RunLog {
+            max_radius: (0.0, 0.0, 0),
+            peak_volume: (0.0, self.time),
+            min_concentration: f64::INFINITY,
+            steps: (0, 0),
+            events: Vec::new(),
+            ending: Ending::Completed,
+            next_record: self.time,
+        };
         // the smallest explicit limit over the gases: fixed for the run
         let lim = self
             .explicit_limit
             .iter()
             .cloned()
             .fold(f64::INFINITY, f64::min);
-        let mut dt_prev = num.max_step.min(lim);
+        let mut dt_prev = self.params.numerics.max_step.min(lim);
         let mut tensions = vec![0.0; nb];
         let mut fluxes = vec![vec![0.0; ng]; nb];
-        let h3 = self.grid.cell_volume();
         // record the initial state
-        let mut scratch_flux = [0.0; Gas::ALL.len()];
-        for i in 0..nb {
-            let a = profile.ambient(self.time);
-            tensions[i] = self.fluxes(i, a, profile, &mut scratch_flux[..ng]);
-        }
-        self.record(profile, &tensions, observer)?;
-        next_record += num.record_interval;
-        for b in self.bubbles.iter().filter(|b| b.active()) {
-            if b.radius > max_radius.0 {
-                max_radius = (b.radius, self.time, b.id);
-            }
-        }
-        let v0: f64 = self
-            .bubbles
-            .iter()
-            .filter(|b| b.active())
-            .map(|b| b.volume())
-            .sum();
-        peak_volume = (v0, self.time);
+        let p0 = profile.ambient(self.time);
+        self.bubble_fluxes(profile, p0, &mut fluxes, &mut tensions);
+        self.observe(profile, p0, &tensions, observer, &mut log, true)?;
         while self.time < end - 1e-9 {
             let t = self.time;
             let p = profile.ambient(t);
-            // 1. fluxes at the start of the step
-            for i in 0..nb {
-                if self.bubbles[i].active() {
-                    let mut j = std::mem::take(&mut fluxes[i]);
-                    tensions[i] = self.fluxes(i, p, profile, &mut j);
-                    fluxes[i] = j;
-                } else {
-                    fluxes[i].iter_mut().for_each(|x| *x = 0.0);
-                }
-            }
-            // 2. choose the step
-            // the physics sets the step (growth at most ×2 per step) ...
-            let mut dt = num.max_step.min(2.0 * dt_prev);
-            let rate = profile.rate(t + 1e-9).abs();
-            if rate > 0.0 {
-                dt = dt.min(num.max_pressure_change * p / rate);
-            }
-            for (i, b) in self.bubbles.iter().enumerate() {
-                if !b.active() {
-                    continue;
-                }
-                let jt: f64 = fluxes[i].iter().sum();
-                let n = b.total_moles();
-                // A bubble shrunk below 1 % of its initial radius may dissolve in one step
-                // (otherwise the steps would shrink with R² for ever); above that every step
-                // is limited by its relative change of content.
-                let finishing = b.radius < 0.01 * b.initial_radius && -jt * dt >= n;
-                if jt.abs() > 0.0 && !finishing {
-                    dt = dt.min(num.max_content_change * n / jt.abs()).max(1e-6);
-                }
-            }
-            dt_prev = dt;
-            // ... then the profile's breakpoints and the scheme's cost cut it
-            dt = dt
-                .min(profile.next_breakpoint(t) - t)
-                .min(end - t)
-                .max(1e-9);
-            // An implicit step costs about ten explicit ones (benches/kernel.rs): below that
-            // ratio, the explicit limit itself is the cheaper (and more accurate) step.
-            if dt > lim && dt < num.implicit_cost_ratio * lim {
-                dt = lim;
-            }
+            self.bubble_fluxes(profile, p, &mut fluxes, &mut tensions);
+            let (dt, dt_physics) = self.choose_step(profile, &fluxes, dt_prev, lim, end);
+            dt_prev = dt_physics;
             let t1 = t + dt;
             let p1 = profile.ambient(t1);
-            // 3. exchange gas between bubbles and grid
-            for i in 0..nb {
-                if !self.bubbles[i].active() || fluxes[i].iter().all(|x| *x == 0.0) {
-                    continue;
-                }
-                let mut dn = [0.0; Gas::ALL.len()];
-                for g in 0..ng {
-                    dn[g] = fluxes[i][g] * dt;
-                }
-                let n_after: f64 = self.bubbles[i].total_moles() + dn.iter().sum::<f64>();
-                let dissolved = n_after <= 1e-6 * self.bubbles[i].total_moles() || n_after <= 0.0;
-                if dissolved {
-                    for g in 0..ng {
-                        dn[g] = -self.bubbles[i].moles[g];
-                    }
-                } else {
-                    for g in 0..ng {
-                        if self.bubbles[i].moles[g] + dn[g] < 0.0 {
-                            dn[g] = -self.bubbles[i].moles[g];
-                        }
-                    }
-                }
-                let (pos, a) = (
-                    self.bubbles[i].position,
-                    self.kernel_radius(self.bubbles[i].radius),
-                );
-                let mut kernel = std::mem::take(&mut self.kernel);
-                self.grid.kernel(pos, a, &mut kernel);
-                for g in 0..ng {
-                    let per_volume = dn[g] / h3;
-                    let f = &mut self.fields[g];
-                    for &(idx, w) in &kernel {
-                        f[idx] -= w * per_volume;
-                    }
-                    self.bubbles[i].moles[g] += dn[g];
-                }
-                self.kernel = kernel;
-                if dissolved {
-                    self.bubbles[i].moles.iter_mut().for_each(|m| *m = 0.0);
-                    self.bubbles[i].radius = 0.0;
-                    self.bubbles[i].fate = BubbleFate::Dissolved(t1);
-                    events.push(Event::Dissolved {
-                        time: t1,
-                        bubble: i,
-                    });
-                }
-            }
-            // 4. diffuse every gas
-            let implicit = self.explicit_limit.iter().any(|lim| dt > *lim);
-            for g in 0..ng {
-                let gas = self.gases[g];
-                let d = self.diffusivity[g];
-                let inflow = if implicit {
-                    let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t1) / self.rt;
-                    diffusion::implicit_step(
-                        &self.grid,
-                        &mut self.fields[g],
-                        &mut self.scratch,
-                        d,
-                        dt,
-                        cb,
-                    )
-                } else {
-                    let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t) / self.rt;
-                    let inflow = diffusion::explicit_step(
-                        &self.grid,
-                        &self.fields[g],
-                        &mut self.scratch,
-                        d,
-                        dt,
-                        cb,
-                    );
-                    std::mem::swap(&mut self.fields[g], &mut self.scratch);
-                    inflow
-                };
-                self.inflow += inflow * h3;
-            }
+            self.exchange(&fluxes, dt, t1, &mut log.events);
+            let implicit = self.diffuse(profile, t, dt);
             if implicit {
-                steps.1 += 1;
+                log.steps.1 += 1;
             } else {
-                steps.0 += 1;
+                log.steps.0 += 1;
             }
-            // 4b. perfusion
             self.perfuse(profile, t, dt);
             self.time = t1;
-            // 5. radii at the new pressure
-            for i in 0..nb {
-                if !self.bubbles[i].active() {
-                    continue;
-                }
-                let nrt = self.bubbles[i].total_moles() * self.rt;
-                let guess = self.bubbles[i].radius;
-                let fixed = self.params.bubble_fixed_gases;
-                let r = self.balance_for(&self.bubbles[i], p1).radius_for(nrt, guess).ok_or_else(|| {
-                    Error::Solver(format!(
-                        "bubble {i} at t = {t1:.3} s: no radius satisfies the Laplace balance (P_amb = {p1:.0} Pa, fixed partial pressure of other gases {fixed:.0} Pa, n = {:.3e} mol); the elasticity law has no physical root here, or P_B − p_fixed ≤ 0",
-                        nrt / self.rt
-                    ))
-                })?;
-                self.bubbles[i].radius = r;
-            }
-            // 6. coalescence
-            self.coalesce(t1, p1, &mut events)?;
-            // 7. health
-            for f in &self.fields {
-                if f.iter().step_by(97).any(|x| !x.is_finite()) {
-                    return Err(Error::Solver(format!(
-                        "non-finite concentration at t = {t1:.3} s"
-                    )));
-                }
-            }
-            // 8. bookkeeping
-            let mut vol = 0.0;
-            for b in self.bubbles.iter().filter(|b| b.active()) {
-                vol += b.volume();
-                if b.radius > max_radius.0 {
-                    max_radius = (b.radius, t1, b.id);
-                }
-            }
-            if vol > peak_volume.0 {
-                peak_volume = (vol, t1);
-            }
-            for b in self.bubbles.iter().filter(|b| b.active()) {
-                if let Some((face, _)) = self
-                    .grid
-                    .distance_to_faces(b.position)
-                    .into_iter()
-                    .find(|(_, d)| *d <= b.radius)
-                {
-                    ending = Ending::BubbleReachedFace {
-                        bubble: b.id,
-                        face,
-                        time: t1,
-                    };
-                    break;
-                }
-            }
-            observer.progress(t1, end);
-            if ending == Ending::Completed && observer.should_stop() {
-                ending = Ending::Interrupted { time: t1 };
-            }
-            let done = ending != Ending::Completed || self.time >= end - 1e-9;
-            if self.time >= next_record - 1e-9 || done {
-                for i in 0..nb {
-                    if self.bubbles[i].active() {
-                        tensions[i] = self.fluxes(i, p1, profile, &mut scratch_flux[..ng]);
-                    }
-                }
-                self.record(profile, &tensions, observer)?;
-                if num.record_interval > 0.0 {
-                    while next_record <= self.time + 1e-9 {
-                        next_record += num.record_interval;
-                    }
-                } else {
-                    // 0 = every step (stepping `next_record` by a tiny interval up to the
-                    // current time would take ~time/1e-9 iterations)
-                    next_record = self.time;
-                }
-            }
-            if done {
+            self.update_radii(p1)?;
+            self.coalesce(t1, p1, &mut log.events)?;
+            self.check_health()?;
+            self.observe(profile, p1, &tensions, observer, &mut log, false)?;
+            if log.ending != Ending::Completed || self.time >= end - 1e-9 {
                 break;
             }
         }
@@ -683,23 +504,337 @@ impl<'a> Simulation<'a> {
         }
         Ok(RunSummary {
             gases: self.gases.clone(),
-            max_radius,
+            max_radius: log.max_radius,
             final_radii: self
                 .bubbles
                 .iter()
                 .map(|b| if b.active() { b.radius } else { 0.0 })
                 .collect(),
-            peak_total_volume: peak_volume,
+            peak_total_volume: log.peak_volume,
             gas_balance_error: balance,
-            steps,
+            min_concentration: log.min_concentration,
+            steps: log.steps,
             end_time: self.time,
-            ending,
-            events,
+            ending: log.ending,
+            events: log.events,
             cells: self.grid.n_inside,
         })
     }
 
-    /// The perfusion phase, operator-split after diffusion: every inside cell relaxes toward the
+    /// Phase 1: every active bubble's fluxes J_g (mol/s) and gel tension at the start of a step.
+    fn bubble_fluxes(
+        &mut self,
+        profile: &PressureHistory,
+        p: f64,
+        fluxes: &mut [Vec<f64>],
+        tensions: &mut [f64],
+    ) {
+        for i in 0..self.bubbles.len() {
+            if self.bubbles[i].active() {
+                let mut j = std::mem::take(&mut fluxes[i]);
+                tensions[i] = self.fluxes(i, p, profile, &mut j);
+                fluxes[i] = j;
+            } else {
+                fluxes[i].iter_mut().for_each(|x| *x = 0.0);
+            }
+        }
+    }
+
+    /// Phase 2: the step. The physics sets it — at most ×2 growth per step, `max_step`, the
+    /// pressure-change limit, and for every bubble the content limit on the sum of each gas's
+    /// own change, dt·Σ_g|J_g| ≤ max_content_change·n (not the net |Σ_g J_g|, which vanishes in
+    /// counter-diffusion while each gas changes fast), and no gas losing more than half of what
+    /// the bubble holds of it in one step. Then the profile's breakpoints and the scheme's cost
+    /// cut it. Returns (the step, the step the physics allowed before the cuts).
+    fn choose_step(
+        &self,
+        profile: &PressureHistory,
+        fluxes: &[Vec<f64>],
+        dt_prev: f64,
+        lim: f64,
+        end: f64,
+    ) -> (f64, f64) {
+        let num = self.params.numerics;
+        let t = self.time;
+        let p = profile.ambient(t);
+        let mut dt = num.max_step.min(2.0 * dt_prev);
+        let rate = profile.rate(t + 1e-9).abs();
+        if rate > 0.0 {
+            dt = dt.min(num.max_pressure_change * p / rate);
+        }
+        for (i, b) in self.bubbles.iter().enumerate() {
+            if !b.active() {
+                continue;
+            }
+            let jnet: f64 = fluxes[i].iter().sum();
+            let jabs: f64 = fluxes[i].iter().map(|j| j.abs()).sum();
+            let n = b.total_moles();
+            // A bubble shrunk below 1 % of its initial radius may dissolve in one step
+            // (otherwise the steps would shrink with R² for ever); above that every step
+            // is limited by its relative change of content.
+            let finishing = b.radius < 0.01 * b.initial_radius && -jnet * dt >= n;
+            if finishing {
+                continue;
+            }
+            if jabs > 0.0 {
+                dt = dt.min(num.max_content_change * n / jabs).max(1e-6);
+            }
+            for (m, j) in b.moles.iter().zip(&fluxes[i]) {
+                if *j < 0.0 && *m > 1e-9 * n {
+                    dt = dt.min(0.5 * m / -j).max(1e-6);
+                }
+            }
+        }
+        let physics = dt;
+        dt = dt
+            .min(profile.next_breakpoint(t) - t)
+            .min(end - t)
+            .max(1e-9);
+        // An implicit step costs about ten explicit ones (benches/kernel.rs): below that
+        // ratio, the explicit limit itself is the cheaper (and more accurate) step.
+        if dt > lim && dt < num.implicit_cost_ratio * lim {
+            dt = lim;
+        }
+        (dt, physics)
+    }
+
+    /// Phase 3: gas exchange between bubbles and gel. J_g·dt is taken from (or returned to) the
+    /// grid through the bubble's sink kernel ([`Self::deposit`], which never overdraws a cell).
+    fn exchange(&mut self, fluxes: &[Vec<f64>], dt: f64, t1: f64, events: &mut Vec<Event>) {
+        let ng = self.gases.len();
+        for i in 0..self.bubbles.len() {
+            if !self.bubbles[i].active() || fluxes[i].iter().all(|x| *x == 0.0) {
+                continue;
+            }
+            let mut dn = [0.0; Gas::ALL.len()];
+            for g in 0..ng {
+                dn[g] = fluxes[i][g] * dt;
+            }
+            let n_after: f64 = self.bubbles[i].total_moles() + dn.iter().sum::<f64>();
+            let dissolved = n_after <= 1e-6 * self.bubbles[i].total_moles() || n_after <= 0.0;
+            for g in 0..ng {
+                if dissolved || self.bubbles[i].moles[g] + dn[g] < 0.0 {
+                    dn[g] = -self.bubbles[i].moles[g];
+                }
+            }
+            let (pos, a) = (
+                self.bubbles[i].position,
+                self.kernel_radius(self.bubbles[i].radius),
+            );
+            let mut kernel = std::mem::take(&mut self.kernel);
+            self.grid.kernel(pos, a, &mut kernel);
+            let mut wide = Vec::new();
+            for g in 0..ng {
+                let mut taken = self.deposit(g, &kernel, dn[g]);
+                if dn[g] > 0.0 && taken < dn[g] {
+                    // the kernel ran dry: the rest comes from the shell out to the coupling
+                    // sphere ρ, the gel next to the bubble
+                    if wide.is_empty() {
+                        let rho = self.coupling_radius(self.bubbles[i].radius);
+                        self.grid.kernel(pos, rho, &mut wide);
+                    }
+                    taken += self.deposit(g, &wide, dn[g] - taken);
+                }
+                self.bubbles[i].moles[g] += taken;
+            }
+            self.kernel = kernel;
+            if dissolved {
+                self.bubbles[i].moles.iter_mut().for_each(|m| *m = 0.0);
+                self.bubbles[i].radius = 0.0;
+                self.bubbles[i].fate = BubbleFate::Dissolved(t1);
+                events.push(Event::Dissolved {
+                    time: t1,
+                    bubble: i,
+                });
+            }
+        }
+    }
+
+    /// Take `dn` mol of gas `g` from the grid through the kernel (give it back when negative) and
+    /// return the amount actually moved. Gas returned to the gel goes with the kernel's weights.
+    /// Gas taken never drives a cell negative: each cell gives at most what it holds — first
+    /// its kernel share, then the shortfall from the cells with content left, in proportion to
+    /// it. When the whole kernel holds less than `dn` it gives what it has ([`Self::exchange`]
+    /// then takes the rest from the wider sphere of radius ρ the same way; if even that runs dry
+    /// the bubble receives only what is there, and the next step's flux sees the emptied cells).
+    fn deposit(&mut self, g: usize, kernel: &[(usize, f64)], dn: f64) -> f64 {
+        let h3 = self.grid.cell_volume();
+        let f = &mut self.fields[g];
+        let per_volume = dn / h3;
+        if per_volume <= 0.0 || kernel.iter().all(|&(idx, w)| w * per_volume <= f[idx]) {
+            for &(idx, w) in kernel {
+                f[idx] -= w * per_volume;
+            }
+            return dn;
+        }
+        // pass 1: each cell its share, capped by its content
+        let mut taken = 0.0;
+        let mut left = 0.0;
+        for &(idx, w) in kernel {
+            let x = (w * per_volume).min(f[idx].max(0.0));
+            f[idx] -= x;
+            taken += x;
+            left += f[idx].max(0.0);
+        }
+        // pass 2: the shortfall from what is left, proportionally (a fraction ≤ 1 of each)
+        let short = per_volume - taken;
+        if short > 0.0 && left > 0.0 {
+            let frac = (short / left).min(1.0);
+            for &(idx, _) in kernel {
+                let x = f[idx].max(0.0) * frac;
+                f[idx] -= x;
+                taken += x;
+            }
+        }
+        taken * h3
+    }
+
+    /// Phase 4: diffuse every gas (eq. 2.1), explicit when the step is within the positivity
+    /// limit of every gas, LOD backward Euler otherwise; the open-face inflow goes to the
+    /// balance. Returns whether the step was implicit.
+    fn diffuse(&mut self, profile: &PressureHistory, t: f64, dt: f64) -> bool {
+        let implicit = self.explicit_limit.iter().any(|lim| dt > *lim);
+        let h3 = self.grid.cell_volume();
+        for g in 0..self.gases.len() {
+            let gas = self.gases[g];
+            let d = self.diffusivity[g];
+            let inflow = if implicit {
+                let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t + dt) / self.rt;
+                diffusion::implicit_step(
+                    &self.grid,
+                    &mut self.fields[g],
+                    &mut self.scratch,
+                    d,
+                    dt,
+                    cb,
+                )
+            } else {
+                let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t) / self.rt;
+                let inflow = diffusion::explicit_step(
+                    &self.grid,
+                    &self.fields[g],
+                    &mut self.scratch,
+                    d,
+                    dt,
+                    cb,
+                );
+                std::mem::swap(&mut self.fields[g], &mut self.scratch);
+                inflow
+            };
+            self.inflow += inflow * h3;
+        }
+        implicit
+    }
+
+    /// Phase 6: every active bubble's radius at the new ambient pressure (eq. 2.4).
+    fn update_radii(&mut self, p1: f64) -> Result<(), Error> {
+        let t1 = self.time;
+        for i in 0..self.bubbles.len() {
+            if !self.bubbles[i].active() {
+                continue;
+            }
+            let nrt = self.bubbles[i].total_moles() * self.rt;
+            let guess = self.bubbles[i].radius;
+            let fixed = self.params.bubble_fixed_gases;
+            let r = self.balance_for(&self.bubbles[i], p1).radius_for(nrt, guess).ok_or_else(|| {
+                Error::Solver(format!(
+                    "bubble {i} at t = {t1:.3} s: no radius satisfies the Laplace balance (P_amb = {p1:.0} Pa, fixed partial pressure of other gases {fixed:.0} Pa, n = {:.3e} mol); the elasticity law has no physical root here, or P_B − p_fixed ≤ 0",
+                    nrt / self.rt
+                ))
+            })?;
+            self.bubbles[i].radius = r;
+        }
+        Ok(())
+    }
+
+    /// Health: no non-finite concentration (sampled every 97th cell).
+    fn check_health(&self) -> Result<(), Error> {
+        for f in &self.fields {
+            if f.iter().step_by(97).any(|x| !x.is_finite()) {
+                return Err(Error::Solver(format!(
+                    "non-finite concentration at t = {:.3} s",
+                    self.time
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// Bookkeeping after a step (peaks, a bubble reaching a face, the observer's progress and
+    /// stop request) and the record when a frame is due (`first`: the initial state).
+    fn observe(
+        &mut self,
+        profile: &PressureHistory,
+        p1: f64,
+        tensions: &[f64],
+        observer: &mut dyn Observer,
+        log: &mut RunLog,
+        first: bool,
+    ) -> Result<(), Error> {
+        let t1 = self.time;
+        let end = profile.duration_s();
+        let num = self.params.numerics;
+        let mut vol = 0.0;
+        for b in self.bubbles.iter().filter(|b| b.active()) {
+            vol += b.volume();
+            if b.radius > log.max_radius.0 {
+                log.max_radius = (b.radius, t1, b.id);
+            }
+        }
+        if vol > log.peak_volume.0 || first {
+            log.peak_volume = (vol, t1);
+        }
+        if first {
+            let min = self.record(profile, tensions, observer)?;
+            log.min_concentration = log.min_concentration.min(min);
+            log.next_record = self.time + num.record_interval;
+            return Ok(());
+        }
+        for b in self.bubbles.iter().filter(|b| b.active()) {
+            if let Some((face, _)) = self
+                .grid
+                .distance_to_faces(b.position)
+                .into_iter()
+                .find(|(_, d)| *d <= b.radius)
+            {
+                log.ending = Ending::BubbleReachedFace {
+                    bubble: b.id,
+                    face,
+                    time: t1,
+                };
+                break;
+            }
+        }
+        observer.progress(t1, end);
+        if log.ending == Ending::Completed && observer.should_stop() {
+            log.ending = Ending::Interrupted { time: t1 };
+        }
+        let done = log.ending != Ending::Completed || self.time >= end - 1e-9;
+        if self.time >= log.next_record - 1e-9 || done {
+            let ng = self.gases.len();
+            let mut fresh = tensions.to_vec();
+            let mut scratch_flux = [0.0; Gas::ALL.len()];
+            for (i, tension) in fresh.iter_mut().enumerate() {
+                if self.bubbles[i].active() {
+                    *tension = self.fluxes(i, p1, profile, &mut scratch_flux[..ng]);
+                }
+            }
+            let min = self.record(profile, &fresh, observer)?;
+            log.min_concentration = log.min_concentration.min(min);
+            if num.record_interval > 0.0 {
+                while log.next_record <= self.time + 1e-9 {
+                    log.next_record += num.record_interval;
+                }
+            } else {
+                // 0 = every step (stepping `next_record` by a tiny interval up to the
+                // current time would take ~time/1e-9 iterations)
+                log.next_record = self.time;
+            }
+        }
+        Ok(())
+    }
+
+    /// Phase 5: perfusion, operator-split after diffusion: every inside cell relaxes toward the
     /// blood value C_b,g(t) = L_g·p_insp,g(t)/(R_u·T) at rate k (`perfusion_rate`), integrated
     /// exactly over the step with C_b linear in time ([`diffusion::PerfusionWeights`]). The gas
     /// perfusion adds or removes is counted with the open-face inflow in the gas balance.
@@ -787,18 +922,20 @@ impl<'a> Simulation<'a> {
         }
     }
 
-    /// One parallel pass over the grid: the largest supersaturation Σ_g C_g·R_u·T/L_g − P_amb (Pa)
-    /// and the gas dissolved in the grid per gas (mol).
-    fn gel_state(&self, ambient: f64) -> (f64, Vec<f64>) {
+    /// One parallel pass over the grid: the largest supersaturation Σ_g C_g·R_u·T/L_g − P_amb (Pa),
+    /// the gas dissolved in the grid per gas (mol) and the lowest concentration of any gas
+    /// (mol/m³). Per-plane results are combined in plane order, independent of the thread count.
+    fn gel_state(&self, ambient: f64) -> (f64, Vec<f64>, f64) {
         use rayon::prelude::*;
         let ng = self.fields.len();
         let k: Vec<f64> = self.ostwald.iter().map(|l| self.rt / l).collect();
         let plane = self.grid.n[0] * self.grid.n[1];
         let inside = &self.grid.codes[0];
-        let (max_t, sums) = (0..self.grid.n[2])
+        let per_plane: Vec<(f64, Vec<f64>, f64)> = (0..self.grid.n[2])
             .into_par_iter()
             .map(|kz| {
                 let mut m = f64::NEG_INFINITY;
+                let mut lo = f64::INFINITY;
                 let mut s = vec![0.0; ng];
                 for idx in kz * plane..(kz + 1) * plane {
                     if inside[idx] & super::grid::INSIDE_BIT == 0 {
@@ -809,34 +946,42 @@ impl<'a> Simulation<'a> {
                         let c = self.fields[g][idx];
                         s[g] += c;
                         t += c * k[g];
+                        lo = lo.min(c);
                     }
                     m = m.max(t);
                 }
-                (m, s)
+                (m, s, lo)
             })
-            .reduce(
-                || (f64::NEG_INFINITY, vec![0.0; ng]),
-                |a, b| {
-                    (
-                        a.0.max(b.0),
-                        a.1.iter().zip(&b.1).map(|(x, y)| x + y).collect(),
-                    )
-                },
-            );
+            .collect();
+        let mut max_t = f64::NEG_INFINITY;
+        let mut min_c = f64::INFINITY;
+        let mut sums = vec![0.0; ng];
+        for (m, s, lo) in per_plane {
+            max_t = max_t.max(m);
+            min_c = min_c.min(lo);
+            for (a, b) in sums.iter_mut().zip(s) {
+                *a += b;
+            }
+        }
         let v = self.grid.cell_volume();
-        (max_t - ambient, sums.into_iter().map(|x| x * v).collect())
+        (
+            max_t - ambient,
+            sums.into_iter().map(|x| x * v).collect(),
+            min_c,
+        )
     }
 
     /// Send a frame to the observer; checks the gas balance on the way (the frame's grid
     /// totals come from the same pass), so a broken run stops at the first frame that shows it.
+    /// Returns the lowest concentration in the gel (mol/m³).
     fn record(
         &self,
         profile: &PressureHistory,
         tensions: &[f64],
         observer: &mut dyn Observer,
-    ) -> Result<(), Error> {
+    ) -> Result<f64, Error> {
         let p = profile.ambient(self.time);
-        let (max_ss, grid_moles) = self.gel_state(p);
+        let (max_ss, grid_moles, min_c) = self.gel_state(p);
         let total = grid_moles.iter().sum::<f64>()
             + self
                 .bubbles
@@ -872,7 +1017,7 @@ impl<'a> Simulation<'a> {
             grid_moles,
         };
         observer.frame(&frame);
-        Ok(())
+        Ok(min_c)
     }
 }
 

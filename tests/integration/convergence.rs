@@ -18,6 +18,7 @@ fn phantom(h: f64, step_scale: f64) -> PhantomParams {
         fold: 30.0,
         reference_radius_m: None,
         exponent: 2.0,
+        cap_at_bulk: true,
     });
     p.min_radius = 55e-6;
     p.bubbles = BubblePlacement::Explicit(vec![([1.2e-3; 3], 60e-6)]);

@@ -65,6 +65,7 @@ fn fig6a_larger_nuclei_reach_larger_plateaus() {
                 fold: 30.0,
                 reference_radius_m: Some(0.2e-3),
                 exponent: 2.0,
+                cap_at_bulk: true,
             }),
         ),
         (
@@ -73,6 +74,7 @@ fn fig6a_larger_nuclei_reach_larger_plateaus() {
                 fold: 30.0,
                 reference_radius_m: None,
                 exponent: 2.0,
+                cap_at_bulk: true,
             }),
         ),
     ];

@@ -390,6 +390,7 @@ fn conservation_params(open: Vec<Face>) -> PhantomParams {
         fold: 30.0,
         reference_radius_m: None,
         exponent: 2.0,
+        cap_at_bulk: true,
     });
     p.min_radius = 20e-6;
     p.bubbles = BubblePlacement::Explicit(vec![
