@@ -25,6 +25,8 @@ mod growth;
 mod paper_findings;
 #[path = "integration/perfusion.rs"]
 mod perfusion;
+#[path = "integration/planner_cli.rs"]
+mod planner_cli;
 #[path = "integration/profiles.rs"]
 mod profiles;
 #[path = "integration/report.rs"]
