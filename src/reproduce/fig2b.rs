@@ -76,30 +76,31 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     // the crossover Γ* where both terms are equal at λ: 2Γ/λ = ½(5 − 4/λ − λ⁻⁴)
     let l = LAMBDA_CMP;
     let cross = l * 0.5 * (5.0 - 4.0 / l - l.powi(-4)) / 2.0;
-    // shape: monotone rising for Γ ≤ 1, a minimum at λ* = (Γ − 1)^(−1/3) for 1 < Γ < 2, falling
-    // from λ = 1 for Γ ≥ 2 (d/dλ = (2/λ²)(1 + λ⁻³ − Γ))
+    // shape: d/dλ = (2/λ²)(1 + λ⁻³ − Γ): rising for Γ ≤ 1 (largest at the end of the range,
+    // tending to 2.5 as λ → ∞), a maximum at λ* = (Γ − 1)^(−1/3) for 1 < Γ < 2, falling from
+    // λ = 1 for Γ ≥ 2
     let mut shape_ok = true;
     let mut shape = Vec::new();
     for g in GAMMAS {
         let v: Vec<f64> = lambdas.iter().map(|l| excess(g, *l).0).collect();
-        let imin = v
+        let imax = v
             .iter()
             .enumerate()
-            .fold((0, f64::INFINITY), |a, (i, x)| if *x < a.1 { (i, *x) } else { a })
+            .fold((0, f64::NEG_INFINITY), |a, (i, x)| if *x > a.1 { (i, *x) } else { a })
             .0;
-        let lmin = lambdas[imin];
+        let lmax = lambdas[imax];
         let want = if g <= 1.0 {
-            1.0
+            *lambdas.last().unwrap_or(&5.0)
         } else if g < 2.0 {
             (g - 1.0).powf(-1.0 / 3.0)
         } else {
-            *lambdas.last().unwrap_or(&5.0)
+            1.0
         };
         let step = 4.0 / n as f64;
-        if (lmin - want).abs() > 1.5 * step {
+        if (lmax - want).abs() > 1.5 * step {
             shape_ok = false;
         }
-        shape.push(format!("Γ = {}: minimum at λ = {}", s3(g), s3(lmin)));
+        shape.push(format!("Γ = {}: largest at λ = {}", s3(g), s3(lmax)));
     }
     let verdicts = vec![
         Verdict::new(
@@ -118,9 +119,9 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         ),
         Verdict::new(
             "shape-of-the-curves",
-            "(not stated in the text) the curves' shape: where the resistance to growth is smallest",
+            "(not stated in the text) the curves' shape: where the resistance to growth peaks",
             format!(
-                "d/dλ[(P_B − P_amb)/μ] = (2/λ²)(1 + λ⁻³ − Γ): rising for Γ ≤ 1 (elasticity wins at every stretch), a minimum at λ* = (Γ − 1)^(−1/3) for 1 < Γ < 2, falling for Γ ≥ 2 (surface tension wins). Computed: {}",
+                "d/dλ[(P_B − P_amb)/μ] = (2/λ²)(1 + λ⁻³ − Γ): for Γ ≤ 1 the resistance rises with every stretch (towards 2.5μ: elasticity wins), for 1 < Γ < 2 it peaks at λ* = (Γ − 1)^(−1/3) and then falls, for Γ ≥ 2 it falls from λ = 1 (surface tension wins; a bubble that starts to grow meets less and less resistance). Computed on λ ∈ [1, 5]: {}",
                 shape.join("; ")
             ),
             Agreement::of(shape_ok),

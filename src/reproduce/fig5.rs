@@ -355,7 +355,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         if lin_ok { "" } else { "the half-life curves with time at depth in the model" },
     ));
     let flat_ht = p_of(htd) >= 0.05;
-    let rising_pt = pt.line.is_some_and(|l| l.slope > 0.0);
+    let rising_pt = pt.line.is_some_and(|l| l.slope > 0.0) && p_of(pt) < 0.05;
     verdicts.push(Verdict::new(
         "half-life-flat-plateau-rises",
         "'the rate of bubble growth as indicated by the half-lives does not appear to vary with time at depth, whereas the final radial distribution does' (§4.2)",
