@@ -29,6 +29,8 @@ mod perfusion;
 mod profiles;
 #[path = "integration/report.rs"]
 mod report;
+#[path = "integration/reproduce.rs"]
+mod reproduce;
 #[path = "integration/robustness.rs"]
 mod robustness;
 #[path = "integration/sweep.rs"]

@@ -297,7 +297,9 @@ mod tests {
         let x = [0.0, 1.0, 2.0, 3.0, 4.0];
         let y: Vec<f64> = x.iter().map(|v| 1.0 + v * v).collect();
         assert!(polynomial_ssr(&x, &y, 2).unwrap() < 1e-20);
-        assert!((polynomial_ssr(&x, &y, 1).unwrap() - linear_fit(&x, &y).unwrap().ssr).abs() < 1e-9);
+        assert!(
+            (polynomial_ssr(&x, &y, 1).unwrap() - linear_fit(&x, &y).unwrap().ssr).abs() < 1e-9
+        );
     }
 
     #[test]

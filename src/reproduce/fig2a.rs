@@ -202,13 +202,15 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
                 no_root += 1;
                 continue;
             }
-            if v.iter().any(|x| x.1.is_finite() && x.1 > cod * (1.0 + 1e-12)) {
+            if v.iter()
+                .any(|x| x.1.is_finite() && x.1 > cod * (1.0 + 1e-12))
+            {
                 cod_largest = false;
             }
             worst_gain = worst_gain.min(cod / rf(&rows, *mu, *r0, "none"));
         }
-        let gain_large = rf(&rows, *mu, large, "continuity-of-displacement")
-            / rf(&rows, *mu, large, "none");
+        let gain_large =
+            rf(&rows, *mu, large, "continuity-of-displacement") / rf(&rows, *mu, large, "none");
         let much = gain_large > 1.1;
         let agree = match (cod_largest, much) {
             (true, true) => Agreement::Yes,

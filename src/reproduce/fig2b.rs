@@ -86,7 +86,10 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         let imax = v
             .iter()
             .enumerate()
-            .fold((0, f64::NEG_INFINITY), |a, (i, x)| if *x > a.1 { (i, *x) } else { a })
+            .fold(
+                (0, f64::NEG_INFINITY),
+                |a, (i, x)| if *x > a.1 { (i, *x) } else { a },
+            )
             .0;
         let lmax = lambdas[imax];
         let want = if g <= 1.0 {

@@ -123,7 +123,11 @@ fn oat_rows(res: &Results) -> Vec<OatRow> {
 /// or, when `band` is 0, 1e-6 of the value.
 fn direction(lo: f64, hi: f64, band: f64) -> i8 {
     let d = hi - lo;
-    let band = if band > 0.0 { band } else { 1e-6 * lo.abs().max(hi.abs()) };
+    let band = if band > 0.0 {
+        band
+    } else {
+        1e-6 * lo.abs().max(hi.abs())
+    };
     if !d.is_finite() || d.abs() <= band {
         0
     } else if d > 0.0 {
@@ -237,7 +241,10 @@ fn ranking_verdicts(rows: &[OatRow], label: &str, key: &str) -> Vec<Verdict> {
             .join(", ")
     };
     let mu_least = |m: usize| -> bool {
-        let mu = rows.iter().find(|r| r.0 == "μ").map(|r| if m == 0 { r.1[3] } else { r.2[3] });
+        let mu = rows
+            .iter()
+            .find(|r| r.0 == "μ")
+            .map(|r| if m == 0 { r.1[3] } else { r.2[3] });
         let mu = mu.unwrap_or(f64::NAN).abs();
         rows.iter()
             .filter(|r| r.0 != "μ" && r.0 != "D")
@@ -368,7 +375,11 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         if key == "modal" {
             modal_rows = rows.clone();
         }
-        let set = outputs(&res, Shard::WHOLE, &format!("decophantom reproduce fig3 ({dir})"))?;
+        let set = outputs(
+            &res,
+            Shard::WHOLE,
+            &format!("decophantom reproduce fig3 ({dir})"),
+        )?;
         nested.push((dir, set.clone()));
         files.nest(dir, set);
     }
@@ -377,7 +388,10 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     let res = run_all(&st, &|d, t| progress("fig3 sobol", d, t))?;
     let (_, srows) = indices(&res);
     let mut sobol_t = Table::new(
-        format!("Sobol' indices, N = {n_sobol} base rows ({} runs)", res.rows.len()),
+        format!(
+            "Sobol' indices, N = {n_sobol} base rows ({} runs)",
+            res.rows.len()
+        ),
         vec![
             Column::plain("metric"),
             Column::plain("parameter"),
@@ -480,7 +494,10 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         "Fig. 3b(i): R_max at the ends of each range (modal base)",
         "R_max (µm)",
         vec!["lowest value".into(), "highest value".into()],
-        modal_rows.iter().map(|r| vec![r.1[0] * 1e6, r.1[1] * 1e6]).collect(),
+        modal_rows
+            .iter()
+            .map(|r| vec![r.1[0] * 1e6, r.1[1] * 1e6])
+            .collect(),
     )
     .to_svg()
     .map_err(report_err)?;
@@ -546,8 +563,12 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
             let f = format!("bars-{i}.svg");
             if let Some(svg) = set.get(&f) {
                 let svg = String::from_utf8_lossy(svg).into_owned();
-                page.figure(&svg, Some(&format!("sobol/{f}")), format!("Sobol' indices of {m}."))
-                    .map_err(report_err)?;
+                page.figure(
+                    &svg,
+                    Some(&format!("sobol/{f}")),
+                    format!("Sobol' indices of {m}."),
+                )
+                .map_err(report_err)?;
             }
         }
     }

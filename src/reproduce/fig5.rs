@@ -52,9 +52,19 @@ pub fn hydrogel(h: f64) -> Result<toml::Table, Error> {
 pub fn dive(hold_s: f64, down: f64, up: f64) -> Result<PressureHistory, Error> {
     let top = ATM_PA + 130.0 * PSI_PA;
     let (td, tu) = ((top - ATM_PA) / down, (top - ATM_PA) / up);
-    let t = vec![0.0, td, td + hold_s, td + hold_s + tu, td + hold_s + tu + AFTER_S];
+    let t = vec![
+        0.0,
+        td,
+        td + hold_s,
+        td + hold_s + tu,
+        td + hold_s + tu + AFTER_S,
+    ];
     PressureHistory::with_gas(
-        format!("130 psi gauge, {} min, up at {} Pa/s", s3(hold_s / 60.0), s3(up)),
+        format!(
+            "130 psi gauge, {} min, up at {} Pa/s",
+            s3(hold_s / 60.0),
+            s3(up)
+        ),
         t,
         vec![ATM_PA, top, top, ATM_PA, ATM_PA],
         GasMix::AIR,
@@ -128,7 +138,9 @@ pub fn regress(x: &[f64], y: &[f64]) -> Regression {
         .unzip();
     let line = linear_fit(&x, &y);
     let curvature = match (line, polynomial_ssr(&x, &y, 2)) {
-        (Some(l), Some(q)) if x.len() > 3 => Some(extra_ss_f_test(l.ssr, x.len() - 2, q, x.len() - 3)),
+        (Some(l), Some(q)) if x.len() > 3 => {
+            Some(extra_ss_f_test(l.ssr, x.len() - 2, q, x.len() - 3))
+        }
         _ => None,
     };
     Regression { line, curvature }
@@ -174,12 +186,19 @@ pub const STATS_NOTE: &str = "Statistics: ordinary least squares on the run mean
 
 /// Compute the figure.
 pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Error> {
-    let h = if settings.quick { GRID_STEP_QUICK } else { GRID_STEP };
+    let h = if settings.quick {
+        GRID_STEP_QUICK
+    } else {
+        GRID_STEP
+    };
     let doc = hydrogel(h)?;
     let (hours, rates): (Vec<f64>, Vec<f64>) = if settings.quick {
         (vec![0.5, 2.0, 4.0], vec![1.0, 5.0, 13.0])
     } else {
-        (vec![0.25, 0.5, 1.0, 2.0, 3.0, 4.0], vec![1.0, 2.0, 5.0, 10.0, 13.0])
+        (
+            vec![0.25, 0.5, 1.0, 2.0, 3.0, 4.0],
+            vec![1.0, 2.0, 5.0, 10.0, 13.0],
+        )
     };
     const BASE_RATE: f64 = 5.0;
     const BASE_HOURS: f64 = 4.0;
@@ -205,7 +224,9 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     for (case, r) in cases.iter().zip(runs) {
         results.push((*case, r?));
     }
-    let mut csv = String::from("time_at_depth_h,decompression_rate_psi_s,bubble,r0_m,x_m,y_m,z_m,plateau_m,half_life_s\n");
+    let mut csv = String::from(
+        "time_at_depth_h,decompression_rate_psi_s,bubble,r0_m,x_m,y_m,z_m,plateau_m,half_life_s\n",
+    );
     for ((hh, r), g) in &results {
         for b in g {
             csv.push_str(&format!(
@@ -225,7 +246,13 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     let series = |by_hours: bool| -> Vec<(f64, (f64, f64), (f64, f64))> {
         results
             .iter()
-            .filter(|((hh, r), _)| if by_hours { *r == BASE_RATE } else { *hh == BASE_HOURS })
+            .filter(|((hh, r), _)| {
+                if by_hours {
+                    *r == BASE_RATE
+                } else {
+                    *hh == BASE_HOURS
+                }
+            })
             .map(|((hh, r), g)| {
                 let x = if by_hours { *hh } else { *r };
                 let p: Vec<f64> = g.iter().map(|b| b.3 * 1e6).collect();
@@ -246,7 +273,12 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     let mut panels = Vec::new();
     for (sname, data, xl, xu) in [
         ("time_at_depth", &by_hours, "time at depth (h)", "h"),
-        ("decompression_rate", &by_rate, "decompression rate (psi/s)", "psi/s"),
+        (
+            "decompression_rate",
+            &by_rate,
+            "decompression rate (psi/s)",
+            "psi/s",
+        ),
     ] {
         for (mname, yl, yu, pick) in [
             ("plateau", "plateau radius (µm)", "µm", 0usize),
@@ -263,7 +295,9 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
                 .collect();
             let r = regress(&x, &y);
             if let Some(l) = &r.line {
-                let (fq, pq) = r.curvature.map_or((f64::NAN, f64::NAN), |q| (q.f, q.p_value));
+                let (fq, pq) = r
+                    .curvature
+                    .map_or((f64::NAN, f64::NAN), |q| (q.f, q.p_value));
                 reg_csv.push_str(&format!(
                     "{sname},{mname},{},{},{},{},{},{},{},{},{},{},{},{}\n",
                     l.n,
@@ -280,11 +314,17 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
                     c(pq)
                 ));
             }
-            let (x0, x1) = (x.first().copied().unwrap_or(0.0), x.last().copied().unwrap_or(1.0));
+            let (x0, x1) = (
+                x.first().copied().unwrap_or(0.0),
+                x.last().copied().unwrap_or(1.0),
+            );
             let lines = match &r.line {
                 Some(l) => vec![(
                     format!("linear fit, R² = {}", s3(l.r2)),
-                    vec![(x0, l.intercept + l.slope * x0), (x1, l.intercept + l.slope * x1)],
+                    vec![
+                        (x0, l.intercept + l.slope * x0),
+                        (x1, l.intercept + l.slope * x1),
+                    ],
                 )],
                 None => Vec::new(),
             };
@@ -308,16 +348,25 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     }
     files.add("fig5-regressions.csv", reg_csv);
     let reg = |s: &str, m: &str| -> &Regression {
-        &regs.iter().find(|r| r.0 .0 == s && r.0 .1 == m).expect("every series and metric").1
+        &regs
+            .iter()
+            .find(|r| r.0 .0 == s && r.0 .1 == m)
+            .expect("every series and metric")
+            .1
     };
 
     // verdicts
     let rel = |d: &[(f64, (f64, f64), (f64, f64))], pick: usize| -> f64 {
-        let v: Vec<f64> = d.iter().map(|x| if pick == 0 { x.1 .0 } else { x.2 .0 }).collect();
+        let v: Vec<f64> = d
+            .iter()
+            .map(|x| if pick == 0 { x.1 .0 } else { x.2 .0 })
+            .collect();
         let (lo, hi) = v
             .iter()
             .filter(|x| x.is_finite())
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |a, x| (a.0.min(*x), a.1.max(*x)));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |a, x| {
+                (a.0.min(*x), a.1.max(*x))
+            });
         let m = mean_sd(&v).0;
         (hi - lo) / m
     };
@@ -405,8 +454,12 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     add_verdicts(&mut page, &verdicts);
     page.section("Panels");
     for (f, svg, d) in &panels {
-        page.figure(svg, Some(f), format!("Points: the mean over the three bubbles ± sd; line: least squares. {d}."))
-            .map_err(report_err)?;
+        page.figure(
+            svg,
+            Some(f),
+            format!("Points: the mean over the three bubbles ± sd; line: least squares. {d}."),
+        )
+        .map_err(report_err)?;
         files.add(f.clone(), svg.clone());
     }
     let mut t = Table::new(

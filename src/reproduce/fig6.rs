@@ -82,7 +82,11 @@ fn course(run: &SimRun, id: usize, t_surface: f64) -> Vec<(f64, f64)> {
 
 /// Compute the figure.
 pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Error> {
-    let h = if settings.quick { GRID_STEP_QUICK } else { GRID_STEP };
+    let h = if settings.quick {
+        GRID_STEP_QUICK
+    } else {
+        GRID_STEP
+    };
     let base = hydrogel(h)?;
     let r0s: Vec<f64> = if settings.quick {
         vec![40e-6, 86.5e-6, 160e-6]
@@ -91,7 +95,8 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     };
     let profile = dive(1200.0, 6.9e4, 8.9e4)?;
     let top = crate::units::ATM_PA + 130.0 * crate::units::PSI_PA;
-    let t_surface = (top - crate::units::ATM_PA) / 6.9e4 + 1200.0 + (top - crate::units::ATM_PA) / 8.9e4;
+    let t_surface =
+        (top - crate::units::ATM_PA) / 6.9e4 + 1200.0 + (top - crate::units::ATM_PA) / 8.9e4;
     // 6a cases and the 6b run
     let mut cases: Vec<(usize, f64)> = Vec::new();
     for ri in 0..READINGS.len() {
@@ -141,7 +146,8 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     page.text("**The paper** (§4.2.1): 'As nucleation is a stochastic process it was not possible to experimentally vary R0 and so its effect was, therefore, investigated primarily using the computational model. The results are shown in figure 6a. As one observes, increasing R0 increased the plateau radius nonlinearly (figure 6a, inset), as expected given the larger initial surface area for gas to diffuse through and the lower surface tension.' (§4.2.2): 'Figure 6b shows the results for three simulated bubbles. As can be seen, the bubble nearest the edge of the phantom has the lowest plateau radius (bubble 1). Those closer to the centre exhibit a slower rate of growth initially (due to the lower dissolved gas concentration in their immediate neighbourhood); but continue to grow for longer, as the centre of the phantom takes longer to desaturate.' Caption (a): 'decompression profile with 20 min at a depth 9.0 × 10^5 Pa with 8.9 × 10^4 Pa s^-1 decompression rate and 6.9 × 10^4 Pa s^-1 compression rate. All other simulation parameters were the same as those in figure 5. Error bars show the range of radial values for three randomly positioned bubbles all with the same initial radius. Inset shows the relation between R0 and mean plateau radius.'");
 
     // ---- 6a
-    let mut csv = String::from("reading,r0_m,bubble,x_m,y_m,z_m,plateau_m,half_life_s,max_radius_m\n");
+    let mut csv =
+        String::from("reading,r0_m,bubble,x_m,y_m,z_m,plateau_m,half_life_s,max_radius_m\n");
     let mut inset = LinePlot::new(
         "Fig. 6a inset: mean plateau radius against R0",
         "initial radius R0 (µm)",
@@ -185,11 +191,19 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
                     c(rmax)
                 ));
             }
-            let p: Vec<f64> = g.iter().map(|b| b.3 * 1e6).filter(|x| x.is_finite()).collect();
-            let m = if p.is_empty() { f64::NAN } else { p.iter().sum::<f64>() / p.len() as f64 };
-            let (lo, hi) = p
+            let p: Vec<f64> = g
                 .iter()
-                .fold((f64::INFINITY, f64::NEG_INFINITY), |a, x| (a.0.min(*x), a.1.max(*x)));
+                .map(|b| b.3 * 1e6)
+                .filter(|x| x.is_finite())
+                .collect();
+            let m = if p.is_empty() {
+                f64::NAN
+            } else {
+                p.iter().sum::<f64>() / p.len() as f64
+            };
+            let (lo, hi) = p.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, x| {
+                (a.0.min(*x), a.1.max(*x))
+            });
             means[ri].push(m);
             pts.push((r0 * 1e6, m));
             cells[k].push(format!("{} [{}, {}]", s3(m), s3(lo), s3(hi)));
@@ -210,8 +224,15 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         let curv = super::fig5::regress(&xs, &means[ri]).curvature;
         let ours = format!(
             "{label}: mean plateau {} µm for R0 = {} µm ({}); {}",
-            means[ri].iter().map(|m| s3(*m)).collect::<Vec<_>>().join(" / "),
-            r0s.iter().map(|r| s3(r * 1e6)).collect::<Vec<_>>().join(" / "),
+            means[ri]
+                .iter()
+                .map(|m| s3(*m))
+                .collect::<Vec<_>>()
+                .join(" / "),
+            r0s.iter()
+                .map(|r| s3(r * 1e6))
+                .collect::<Vec<_>>()
+                .join(" / "),
             if inc { "increasing" } else { "not increasing" },
             match (lf, curv) {
                 (Some(l), Some(q)) => format!(
@@ -291,11 +312,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     let mut t95 = Vec::new();
     for (b, d) in gb.iter().zip(&dist) {
         let cr = course(&run_b, b.0, t_surface);
-        let at = |t_min: f64| -> f64 {
-            cr.iter()
-                .find(|p| p.0 >= t_min)
-                .map_or(f64::NAN, |p| p.1)
-        };
+        let at = |t_min: f64| -> f64 { cr.iter().find(|p| p.0 >= t_min).map_or(f64::NAN, |p| p.1) };
         let g5 = (at(5.0) - at(0.0)) * 1e-6;
         let rmax = cr.iter().map(|p| p.1).fold(0.0, f64::max);
         let r_start = at(0.0);
@@ -331,8 +348,16 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     let lowest = (0..gb.len())
         .min_by(|a, b| gb[*a].3.total_cmp(&gb[*b].3))
         .unwrap_or(0);
-    let plateaus = gb.iter().map(|b| s3(b.3 * 1e6)).collect::<Vec<_>>().join(" / ");
-    let dists = dist.iter().map(|d| s3(d * 1e3)).collect::<Vec<_>>().join(" / ");
+    let plateaus = gb
+        .iter()
+        .map(|b| s3(b.3 * 1e6))
+        .collect::<Vec<_>>()
+        .join(" / ");
+    let dists = dist
+        .iter()
+        .map(|d| s3(d * 1e3))
+        .collect::<Vec<_>>()
+        .join(" / ");
     verdicts.push(Verdict::new(
         "fig6b-nearest-edge-lowest",
         "'the bubble nearest the edge of the phantom has the lowest plateau radius (bubble 1)' (§4.2.2)",

@@ -144,7 +144,8 @@ pub const REGISTRY: &[Figure] = &[
     },
     Figure {
         name: "fig6",
-        title: "Fig. 6a, b: plateau radius against R0; bubbles at different distances from the faces",
+        title:
+            "Fig. 6a, b: plateau radius against R0; bubbles at different distances from the faces",
         run: fig6::run,
     },
 ];
@@ -258,7 +259,11 @@ fn index(done: &[Reproduced], settings: &Settings, command: &str) -> Result<Stri
             "\n## [{}]({}/README.md)\n\n",
             d.figure.title, d.figure.name
         ));
-        s.push_str(&verdict_table(&d.verdicts).to_markdown().map_err(Error::Solver)?);
+        s.push_str(
+            &verdict_table(&d.verdicts)
+                .to_markdown()
+                .map_err(Error::Solver)?,
+        );
     }
     s.push_str("\n## Where the paper disagrees with itself, and what decophantom does\n\n");
     for (_, text) in DISCREPANCIES {

@@ -388,7 +388,10 @@ pub fn run_all(study: &Study, progress: &(dyn Fn(usize, usize) + Sync)) -> Resul
         })
         .collect();
     out.sort_by_key(|r| r.0.index);
-    let (rows, courses) = out.into_iter().map(|(r, c)| (r.clone(), (r.index, c))).unzip();
+    let (rows, courses) = out
+        .into_iter()
+        .map(|(r, c)| (r.clone(), (r.index, c)))
+        .unzip();
     Ok(Results {
         spec: study.spec.clone(),
         rows,
