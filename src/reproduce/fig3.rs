@@ -423,7 +423,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         "sobol:most-influential",
         "abstract: 'A sensitivity analysis indicated that the diffusion coefficient was the most influential material parameter' (one at a time, §2.3.1)",
         format!(
-            "Sobol' over all five at once (μ uniform on 0–4 MPa, D log-uniform): the largest total index of R_max is {}'s ({}), of t_max {}'s ({}); N = {n_sobol}, see the intervals",
+            "Sobol' over all five at once (μ uniform on 0–4 MPa, D log-uniform): the largest total index of R_max is {}'s ({}), of t_max {}'s ({}); N = {n_sobol}, wide intervals (an index above 1 is estimator noise)",
             top[0].1 .0,
             s3(top[0].1 .1),
             top[1].1 .0,
@@ -553,7 +553,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         }
     }
     page.section("Sobol' indices over all five (not in the paper)");
-    page.text("Saltelli's A, B, A_B^i design over the five ranges at once (γ, L_N2, L_O2 and μ uniform, D log-uniform), first-order S1 and total ST with 95 % bootstrap intervals (500 resamples); μ's base is irrelevant here. With this few base rows the intervals are wide: read the ranking, not the digits. Every run is in `sobol/sensitivity.csv`.");
+    page.text("Saltelli's A, B, A_B^i design over the five ranges at once (γ, L_N2, L_O2 and μ uniform, D log-uniform), first-order S1 and total ST with 95 % bootstrap intervals (500 resamples); μ's base is irrelevant here. With this few base rows the intervals are wide and an index can come out above 1 (estimator noise: the total variance is estimated from 2N runs): read the ranking, not the digits. Every run is in `sobol/sensitivity.csv`.");
     page.table(&sobol_t);
     for (dir, set) in &nested {
         if *dir != "sobol" {

@@ -280,7 +280,7 @@ pub fn verdict_table(v: &[Verdict]) -> Table {
             Column::plain("claim (paper)"),
             Column::plain("ours"),
             Column::plain("agrees?"),
-            Column::plain("most likely reason where not"),
+            Column::plain("note; where not, the most likely reason"),
         ],
     );
     for x in v {
