@@ -190,7 +190,7 @@ fn reproduce_fig2a_and_fig3_quick_against_an_independent_solve_and_the_paper() {
         gain(40.0),
         gain(5000.0)
     );
-    assert!((gain(5000.0) - (1e4 / (1e4 - 4.0 * 5000.0 / 3.0)).cbrt()).abs() < 0.01);
+    assert!((gain(5000.0) - (1e4_f64 / (1e4 - 4.0 * 5000.0 / 3.0)).cbrt()).abs() < 0.01);
     assert_eq!(
         verdict("fig2a", "continuity-largest:mu1"),
         Agreement::Partly
