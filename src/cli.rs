@@ -604,11 +604,19 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             Ok(0)
         }
         Command::Reproduce(a) => {
+            // the command as a reader would type it (not argv[0]), so that re-running it
+            // leaves the committed reports/paper/ unchanged
+            let command = format!(
+                "decophantom reproduce {} --out {}{}",
+                a.figure,
+                a.out.display(),
+                if a.quick { " --quick" } else { "" }
+            );
             let req = decophantom::app::reproduce::ReproduceRequest {
                 figure: a.figure,
                 out: a.out.clone(),
                 quick: a.quick,
-                command: command_line(),
+                command,
             };
             let bar = std::sync::Mutex::new(Progress::runs());
             let r = decophantom::app::reproduce::run(&req, &|_fig, done, total| {
