@@ -151,7 +151,9 @@ pub struct Saturating {
 /// Least squares of y = a + b·e^(−x/τ): for each τ on a log grid (and a golden-section
 /// refinement around the best) a and b are a straight-line fit on e^(−x/τ).
 fn one_phase(x: &[f64], y: &[f64]) -> Option<(f64, f64, f64, f64)> {
-    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, v| (a.0.min(*v), a.1.max(*v)));
+    let (lo, hi) = x.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |a, v| {
+        (a.0.min(*v), a.1.max(*v))
+    });
     let span = hi - lo;
     if !(span > 0.0) || x.len() < 4 {
         return None;
@@ -160,7 +162,9 @@ fn one_phase(x: &[f64], y: &[f64]) -> Option<(f64, f64, f64, f64)> {
         let z: Vec<f64> = x.iter().map(|v| (-(v - lo) / tau).exp()).collect();
         linear_fit(&z, y).map(|l| (l.ssr, l.intercept, l.slope))
     };
-    let grid: Vec<f64> = (0..=400).map(|i| span * 1e-3 * 10f64.powf(5.0 * i as f64 / 400.0)).collect();
+    let grid: Vec<f64> = (0..=400)
+        .map(|i| span * 1e-3 * 10f64.powf(5.0 * i as f64 / 400.0))
+        .collect();
     let (mut best, mut bi) = (f64::INFINITY, 0);
     for (i, t) in grid.iter().enumerate() {
         if let Some((ssr, _, _)) = at(*t) {
@@ -170,7 +174,10 @@ fn one_phase(x: &[f64], y: &[f64]) -> Option<(f64, f64, f64, f64)> {
             }
         }
     }
-    let (mut a, mut b) = (grid[bi.saturating_sub(1)].ln(), grid[(bi + 1).min(grid.len() - 1)].ln());
+    let (mut a, mut b) = (
+        grid[bi.saturating_sub(1)].ln(),
+        grid[(bi + 1).min(grid.len() - 1)].ln(),
+    );
     let g = (5f64.sqrt() - 1.0) / 2.0;
     let f = |u: f64| at(u.exp()).map_or(f64::INFINITY, |r| r.0);
     for _ in 0..80 {
@@ -286,6 +293,9 @@ pub fn describe(r: &Regression, xu: &str, yu: &str) -> String {
 /// The assumptions behind the p-values, said once per figure.
 pub const STATS_NOTE: &str = "Statistics: ordinary least squares on the run means (the mean over the phantom's three bubbles, as the paper took means per gel), Student-t 95 % intervals, R², and the F-test of a zero slope (F(1, n − 2), the line against the mean alone); the nonlinear tests are extra sum-of-squares F-tests of a quadratic, and of the one-phase association y = a + b·e^(−(x − x_min)/τ) (the exponential approach to a plateau, fitted by a golden-section search over τ with a and b linear), against the line; the line is the association's limit τ → ∞, so the two are nested. 'Varies' uses the association against the mean where it beats the line, else the line's zero-slope test. These tests assume independent Gaussian errors of constant variance about the fitted curve. A simulation is deterministic: its 'errors' are how far a straight line (or parabola) is from the model's smooth response, so a p-value here says how well the form describes the response over these few levels, not how likely a repeat would differ.";
 
+/// One level of a series: (x, (plateau mean, sd) µm, (half-life mean, sd) min).
+type Level = (f64, (f64, f64), (f64, f64));
+
 /// Compute the figure.
 pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Error> {
     let h = if settings.quick {
@@ -345,7 +355,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
             ));
         }
     }
-    let series = |by_hours: bool| -> Vec<(f64, (f64, f64), (f64, f64))> {
+    let series = |by_hours: bool| -> Vec<Level> {
         results
             .iter()
             .filter(|((hh, r), _)| {
@@ -481,7 +491,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     };
 
     // verdicts
-    let rel = |d: &[(f64, (f64, f64), (f64, f64))], pick: usize| -> f64 {
+    let rel = |d: &[Level], pick: usize| -> f64 {
         let v: Vec<f64> = d
             .iter()
             .map(|x| if pick == 0 { x.1 .0 } else { x.2 .0 })

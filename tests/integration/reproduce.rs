@@ -7,17 +7,24 @@ use decophantom::reproduce::{reproduce, select, Agreement, Settings};
 use std::collections::HashMap;
 use std::f64::consts::PI;
 
+/// The moduli of the Fig. 2a caption: μ (Pa), M (Pa/m³), K (Pa).
+struct Moduli {
+    mu: f64,
+    m: f64,
+    k: f64,
+}
+
 /// Ω(R) of each form written out from the paper's eqs (2.6)–(2.9) (Walsh et al. 2017, §2.1.2),
 /// independently of `phantom::elasticity`.
-fn omega(form: &str, r: f64, r0: f64, p: f64, p0: f64, mu: f64, m: f64, k: f64) -> f64 {
+fn omega(form: &str, r: f64, r0: f64, p: f64, p0: f64, e: &Moduli) -> f64 {
     match form {
         "none" => 0.0,
-        "bulk-modulus" => 4.0 / 3.0 * PI * r.powi(3) * m,
-        "continuity-of-displacement" => -4.0 * mu / 3.0,
+        "bulk-modulus" => 4.0 / 3.0 * PI * r.powi(3) * e.m,
+        "continuity-of-displacement" => -4.0 * e.mu / 3.0,
         "reference-configuration" => {
-            4.0 * mu * ((1.0 - p0 / (3.0 * k)) * r / r0 - (1.0 - p / (3.0 * k)))
+            4.0 * e.mu * ((1.0 - p0 / (3.0 * e.k)) * r / r0 - (1.0 - p / (3.0 * e.k)))
         }
-        "hyperelastic" => 0.5 * mu * (5.0 - 4.0 * r0 / r - (r0 / r).powi(4)),
+        "hyperelastic" => 0.5 * e.mu * (5.0 - 4.0 * r0 / r - (r0 / r).powi(4)),
         other => panic!("unknown form {other}"),
     }
 }
@@ -26,22 +33,12 @@ fn omega(form: &str, r: f64, r0: f64, p: f64, p0: f64, mu: f64, m: f64, k: f64) 
 /// p_gas·R³ is constant, with p_gas = p + 2γ/R + Ω(R) (Young–Laplace with the tissue term).
 /// The smallest root above 1 nm, found by a geometric scan then 200 bisections; None if the
 /// balance has no root below 10 m.
-fn final_radius(
-    form: &str,
-    r0: f64,
-    p0: f64,
-    pf: f64,
-    g: f64,
-    mu: f64,
-    m: f64,
-    k: f64,
-) -> Option<f64> {
-    let content = (p0 + 2.0 * g / r0 + omega(form, r0, r0, p0, p0, mu, m, k)) * r0.powi(3);
-    if !(content > 0.0) {
+fn final_radius(form: &str, r0: f64, p0: f64, pf: f64, g: f64, e: &Moduli) -> Option<f64> {
+    let content = (p0 + 2.0 * g / r0 + omega(form, r0, r0, p0, p0, e)) * r0.powi(3);
+    if content.is_nan() || content <= 0.0 {
         return None;
     }
-    let f =
-        |r: f64| (pf + 2.0 * g / r + omega(form, r, r0, pf, p0, mu, m, k)) * r.powi(3) - content;
+    let f = |r: f64| (pf + 2.0 * g / r + omega(form, r, r0, pf, p0, e)) * r.powi(3) - content;
     let mut a = 1e-9;
     while a < 10.0 {
         let b = a * 1.01;
@@ -137,7 +134,12 @@ fn reproduce_fig2a_and_fig3_quick_against_an_independent_solve_and_the_paper() {
             (num(r, "gamma"), num(r, "m_pa_per_m3"), num(r, "k_pa")),
             (0.07, 5e16, 2.2e9)
         );
-        let want = final_radius(&r["form"], r0, 1e6, 1e4, 0.07, mu, 5e16, 2.2e9);
+        let moduli = Moduli {
+            mu,
+            m: 5e16,
+            k: 2.2e9,
+        };
+        let want = final_radius(&r["form"], r0, 1e6, 1e4, 0.07, &moduli);
         match (r["rf_m"].as_str(), want) {
             ("", None) => {}
             (s, Some(w)) if !s.is_empty() => {
