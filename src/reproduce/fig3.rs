@@ -328,7 +328,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     let mut files = OutputSet::new();
     let mut verdicts = Vec::new();
     let mut tables = Vec::new();
-    let mut modal_rows = Vec::new();
+    let mut base_rows: Vec<(&str, &str, Vec<OatRow>)> = Vec::new();
     let mut nested = Vec::new();
     for (key, label, mu, dir) in [
         ("modal", "modal values (μ = 2 MPa)", 2e6, "oat-modal"),
@@ -372,9 +372,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
             .map_err(report_err)?;
         }
         tables.push(t);
-        if key == "modal" {
-            modal_rows = rows.clone();
-        }
+        base_rows.push((key, label, rows.clone()));
         let set = outputs(
             &res,
             Shard::WHOLE,
@@ -478,45 +476,56 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         "the 36 % does not follow from 2γ/R at 1 atm (42 %); γ/R would give 27 % for γ = 0.073 but then 17 % for 0.04. Likely an arithmetic slip in the text; it does not affect the simulations",
     ));
 
-    // paper-style panels: 3b (ranges) and 3c (normalised sensitivities) at the modal values
-    let cats: Vec<String> = modal_rows.iter().map(|r| r.0.to_string()).collect();
-    let bar = |title: &str, y: &str, groups: Vec<String>, vals: Vec<Vec<f64>>| BarChart {
-        title: title.into(),
-        x_label: "parameter".into(),
-        y_label: y.into(),
-        categories: cats.clone(),
-        groups,
-        values: vals,
-        reference: None,
-        size: (960, 480),
-    };
-    let b1 = bar(
-        "Fig. 3b(i): R_max at the ends of each range (modal base)",
-        "R_max (µm)",
-        vec!["lowest value".into(), "highest value".into()],
-        modal_rows
-            .iter()
-            .map(|r| vec![r.1[0] * 1e6, r.1[1] * 1e6])
-            .collect(),
-    )
-    .to_svg()
-    .map_err(report_err)?;
-    let b2 = bar(
-        "Fig. 3b(ii): t_max at the ends of each range (modal base)",
-        "t_max (s)",
-        vec!["lowest value".into(), "highest value".into()],
-        modal_rows.iter().map(|r| vec![r.2[0], r.2[1]]).collect(),
-    )
-    .to_svg()
-    .map_err(report_err)?;
-    let b3 = bar(
-        "Fig. 3c: normalised sensitivities (modal base)",
-        "(Δmetric/Δx)·(x/metric)",
-        vec!["R_max".into(), "t_max".into()],
-        modal_rows.iter().map(|r| vec![r.1[3], r.2[3]]).collect(),
-    )
-    .to_svg()
-    .map_err(report_err)?;
+    // paper-style panels: 3b (ranges) and 3c (normalised sensitivities) at each base
+    let mut bars: Vec<(String, String, String)> = Vec::new();
+    for (key, label, rows) in &base_rows {
+        let cats: Vec<String> = rows.iter().map(|r| r.0.to_string()).collect();
+        let bar = |title: String, y: &str, groups: Vec<String>, vals: Vec<Vec<f64>>| {
+            BarChart {
+                title,
+                x_label: "parameter".into(),
+                y_label: y.into(),
+                categories: cats.clone(),
+                groups,
+                values: vals,
+                reference: None,
+                size: (960, 480),
+            }
+            .to_svg()
+            .map_err(report_err)
+        };
+        let ends = vec!["lowest value".to_string(), "highest value".to_string()];
+        bars.push((
+            format!("fig3b-rmax-{key}.svg"),
+            bar(
+                format!("Fig. 3b(i): R_max at the ends of each range ({label})"),
+                "R_max (µm)",
+                ends.clone(),
+                rows.iter().map(|r| vec![r.1[0] * 1e6, r.1[1] * 1e6]).collect(),
+            )?,
+            format!("R_max at the lowest and highest value of each parameter's range, the others at the base ({label}; Fig. 3b(i))."),
+        ));
+        bars.push((
+            format!("fig3b-tmax-{key}.svg"),
+            bar(
+                format!("Fig. 3b(ii): t_max at the ends of each range ({label})"),
+                "t_max (s)",
+                ends,
+                rows.iter().map(|r| vec![r.2[0], r.2[1]]).collect(),
+            )?,
+            format!("t_max at the lowest and highest value of each parameter's range ({label}; Fig. 3b(ii))."),
+        ));
+        bars.push((
+            format!("fig3c-{key}.svg"),
+            bar(
+                format!("Fig. 3c: normalised sensitivities ({label})"),
+                "(Δmetric/Δx)·(x/metric)",
+                vec!["R_max".into(), "t_max".into()],
+                rows.iter().map(|r| vec![r.1[3], r.2[3]]).collect(),
+            )?,
+            format!("Normalised sensitivities of R_max and t_max ({label}; Fig. 3c)."),
+        ));
+    }
 
     let mut page = Page::new("Fig. 3: sensitivity of R_max and t_max to the material parameters");
     page.text("**The paper** (§2.3.1): 'Simulations were conducted on a 1.28 mm^3 grid with h = R0 = 0.04 mm … A single bubble located at the centre of the grid was exposed to a decompression corresponding to a depth change of 30 m in 3.75 min (ascent rate approx. 0.133 m s^-1). The tissue was assumed to be saturated with air at the start of the decompression … From figure 3a, it can be seen that increases in the parameters D, μ and γ led to a decrease in the maximum bubble radius (R_max) and a decrease in the time taken to reach this maximum (t_max). Increases in both LN2 and LO2 led to an increase in R_max but a decrease in t_max. … From this top panel it can be seen that μ has the largest effect upon R_max, while D has the largest effect upon t_max. … These results show that R_max and t_max are relatively insensitive to μ and that its large impact is due to its wide physiological range. LN2, LO2 and γ all have a similar influence that is larger than that of μ but the parameter to which R_max and t_max are most sensitive is D.' Caption: 'the fixed parameter values are the modal values of the range (γ = 0.056 N m^-1, LN2 = 0.0436, LO2 = 0.02, μ = 2 × 10^6 Pa, D = 1.4 × 10^-9 m^2 s^-1)'.");
@@ -526,13 +535,9 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     for t in &tables {
         page.table(t);
     }
-    for (f, svg, cap) in [
-        ("fig3b-rmax.svg", &b1, "R_max at the lowest and highest value of each parameter's range, the others modal (Fig. 3b(i))."),
-        ("fig3b-tmax.svg", &b2, "t_max at the lowest and highest value of each parameter's range (Fig. 3b(ii))."),
-        ("fig3c.svg", &b3, "Normalised sensitivities of R_max and t_max (Fig. 3c)."),
-    ] {
-        page.figure(svg, Some(f), cap).map_err(report_err)?;
-        files.add(f, svg.clone());
+    for (f, svg, cap) in &bars {
+        page.figure(svg, Some(f), cap.clone()).map_err(report_err)?;
+        files.add(f.clone(), svg.clone());
     }
     page.section("Radius time courses (Fig. 3a)");
     for (dir, set) in &nested {
