@@ -55,6 +55,21 @@ pub enum Command {
     Sensitivity(SensitivityArgs),
     /// Merge `sensitivity --shard` output folders and compute the indices and report.
     Merge(MergeArgs),
+    /// Regenerate the paper's computational figures (2a, 2b, 3, 5, 6): data, panels, claims vs ours.
+    Reproduce(ReproduceArgs),
+}
+
+/// Arguments of `reproduce`.
+#[derive(clap::Args, Debug)]
+pub struct ReproduceArgs {
+    /// fig2a, fig2b, fig3, fig5, fig6 or all.
+    pub figure: String,
+    /// Output folder (written whole: DIR/<figure>/..., DIR/README.md).
+    #[arg(long)]
+    pub out: std::path::PathBuf,
+    /// Reduced grids and designs (seconds, for a first look and the tests).
+    #[arg(long)]
+    pub quick: bool,
 }
 
 /// Arguments of `sensitivity`.
@@ -671,6 +686,34 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             }
             print!("{}", decophantom::app::sensitivity::summary_text(&r?));
             println!("wrote {}", a.out.display());
+            Ok(0)
+        }
+        Command::Reproduce(a) => {
+            // the command as a reader would type it (not argv[0]), so that re-running it
+            // leaves the committed reports/paper/ unchanged
+            let command = format!(
+                "decophantom reproduce {} --out {}{}",
+                a.figure,
+                a.out.display(),
+                if a.quick { " --quick" } else { "" }
+            );
+            let req = decophantom::app::reproduce::ReproduceRequest {
+                figure: a.figure,
+                out: a.out.clone(),
+                quick: a.quick,
+                command,
+            };
+            let bar = std::sync::Mutex::new(Progress::runs());
+            let r = decophantom::app::reproduce::run(&req, &|_fig, done, total| {
+                if let Ok(mut b) = bar.lock() {
+                    b.update(done as f64, total as f64);
+                }
+            });
+            if let Ok(b) = bar.lock() {
+                b.finish();
+            }
+            print!("{}", decophantom::app::reproduce::summary_text(&r?));
+            wrote(&a.out);
             Ok(0)
         }
         Command::Merge(a) => {

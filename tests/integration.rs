@@ -31,6 +31,8 @@ mod planner_cli;
 mod profiles;
 #[path = "integration/report.rs"]
 mod report;
+#[path = "integration/reproduce.rs"]
+mod reproduce;
 #[path = "integration/robustness.rs"]
 mod robustness;
 #[path = "integration/sweep.rs"]
