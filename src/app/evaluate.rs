@@ -83,7 +83,17 @@ impl PhantomSpec {
                 );
             }
             params.grid_step = h;
+            // the new grid must be buildable (cell count) and hold the bubbles
+            let cl = |m: String| {
+                InputError::new(m)
+                    .in_file("<command line>")
+                    .field("--grid-step")
+            };
+            let grid =
+                crate::phantom::grid::Grid::new(params.shape, h, &params.open_faces).map_err(cl)?;
+            crate::phantom::sim::place_bubbles(&params, &grid).map_err(|e| cl(e.to_string()))?;
         }
+        crate::phantom::config::require_bubbles(&params, path)?;
         let table: toml::Table = toml::from_str(text).unwrap_or_default();
         let el = table
             .get("material")
@@ -349,6 +359,8 @@ pub fn run_matrix(
                 frames: &run.frames,
                 surfaced_s: Some(h.final_arrival_s()),
             });
+            crate::risk::check_finite(&scores)
+                .map_err(|m| Error::Solver(format!("{} under {law}: {m}", candidates[c].label)))?;
             Ok(RunOutcome {
                 candidate: c,
                 law,

@@ -312,6 +312,7 @@ pub fn run(req: &SimulateRequest, progress: &mut dyn FnMut(f64, f64)) -> Result<
         )
     };
     let phantom = load_phantom(&req.phantom)?;
+    crate::phantom::config::require_bubbles(&phantom.params, &req.phantom)?;
     let mut run = simulate_until(&phantom.params, &profile, progress, req.stop.as_deref())?;
     run.notes = notes;
     let mut set = OutputSet::new();
