@@ -12,6 +12,10 @@ pub enum Error {
     /// The solver found itself unhealthy (NaN, lost gas, unstable settings).
     #[error("solver: {0}")]
     Solver(String),
+    /// Stopped on request (Ctrl-C) before the work was complete; nothing half-done was
+    /// written. The binary exits 130.
+    #[error("interrupted: {0}")]
+    Interrupted(String),
     /// An I/O failure while writing outputs.
     #[error("{path}: {source}")]
     Io {

@@ -183,7 +183,11 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
             PlanFormat::Csv => waypoints_csv(&schedule),
             PlanFormat::Md => markdown(&schedule, &plan, &oxygen),
         };
-        crate::report::output::write_file_atomic(path, bytes.as_bytes())?;
+        crate::report::output::write_file_atomic_with_inputs(
+            path,
+            bytes.as_bytes(),
+            &[req.algorithm.as_path()],
+        )?;
     }
     let text = match req.format {
         PlanFormat::Toml => toml_text,
