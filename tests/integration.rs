@@ -19,6 +19,8 @@ mod evaluate;
 mod events;
 #[path = "integration/fixed_gases.rs"]
 mod fixed_gases;
+#[path = "integration/hardening.rs"]
+mod hardening;
 #[path = "integration/growth.rs"]
 mod growth;
 #[path = "integration/paper_findings.rs"]
