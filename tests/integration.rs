@@ -19,10 +19,10 @@ mod evaluate;
 mod events;
 #[path = "integration/fixed_gases.rs"]
 mod fixed_gases;
-#[path = "integration/hardening.rs"]
-mod hardening;
 #[path = "integration/growth.rs"]
 mod growth;
+#[path = "integration/hardening.rs"]
+mod hardening;
 #[path = "integration/paper_findings.rs"]
 mod paper_findings;
 #[path = "integration/perfusion.rs"]

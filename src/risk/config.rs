@@ -233,7 +233,7 @@ pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError
             return Err(err(
                 "limit",
                 format!(
-                    "must be a number between 1e-9 and 1e12 (got {}); give it in {}",
+                    "must be positive, between 1e-9 and 1e12 (got {}); give it in {}",
                     crate::error::num(limit),
                     if criterion.unit().is_empty() {
                         "the criterion's unit"

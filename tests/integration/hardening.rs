@@ -212,7 +212,11 @@ fn durations_beyond_thirty_days_are_refused() {
     assert!(p("time_unit = \"h\"\npressure_unit = \"bar\"\npoints = [[0, 1], [720, 1]]\n").is_ok());
     // a waypoint at 1e20 min, a schedule leg of 1e20 s
     let dir = tempdir("hard-duration");
-    let csv = write(&dir, "s.csv", "time_min,depth_m\n0,0\n1,10\n1e20,10\n1.1e20,0\n");
+    let csv = write(
+        &dir,
+        "s.csv",
+        "time_min,depth_m\n0,0\n1,10\n1e20,10\n1.1e20,0\n",
+    );
     let o = run(&[
         "check".as_ref(),
         "--schedule".as_ref(),
@@ -254,12 +258,10 @@ fn runs_estimated_at_hours_need_force() {
         "time_unit = \"h\"\npressure_unit = \"psi-gauge\"\npoints = [[0, 0], [1, 10], [720, 0]]\n",
     );
     let params = parse_phantom(&big, &ph).unwrap().params;
-    let history = decophantom::profile::toml::parse(
-        &std::fs::read_to_string(&month).unwrap(),
-        &month,
-    )
-    .unwrap()
-    .history;
+    let history =
+        decophantom::profile::toml::parse(&std::fs::read_to_string(&month).unwrap(), &month)
+            .unwrap()
+            .history;
     let e = decophantom::app::cost::estimate(&params, &history);
     assert!(
         e.cells == 8e6 && e.seconds > decophantom::app::cost::DEFAULT_LIMIT_S,
@@ -344,10 +346,22 @@ fn physical_ranges_are_bad_input_naming_the_field() {
     let hyper = |mu: &str| format!("law = \"hyperelastic\"\nshear_modulus = {mu}");
     let pos = "[1e-3, 1e-3, 1e-3]";
     let cases: Vec<(String, &str)> = vec![
-        (phantom("0.07", none, "1e3", pos, "5e-5"), "gases.n2.diffusivity"),
-        (phantom("0.07", none, "1e-300", pos, "5e-5"), "gases.n2.diffusivity"),
-        (phantom("inf", none, "2.5e-9", pos, "5e-5"), "material.surface_tension"),
-        (phantom("0.07", none, "2.5e-9", pos, "1e-30"), "bubbles.initial_radius_m"),
+        (
+            phantom("0.07", none, "1e3", pos, "5e-5"),
+            "gases.n2.diffusivity",
+        ),
+        (
+            phantom("0.07", none, "1e-300", pos, "5e-5"),
+            "gases.n2.diffusivity",
+        ),
+        (
+            phantom("inf", none, "2.5e-9", pos, "5e-5"),
+            "material.surface_tension",
+        ),
+        (
+            phantom("0.07", none, "2.5e-9", pos, "1e-30"),
+            "bubbles.initial_radius_m",
+        ),
         (
             phantom("0.07", &hyper("1e308"), "2.5e-9", pos, "5e-5"),
             "material.elasticity.shear_modulus",
@@ -441,7 +455,12 @@ fn user_files_are_never_replaced_or_deleted() {
     let prof = write(&dir, "p.toml", SHORT_PROFILE);
     let out = dir.join("out");
     let o = simulate_into(&dir, &prof, &ph, &out);
-    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     let marker = std::fs::read_to_string(out.join(".decophantom-output")).unwrap();
     assert!(marker.contains("\nbubbles.csv\n"), "{marker}");
     // the run's own inputs inside the old output folder
@@ -453,7 +472,10 @@ fn user_files_are_never_replaced_or_deleted() {
     // a file the tool did not write
     let o = simulate_into(&dir, &prof, &ph, &out);
     assert_refused(&o, &["did not write"]);
-    assert_eq!(std::fs::read_to_string(out.join("p.toml")).unwrap(), SHORT_PROFILE);
+    assert_eq!(
+        std::fs::read_to_string(out.join("p.toml")).unwrap(),
+        SHORT_PROFILE
+    );
     std::fs::remove_file(out.join("p.toml")).unwrap();
     std::fs::remove_file(out.join("ph.toml")).unwrap();
     // --out checked before the run: a file in the way
@@ -473,7 +495,12 @@ fn user_files_are_never_replaced_or_deleted() {
     std::fs::create_dir_all(&staging).unwrap();
     std::fs::create_dir_all(old.join("sub")).unwrap();
     let o = simulate_into(&dir, &prof, &ph, &out);
-    assert_eq!(o.status.code(), Some(0), "{}", String::from_utf8_lossy(&o.stderr));
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
     assert!(!staging.exists() && !old.exists());
     // plan --out onto its own algorithm file
     let alg = write(
@@ -531,4 +558,36 @@ fn check_stops_on_ctrl_c_and_writes_nothing() {
         .filter(|e| e.file_name().to_string_lossy().starts_with(".out."))
         .count();
     assert_eq!(debris, 0);
+}
+
+/// The ranges are physical, not arbitrary: every phantom and profile the project ships is
+/// inside them.
+#[test]
+fn every_committed_phantom_and_profile_is_within_the_ranges() {
+    let mut stack = vec![root().join("profiles"), root().join("tests/data")];
+    let mut phantoms = 0;
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap().flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                stack.push(p);
+                continue;
+            }
+            if p.extension().is_none_or(|x| x != "toml") {
+                continue;
+            }
+            let text = std::fs::read_to_string(&p).unwrap();
+            if text.contains("[geometry]") {
+                phantoms += 1;
+                if let Err(e) = parse_phantom(&text, &p) {
+                    panic!("{e}");
+                }
+            } else if text.contains("pressure_unit") {
+                if let Err(e) = decophantom::profile::toml::parse(&text, &p) {
+                    panic!("{e}");
+                }
+            }
+        }
+    }
+    assert!(phantoms >= 5);
 }
