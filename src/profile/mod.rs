@@ -233,9 +233,9 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputErr
 /// The message for a history longer than [`MAX_DURATION_S`].
 pub fn duration_message(end_s: f64) -> String {
     format!(
-        "the profile lasts {:.4e} s ({:.1} days); the longest run accepted is {} days simulated ({MAX_DURATION_S} s)",
-        end_s,
-        end_s / 86400.0,
+        "the profile lasts {} s ({} days); the longest run accepted is {} days simulated ({MAX_DURATION_S} s)",
+        crate::error::num(end_s),
+        crate::error::num((end_s / 86400.0 * 10.0).round() / 10.0),
         MAX_DURATION_S / 86400.0
     )
 }

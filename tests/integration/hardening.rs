@@ -591,3 +591,34 @@ fn every_committed_phantom_and_profile_is_within_the_ranges() {
     }
     assert!(phantoms >= 5);
 }
+
+#[test]
+fn legacy_files_and_the_elasticity_command_check_their_numbers() {
+    use decophantom::profile::legacy::{read, LegacyUnits};
+    use decophantom::units::{PressureUnit, TimeUnit};
+    let dir = tempdir("hard-legacy");
+    let units = LegacyUnits::new(TimeUnit::Min, PressureUnit::Msw);
+    for (text, line, field) in [
+        ("0 0\n1 1e17\n2 0\n", 2, "value"),
+        ("0 0\n1e20 0\n", 2, "time"),
+        ("0 0\n1 nan\n2 0\n", 2, "value"),
+    ] {
+        let p = write(&dir, "l.txt", text);
+        let e = read(&p, &units).unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(line), Some(field)),
+            "{e}"
+        );
+    }
+    for (flag, v) in [
+        ("--mu", "nan"),
+        ("--mu", "1e308"),
+        ("--r0", "1e-30"),
+        ("--gamma", "inf"),
+    ] {
+        let o = run(&["elasticity".as_ref(), flag.as_ref(), v.as_ref()]);
+        assert_refused(&o, &[flag]);
+        assert!(o.stdout.is_empty());
+    }
+}
