@@ -215,6 +215,9 @@ pub struct CheckArgs {
     /// Print the result as JSON (schema decophantom.check/1, docs/json.md) instead of text.
     #[arg(long)]
     pub json: bool,
+    /// Run even when the run is estimated to take more than 6 hours.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// The dive to plan (shared by `plan` and `evaluate`).
@@ -284,6 +287,9 @@ pub struct EvaluateArgs {
     /// Print the scores and ranking as JSON (schema decophantom.evaluate/1, docs/json.md).
     #[arg(long)]
     pub json: bool,
+    /// Run even when a run is estimated to take more than 6 hours.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Arguments of `simulate`.
@@ -310,6 +316,9 @@ pub struct SimulateArgs {
     /// Which dive of a dive log (1-based).
     #[arg(long)]
     pub dive: Option<usize>,
+    /// Run even when the run is estimated to take more than 6 hours.
+    #[arg(long)]
+    pub force: bool,
 }
 
 /// Arguments of `elasticity`.
@@ -495,6 +504,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             Ok(0)
         }
         Command::Simulate(a) => {
+            long_runs(a.force);
             let (time_unit, pressure_unit) = match &a.units {
                 Some(u) => {
                     let (t, p) = decophantom::profile::legacy::parse_units(u)?;
@@ -559,6 +569,8 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             Ok(0)
         }
         Command::Check(a) => {
+            interrupt_flag();
+            long_runs(a.force);
             let req = decophantom::app::check::CheckRequest {
                 schedule: a.schedule,
                 dive: a.dive,
@@ -583,6 +595,8 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             Ok(if outcome.all_pass { 0 } else { 1 })
         }
         Command::Evaluate(a) => {
+            interrupt_flag();
+            long_runs(a.force);
             let req = decophantom::app::evaluate::EvaluateRequest {
                 depth_m: a.depth,
                 time_min: a.time,
@@ -725,6 +739,15 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
     }
 }
 
+/// Refuse runs estimated above 6 h unless `--force` (the library itself sets no limit).
+fn long_runs(force: bool) {
+    decophantom::app::cost::set_limit(if force {
+        f64::INFINITY
+    } else {
+        decophantom::app::cost::DEFAULT_LIMIT_S
+    });
+}
+
 fn command_line() -> String {
     std::env::args()
         .map(|a| if a.contains(' ') { format!("'{a}'") } else { a })
@@ -786,17 +809,24 @@ impl Progress {
     }
 }
 
-/// A flag that Ctrl-C sets: the simulation stops at its next step and writes what it has.
-/// A second Ctrl-C ends the process at once.
+/// A flag that Ctrl-C sets (with the library's [`decophantom::app::INTERRUPT`]): `simulate`
+/// stops at its next step and writes what it has; `check` and `evaluate` stop their runs and
+/// write nothing half-done. A second Ctrl-C ends the process at once, but never in the middle
+/// of writing an output (it waits the few ms that takes), so no staging folder is left behind.
 fn interrupt_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     use std::sync::atomic::{AtomicBool, Ordering};
     let flag = std::sync::Arc::new(AtomicBool::new(false));
     let f = flag.clone();
     let _ = ctrlc::set_handler(move || {
-        if f.swap(true, Ordering::Relaxed) {
+        let again = f.swap(true, Ordering::SeqCst);
+        decophantom::app::INTERRUPT.store(true, Ordering::SeqCst);
+        if again {
+            while decophantom::report::output::commit_in_progress() {
+                std::thread::sleep(std::time::Duration::from_millis(5));
+            }
             std::process::exit(130);
         }
-        eprintln!("\ninterrupted: finishing the current step and writing what was simulated so far (Ctrl-C again to quit now)");
+        eprintln!("\ninterrupted: finishing the current step; runs stop and only complete results are written (Ctrl-C again to quit now)");
     });
     flag
 }

@@ -12,6 +12,10 @@ pub enum Error {
     /// The solver found itself unhealthy (NaN, lost gas, unstable settings).
     #[error("solver: {0}")]
     Solver(String),
+    /// Stopped on request (Ctrl-C) before the work was complete; nothing half-done was
+    /// written. The binary exits 130.
+    #[error("interrupted: {0}")]
+    Interrupted(String),
     /// An I/O failure while writing outputs.
     #[error("{path}: {source}")]
     Io {
@@ -110,6 +114,16 @@ pub fn line_of_key(text: &str, key: &str) -> Option<usize> {
             t.starts_with(key) && t[key.len()..].trim_start().starts_with('=')
         })
         .map(|i| i + 1)
+}
+
+/// A number for a message: plain when it reads well (-40, 0.07, 2500), else in scientific
+/// notation (1e-308, 2.561e-12), so that an absurd value does not print 300 digits.
+pub fn num(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() || (1e-4..1e7).contains(&v.abs()) {
+        format!("{v}")
+    } else {
+        format!("{v:e}")
+    }
 }
 
 /// Result alias.

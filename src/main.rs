@@ -13,6 +13,7 @@ fn main() {
             eprintln!("error: {e:#}");
             match e.downcast_ref::<decophantom::error::Error>() {
                 Some(decophantom::error::Error::Input(_)) => 2,
+                Some(decophantom::error::Error::Interrupted(_)) => 130,
                 _ if e.downcast_ref::<decophantom::error::InputError>().is_some() => 2,
                 _ => 3,
             }

@@ -21,6 +21,8 @@ mod events;
 mod fixed_gases;
 #[path = "integration/growth.rs"]
 mod growth;
+#[path = "integration/hardening.rs"]
+mod hardening;
 #[path = "integration/paper_findings.rs"]
 mod paper_findings;
 #[path = "integration/perfusion.rs"]

@@ -46,6 +46,9 @@ impl DecoGas {
     }
 }
 
+/// Deepest dive a plan may have, m.
+pub const MAX_PLAN_DEPTH_M: f64 = 1000.0;
+
 impl DivePlan {
     /// The gases available on the ascent: the deco gases, and the travel gas from its switch
     /// depth unless a deco gas is switched to at the same depth.
@@ -78,6 +81,21 @@ impl DivePlan {
             return Err(InputError::new(format!(
                 "bottom time {} min must be a positive number of minutes",
                 self.bottom_time_min
+            ))
+            .field("time"));
+        }
+        if self.depth_m > MAX_PLAN_DEPTH_M {
+            return Err(InputError::new(format!(
+                "depth {} m is beyond the accepted {MAX_PLAN_DEPTH_M} m",
+                crate::error::num(self.depth_m)
+            ))
+            .field("depth"));
+        }
+        let max_min = crate::profile::MAX_DURATION_S / 60.0;
+        if self.bottom_time_min > max_min {
+            return Err(InputError::new(format!(
+                "bottom time {} min is beyond the accepted {max_min} min (30 days simulated)",
+                crate::error::num(self.bottom_time_min)
             ))
             .field("time"));
         }
@@ -480,6 +498,7 @@ impl Schedule {
             );
         }
         let mut legs = Vec::with_capacity(raw.legs.len());
+        let mut total_s = 0.0;
         for (i, l) in raw.legs.iter().enumerate() {
             let err = |field: &str, msg: String| {
                 let mut e = InputError::new(format!("leg {}: {msg}", i + 1))
@@ -498,12 +517,25 @@ impl Schedule {
                 if !(v.is_finite() && v >= 0.0) {
                     return Err(err(f, format!("depth {v} m must be zero or positive")));
                 }
+                if v > MAX_PLAN_DEPTH_M {
+                    return Err(err(
+                        f,
+                        format!(
+                            "depth {} m is beyond the accepted {MAX_PLAN_DEPTH_M} m",
+                            crate::error::num(v)
+                        ),
+                    ));
+                }
             }
             if !(l.duration_s.is_finite() && l.duration_s >= 0.0) {
                 return Err(err(
                     "duration_s",
                     format!("duration {} s must be zero or positive", l.duration_s),
                 ));
+            }
+            total_s += l.duration_s;
+            if total_s > crate::profile::MAX_DURATION_S {
+                return Err(err("duration_s", crate::profile::duration_message(total_s)));
             }
             if let Some(prev) = legs.last().map(|p: &Leg| p.end_depth_m) {
                 if (prev - l.start_depth_m).abs() > 1e-6 {
@@ -541,15 +573,33 @@ impl Schedule {
         }
         let mut stops = Vec::with_capacity(raw.stops.len());
         for (i, s) in raw.stops.iter().enumerate() {
-            let gas = GasMix::parse(&s.gas).map_err(|m| {
+            let stop_err = |field: &str, m: String| {
                 let mut e = InputError::new(format!("stop {}: {m}", i + 1))
                     .in_file(path)
-                    .field("stops.gas");
+                    .field(format!("stops.{field}"));
                 if let Some(line) = line_of_nth(text, "[[stops]]", i) {
                     e = e.at_line(line);
                 }
                 e
-            })?;
+            };
+            let gas = GasMix::parse(&s.gas).map_err(|m| stop_err("gas", m))?;
+            // the stop table is printed and reported as it is: every number must be a real one
+            let max_min = crate::profile::MAX_DURATION_S / 60.0;
+            for (f, v, hi, unit) in [
+                ("depth_m", s.depth_m, MAX_PLAN_DEPTH_M, "m"),
+                ("stop_min", s.stop_min, max_min, "min"),
+                ("runtime_min", s.runtime_min, max_min, "min"),
+            ] {
+                if !(v.is_finite() && v >= 0.0 && v <= hi) {
+                    return Err(stop_err(
+                        f,
+                        format!(
+                            "{} {unit} must be a number between 0 and {hi} {unit}",
+                            crate::error::num(v)
+                        ),
+                    ));
+                }
+            }
             stops.push(Stop {
                 depth_m: s.depth_m,
                 stop_min: s.stop_min,

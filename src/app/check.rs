@@ -55,12 +55,24 @@ pub fn run(
     req: &CheckRequest,
     progress: &mut (dyn FnMut(f64, f64) + Send),
 ) -> Result<CheckOutcome, Error> {
+    // the output folder is checked before anything is simulated (and again at the commit)
+    let mut inputs = vec![req.schedule.as_path(), req.criteria.as_path()];
+    inputs.extend(req.phantom.as_deref());
+    if let Some(out) = &req.out {
+        crate::report::output::check_target(out, &inputs)?;
+    }
     let criteria = load_criteria(&req.criteria)?;
     let phantom = PhantomSpec::load(req.phantom.as_deref(), req.grid_step_m)?;
     let imp = read_schedule_with_notes(&req.schedule, &DECOTENGU, GasMix::AIR, req.dive)?;
     let schedule = imp.schedule;
-    let history = dive_history(&schedule, &criteria.protocol, req.repeat_after_min)
-        .map_err(|e| e.in_file(&req.schedule))?;
+    let history =
+        dive_history(&schedule, &criteria.protocol, req.repeat_after_min).map_err(|e| {
+            if e.file.is_none() {
+                e.in_file(&req.schedule)
+            } else {
+                e
+            }
+        })?;
     let law = phantom.own_law();
     let cand = Candidate {
         label: schedule.label.clone(),
@@ -118,7 +130,7 @@ pub fn run(
         };
         add_report(&mut page, &mut set, "", &ev, &ctx)?;
         finish_page(&mut page, &mut set, "")?;
-        set.commit(out)?;
+        set.commit_with_inputs(out, &inputs)?;
     }
     Ok(CheckOutcome {
         evaluation: ev,

@@ -39,6 +39,9 @@ pub fn run(
                 .into(),
         );
     }
+    // the output folder is checked before any fitting (and again at the commit)
+    let inputs = [req.measured.as_path(), req.experiments.as_path()];
+    crate::report::output::check_target(&req.out, &inputs)?;
     let data = read_measurements(&req.measured)?;
     let experiments = read_experiments(&req.experiments)?;
     check_against(&data, &experiments)?;
@@ -59,7 +62,7 @@ pub fn run(
         &data,
         &req.command,
     )?;
-    set.commit(&req.out)?;
+    set.commit_with_inputs(&req.out, &inputs)?;
     Ok(d)
 }
 

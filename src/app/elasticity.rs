@@ -47,6 +47,30 @@ pub fn compare(req: &ElasticityRequest) -> Result<Vec<ElasticityRow>, Error> {
             "give positive initial radii in m, comma-separated".into(),
         ));
     }
+    // the physical ranges of the phantom files (profiles/phantoms/README.md)
+    let mut ranged = vec![
+        ("--p0", req.p0, 1.0, crate::profile::MAX_AMBIENT_PA),
+        ("--pf", req.pf, 1.0, crate::profile::MAX_AMBIENT_PA),
+        ("--gamma", req.gamma, 0.0, 1.0),
+        ("--mu", req.laws.shear_modulus, 0.0, 1e7),
+        ("--m", req.laws.bulk_modulus_per_volume, 0.0, 1e22),
+        ("--k", req.laws.bulk_modulus, 1e3, 1e12),
+    ];
+    ranged.extend(req.r0.iter().map(|r| ("--r0", *r, 1e-7, 1e-2)));
+    for (f, v, lo, hi) in ranged {
+        if !(v.is_finite() && v >= lo && v <= hi) {
+            return Err(Error::Input(
+                InputError::new(format!(
+                    "{} is outside the accepted range {} ..= {}",
+                    crate::error::num(v),
+                    crate::error::num(lo),
+                    crate::error::num(hi)
+                ))
+                .in_file("<command line>")
+                .field(f),
+            ));
+        }
+    }
     let mut rows = Vec::new();
     for &r0 in &req.r0 {
         for name in law_names() {

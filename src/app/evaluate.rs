@@ -83,7 +83,17 @@ impl PhantomSpec {
                 );
             }
             params.grid_step = h;
+            // the new grid must be buildable (cell count) and hold the bubbles
+            let cl = |m: String| {
+                InputError::new(m)
+                    .in_file("<command line>")
+                    .field("--grid-step")
+            };
+            let grid =
+                crate::phantom::grid::Grid::new(params.shape, h, &params.open_faces).map_err(cl)?;
+            crate::phantom::sim::place_bubbles(&params, &grid).map_err(|e| cl(e.to_string()))?;
         }
+        crate::phantom::config::require_bubbles(&params, path)?;
         let table: toml::Table = toml::from_str(text).unwrap_or_default();
         let el = table
             .get("material")
@@ -230,9 +240,11 @@ pub fn dive_history(
     };
     let mut h = dive.clone();
     if let Some(si) = repeat_after_min {
-        if !(si.is_finite() && si > 0.0) {
+        if !(si.is_finite() && si > 0.0 && si * 60.0 <= crate::profile::MAX_DURATION_S) {
             return Err(InputError::new(format!(
-                "surface interval must be a positive number of minutes (got {si})"
+                "surface interval must be a positive number of minutes, at most {} (30 days) (got {})",
+                crate::profile::MAX_DURATION_S / 60.0,
+                crate::error::num(si)
             ))
             .in_file("<command line>")
             .field("--repeat-after"));
@@ -349,6 +361,8 @@ pub fn run_matrix(
                 frames: &run.frames,
                 surfaced_s: Some(h.final_arrival_s()),
             });
+            crate::risk::check_finite(&scores)
+                .map_err(|m| Error::Solver(format!("{} under {law}: {m}", candidates[c].label)))?;
             Ok(RunOutcome {
                 candidate: c,
                 law,
@@ -498,6 +512,12 @@ pub fn run(
         };
         Some((need(req.depth_m, "--depth")?, need(req.time_min, "--time")?))
     };
+    // the output folder is checked before anything is simulated (and again at the commit)
+    let mut inputs: Vec<&Path> = vec![req.criteria.as_path()];
+    inputs.extend(req.algorithms.iter().map(|p| p.as_path()));
+    inputs.extend(req.schedules.iter().map(|p| p.as_path()));
+    inputs.extend(req.phantom.as_deref());
+    crate::report::output::check_target(&req.out, &inputs)?;
     let criteria = load_criteria(&req.criteria)?;
     let phantom = PhantomSpec::load(req.phantom.as_deref(), req.grid_step_m)?;
     let laws = phantom.resolve_laws(&req.elasticity)?;
@@ -555,7 +575,7 @@ pub fn run(
     };
     add_report(&mut page, &mut set, "", &ev, &ctx)?;
     finish_page(&mut page, &mut set, "")?;
-    set.commit(&req.out)?;
+    set.commit_with_inputs(&req.out, &inputs)?;
     Ok(ev)
 }
 

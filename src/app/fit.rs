@@ -26,6 +26,9 @@ pub struct FitRequest {
 
 /// Fit and write `fit.toml`, `report.md`, `report.html` and the overlays.
 pub fn run(req: &FitRequest) -> Result<Fitted, Error> {
+    // the output folder is checked before any fitting (and again at the commit)
+    let inputs = [req.measured.as_path(), req.experiments.as_path()];
+    crate::report::output::check_target(&req.out, &inputs)?;
     let data = read_measurements(&req.measured)?;
     let experiments = read_experiments(&req.experiments)?;
     check_against(&data, &experiments)?;
@@ -82,7 +85,7 @@ pub fn run(req: &FitRequest) -> Result<Fitted, Error> {
         &data,
         &req.command,
     )?;
-    set.commit(&req.out)?;
+    set.commit_with_inputs(&req.out, &inputs)?;
     Ok(fitted)
 }
 

@@ -199,6 +199,7 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
         req.travel_gas.as_deref(),
     )?;
     let oxygen = oxygen::exposure(&schedule);
+    check_plan_numbers(&schedule, &oxygen)?;
     let ndl_min = if schedule.stops.is_empty() {
         Some(no_deco_limit(&alg, &plan))
     } else {
@@ -236,7 +237,11 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
             PlanFormat::Csv => waypoints_csv(&schedule),
             PlanFormat::Md => markdown(&schedule, &plan, &oxygen, &extras),
         };
-        crate::report::output::write_file_atomic(path, bytes.as_bytes())?;
+        crate::report::output::write_file_atomic_with_inputs(
+            path,
+            bytes.as_bytes(),
+            &[req.algorithm.as_path()],
+        )?;
     }
     let text = match req.format {
         PlanFormat::Toml => toml_text,
@@ -370,6 +375,37 @@ struct MdExtras<'a> {
     ndl_min: Option<Option<f64>>,
     settings: &'a [(String, String)],
     warnings: &'a [String],
+}
+
+/// Every number of a plan must be a real one before it is printed or written: a non-finite
+/// runtime, stop or oxygen dose is a numerical failure (exit 3), never a result.
+fn check_plan_numbers(
+    schedule: &Schedule,
+    oxygen: &OxygenExposure,
+) -> Result<(), crate::error::Error> {
+    let mut bad: Vec<String> = Vec::new();
+    let mut check = |what: &str, v: f64| {
+        if !v.is_finite() {
+            bad.push(format!("{what} = {v}"));
+        }
+    };
+    check("runtime", schedule.runtime_min());
+    check("CNS", oxygen.cns_percent);
+    check("OTU", oxygen.otu);
+    for (i, l) in schedule.legs.iter().enumerate() {
+        check(&format!("leg {} duration", i + 1), l.duration_s);
+        check(&format!("leg {} depth", i + 1), l.end_depth_m);
+    }
+    for (i, s) in schedule.stops.iter().enumerate() {
+        check(&format!("stop {} time", i + 1), s.stop_min);
+        check(&format!("stop {} runtime", i + 1), s.runtime_min);
+    }
+    match bad.first() {
+        None => Ok(()),
+        Some(b) => Err(crate::error::Error::Solver(format!(
+            "the planner produced a non-finite number ({b}); nothing was printed or written"
+        ))),
+    }
 }
 
 /// Whether two paths name the same existing file.

@@ -51,6 +51,8 @@ pub fn run(
             format!("unknown method '{}'; use oat, morris or sobol", req.method),
         )
     })?;
+    // the output folder is checked before any run
+    crate::report::output::check_target(&req.out, &[req.phantom.as_path(), req.profile.as_path()])?;
     if req.samples < 2 {
         return Err(cli_err(
             "--samples",

@@ -69,7 +69,15 @@ pub fn simulate(
     profile: &PressureHistory,
     progress: &mut dyn FnMut(f64, f64),
 ) -> Result<SimRun, Error> {
-    simulate_until(params, profile, progress, None)
+    let run = simulate_until(params, profile, progress, Some(&super::INTERRUPT))?;
+    if let crate::phantom::sim::Ending::Interrupted { time } = run.summary.ending {
+        return Err(Error::Interrupted(format!(
+            "run '{}' stopped at t = {time:.1} s of {:.1} s; its results are incomplete and were not used",
+            profile.label,
+            profile.duration_s()
+        )));
+    }
+    Ok(run)
 }
 
 /// [`simulate`], stopping early (as [`Ending::Interrupted`]) once `stop` becomes true.
@@ -80,6 +88,7 @@ pub fn simulate_until(
     stop: Option<&AtomicBool>,
 ) -> Result<SimRun, Error> {
     let start = std::time::Instant::now();
+    super::cost::check(params, profile)?;
     let mut sim = Simulation::new(params, profile)?;
     let mut obs = WithProgress {
         rec: Recorder::default(),
@@ -303,6 +312,9 @@ pub fn add_run_files(
 
 /// Run `simulate` and write its outputs; returns the run.
 pub fn run(req: &SimulateRequest, progress: &mut dyn FnMut(f64, f64)) -> Result<SimRun, Error> {
+    // the output folder is checked before anything is simulated (and again at the commit)
+    let inputs = [req.profile.as_path(), req.phantom.as_path()];
+    crate::report::output::check_target(&req.out, &inputs)?;
     let (profile, notes) = if crate::profile::is_dive_log(&req.profile) {
         crate::profile::load_with_notes(&req.profile, &req.load)?
     } else {
@@ -312,11 +324,12 @@ pub fn run(req: &SimulateRequest, progress: &mut dyn FnMut(f64, f64)) -> Result<
         )
     };
     let phantom = load_phantom(&req.phantom)?;
+    crate::phantom::config::require_bubbles(&phantom.params, &req.phantom)?;
     let mut run = simulate_until(&phantom.params, &profile, progress, req.stop.as_deref())?;
     run.notes = notes;
     let mut set = OutputSet::new();
     add_run_files(&mut set, "", &run, &profile.label, &phantom.params.name)?;
-    set.commit(&req.out)?;
+    set.commit_with_inputs(&req.out, &inputs)?;
     Ok(run)
 }
 

@@ -7,8 +7,9 @@ use super::elasticity;
 use super::grid::{Face, Shape};
 use super::params::{BubblePlacement, GasProperties, Numerics, PhantomParams};
 use super::surface;
-use crate::error::{line_of_key, toml_error, InputError};
+use crate::error::{line_of_key, num, toml_error, InputError};
 use crate::gas::Gas;
+use crate::profile::MAX_DURATION_S;
 use serde::Deserialize;
 use std::collections::BTreeMap;
 use std::path::Path;
@@ -102,6 +103,76 @@ struct RawNumerics {
     record_interval_s: Option<f64>,
 }
 
+/// Smallest initial bubble radius accepted, m (0.1 µm: the Laplace pressure 2γ/R is then
+/// already 14 bar at γ = 0.07 N/m).
+pub const MIN_BUBBLE_RADIUS_M: f64 = 1e-7;
+/// Most bubbles a phantom may hold.
+pub const MAX_BUBBLES: usize = 10_000;
+
+/// Accepted ranges of the numeric parameters of elasticity and surface laws (key, lo, hi, unit).
+const LAW_RANGES: &[(&str, f64, f64, &str)] = &[
+    ("shear_modulus", 0.0, 1e7, "Pa"),
+    ("bulk_modulus", 1e3, 1e12, "Pa"),
+    ("bulk_modulus_per_volume", 0.0, 1e22, "Pa/m³"),
+    ("fold", 1e-3, 1e6, ""),
+    ("reference_radius_m", MIN_BUBBLE_RADIUS_M, 1e-2, "m"),
+    ("exponent", -10.0, 10.0, ""),
+    ("layer_thickness_m", 1e-8, 1e-2, "m"),
+];
+
+/// Check the numbers of an elasticity or surface-law table (and of a `sum`'s `terms`) against
+/// [`LAW_RANGES`]; the error names the full key.
+fn check_law_ranges(t: &toml::Table, prefix: &str) -> Result<(), (String, String)> {
+    for (k, v) in t {
+        let key = format!("{prefix}.{k}");
+        if let Some(terms) = v.as_array() {
+            for (i, term) in terms.iter().enumerate() {
+                if let Some(tt) = term.as_table() {
+                    check_law_ranges(tt, &format!("{key}[{i}]"))?;
+                }
+            }
+            continue;
+        }
+        let Some(&(_, lo, hi, unit)) = LAW_RANGES.iter().find(|(n, ..)| *n == k.as_str()) else {
+            continue;
+        };
+        let x = v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
+        match x {
+            Some(x) if x.is_finite() && x >= lo && x <= hi => {}
+            Some(x) => {
+                return Err((
+                    key,
+                    format!(
+                        "{} {unit} is outside the accepted range {} ..= {} {unit}",
+                        num(x),
+                        num(lo),
+                        num(hi)
+                    ),
+                ))
+            }
+            None => return Err((key, format!("must be a number (got {v})"))),
+        }
+    }
+    Ok(())
+}
+
+/// Refuse a phantom without bubbles (`bubbles` field): the commands report bubble radii,
+/// volumes and areas, and a bare gel has none of them.
+pub fn require_bubbles(params: &PhantomParams, source: &Path) -> Result<(), InputError> {
+    let none = match &params.bubbles {
+        BubblePlacement::Explicit(list) => list.is_empty(),
+        BubblePlacement::Random { count, .. } => *count == 0,
+    };
+    if none {
+        return Err(InputError::new(
+            "the phantom has no bubbles; add [[bubbles]] tables or a [population] with count ≥ 1",
+        )
+        .in_file(source)
+        .field("bubbles"));
+    }
+    Ok(())
+}
+
 /// A loaded phantom: the parameters and the description from the file.
 #[derive(Debug, Clone)]
 pub struct LoadedPhantom {
@@ -143,11 +214,31 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
         if v > 0.0 && v.is_finite() {
             Ok(v)
         } else {
-            Err(err(key, format!("must be a positive number (got {v})")))
+            Err(err(
+                key,
+                format!("must be a positive number (got {})", num(v)),
+            ))
+        }
+    };
+    // a finite number in [lo, hi] (the physical ranges of `profiles/phantoms/README.md`)
+    let in_range = |key: &str, v: f64, lo: f64, hi: f64, unit: &str| -> Result<f64, InputError> {
+        if v.is_finite() && v >= lo && v <= hi {
+            Ok(v)
+        } else {
+            Err(err(
+                key,
+                format!(
+                    "{} {unit} is outside the accepted range {} ..= {} {unit}",
+                    num(v),
+                    num(lo),
+                    num(hi)
+                ),
+            ))
         }
     };
     let g = &raw.geometry;
     let h = positive("geometry.grid_step_m", g.grid_step_m)?;
+    in_range("geometry.grid_step_m", h, 1e-7, 1.0, "m")?;
     let shape = match g.shape.as_str() {
         "box" => {
             let s = g.size_m.ok_or_else(|| {
@@ -158,6 +249,7 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
             })?;
             for v in s {
                 positive("geometry.size_m", v)?;
+                in_range("geometry.size_m", v, 1e-6, 10.0, "m")?;
             }
             if g.diameter_m.is_some() || g.depth_m.is_some() {
                 return Err(err(
@@ -181,8 +273,20 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
                 ));
             }
             Shape::Cylinder {
-                diameter: positive("geometry.diameter_m", d)?,
-                depth: positive("geometry.depth_m", z)?,
+                diameter: in_range(
+                    "geometry.diameter_m",
+                    positive("geometry.diameter_m", d)?,
+                    1e-6,
+                    10.0,
+                    "m",
+                )?,
+                depth: in_range(
+                    "geometry.depth_m",
+                    positive("geometry.depth_m", z)?,
+                    1e-6,
+                    10.0,
+                    "m",
+                )?,
             }
         }
         other => {
@@ -232,6 +336,7 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
         "material.temperature_k",
         m.temperature_k.unwrap_or(crate::units::BODY_TEMPERATURE_K),
     )?;
+    in_range("material.temperature_k", temperature, 250.0, 400.0, "K")?;
     let surface_tension = m.surface_tension.unwrap_or(0.07);
     if !(surface_tension >= 0.0) {
         return Err(err(
@@ -239,6 +344,7 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
             format!("must be ≥ 0 N/m (got {surface_tension})"),
         ));
     }
+    in_range("material.surface_tension", surface_tension, 0.0, 1.0, "N/m")?;
     let bubble_fixed_gases = m.bubble_fixed_gases_pa.unwrap_or(0.0);
     if !(bubble_fixed_gases >= 0.0 && bubble_fixed_gases.is_finite()) {
         return Err(err(
@@ -246,12 +352,28 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
             format!("must be a finite pressure ≥ 0 Pa (got {bubble_fixed_gases})"),
         ));
     }
+    in_range(
+        "material.bubble_fixed_gases_pa",
+        bubble_fixed_gases,
+        0.0,
+        1e5,
+        "Pa",
+    )?;
     let perfusion_rate = raw.perfusion.rate_per_s.unwrap_or(0.0);
     if !(perfusion_rate >= 0.0 && perfusion_rate.is_finite()) {
         return Err(err(
             "perfusion.rate_per_s",
             format!("must be a finite rate ≥ 0 per second (got {perfusion_rate})"),
         ));
+    }
+    in_range("perfusion.rate_per_s", perfusion_rate, 0.0, 10.0, "1/s")?;
+    for (table, key) in [
+        (&m.elasticity, "material.elasticity"),
+        (&m.surface, "material.surface"),
+    ] {
+        if let Some(t) = table {
+            check_law_ranges(t, key).map_err(|(k, msg)| err(&k, msg))?;
+        }
     }
     let law_of = |t: &Option<toml::Table>, key: &str, default: &str| -> (String, toml::Table) {
         let mut t = t.clone().unwrap_or_default();
@@ -286,14 +408,18 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
                 format!("unknown gas '{name}'; use n2, o2 or he"),
             )
         })?;
+        let (dkey, lkey) = (
+            format!("gases.{name}.diffusivity"),
+            format!("gases.{name}.ostwald"),
+        );
         gases.push(GasProperties {
             gas,
-            diffusivity: positive(&format!("gases.{name}.diffusivity"), gp.diffusivity)?,
-            ostwald: positive(&format!("gases.{name}.ostwald"), gp.ostwald)?,
+            diffusivity: in_range(&dkey, positive(&dkey, gp.diffusivity)?, 1e-14, 1e-6, "m²/s")?,
+            ostwald: in_range(&lkey, positive(&lkey, gp.ostwald)?, 1e-6, 100.0, "")?,
         });
     }
     let min_radius = match raw.nuclei.min_radius_m {
-        Some(r) if r >= 0.0 => r,
+        Some(r) if r >= 0.0 => in_range("nuclei.min_radius_m", r, 0.0, 1e-2, "m")?,
         Some(r) => {
             return Err(err(
                 "nuclei.min_radius_m",
@@ -311,6 +437,27 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
         }
         (Some(p), true) => {
             let r0 = positive("population.initial_radius_m", p.initial_radius_m)?;
+            in_range(
+                "population.initial_radius_m",
+                r0,
+                MIN_BUBBLE_RADIUS_M,
+                1e-2,
+                "m",
+            )?;
+            if p.count > MAX_BUBBLES {
+                return Err(err(
+                    "population.count",
+                    format!("{} bubbles is too many (limit {MAX_BUBBLES})", p.count),
+                ));
+            }
+            for (key, v) in [
+                ("population.min_spacing_m", p.min_spacing_m),
+                ("population.margin_m", p.margin_m),
+            ] {
+                if let Some(v) = v {
+                    in_range(key, v, 0.0, 10.0, "m")?;
+                }
+            }
             BubblePlacement::Random {
                 count: p.count,
                 initial_radius: r0,
@@ -321,11 +468,31 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
         }
         (None, _) => {
             let mut list = Vec::new();
-            for b in &raw.bubbles {
-                list.push((
-                    b.position_m,
-                    positive("bubbles.initial_radius_m", b.initial_radius_m)?,
+            if raw.bubbles.len() > MAX_BUBBLES {
+                return Err(err(
+                    "bubbles",
+                    format!(
+                        "{} bubbles is too many (limit {MAX_BUBBLES})",
+                        raw.bubbles.len()
+                    ),
                 ));
+            }
+            for (i, b) in raw.bubbles.iter().enumerate() {
+                if let Some(v) = b.position_m.iter().find(|v| !v.is_finite()) {
+                    return Err(err(
+                        "bubbles.position_m",
+                        format!("bubble {i}: position {v} m is not a finite number"),
+                    ));
+                }
+                let r0 = positive("bubbles.initial_radius_m", b.initial_radius_m)?;
+                in_range(
+                    "bubbles.initial_radius_m",
+                    r0,
+                    MIN_BUBBLE_RADIUS_M,
+                    1e-2,
+                    "m",
+                )?;
+                list.push((b.position_m, r0));
             }
             BubblePlacement::Explicit(list)
         }
@@ -333,7 +500,13 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
     let d = Numerics::default();
     let n = &raw.numerics;
     let numerics = Numerics {
-        max_step: positive("numerics.max_step_s", n.max_step_s.unwrap_or(d.max_step))?,
+        max_step: in_range(
+            "numerics.max_step_s",
+            positive("numerics.max_step_s", n.max_step_s.unwrap_or(d.max_step))?,
+            1e-6,
+            86400.0,
+            "s",
+        )?,
         max_pressure_change: positive(
             "numerics.max_pressure_change",
             n.max_pressure_change.unwrap_or(d.max_pressure_change),
@@ -342,21 +515,38 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
             "numerics.max_content_change",
             n.max_content_change.unwrap_or(d.max_content_change),
         )?,
-        kernel_min_cells: positive(
+        kernel_min_cells: in_range(
             "numerics.kernel_min_cells",
-            n.kernel_min_cells.unwrap_or(d.kernel_min_cells),
+            positive(
+                "numerics.kernel_min_cells",
+                n.kernel_min_cells.unwrap_or(d.kernel_min_cells),
+            )?,
+            1e-3,
+            100.0,
+            "cells",
         )?,
-        coupling_gap_cells: positive(
+        coupling_gap_cells: in_range(
             "numerics.coupling_gap_cells",
-            n.coupling_gap_cells.unwrap_or(d.coupling_gap_cells),
+            positive(
+                "numerics.coupling_gap_cells",
+                n.coupling_gap_cells.unwrap_or(d.coupling_gap_cells),
+            )?,
+            1e-3,
+            100.0,
+            "cells",
         )?,
         implicit_cost_ratio: d.implicit_cost_ratio,
         record_interval: match n.record_interval_s {
-            Some(v) if v >= 0.0 => v,
+            // 0 (every step) or a positive interval long enough to move the clock: a tiny one
+            // (1e-308 s) would never advance the next-frame time
+            Some(v) if v == 0.0 || (v.is_finite() && (1e-6..=MAX_DURATION_S).contains(&v)) => v,
             Some(v) => {
                 return Err(err(
                     "numerics.record_interval_s",
-                    format!("must be ≥ 0 s (got {v})"),
+                    format!(
+                        "must be 0 (every step) or between 1e-6 s and {MAX_DURATION_S} s (got {})",
+                        num(v)
+                    ),
                 ))
             }
             None => d.record_interval,

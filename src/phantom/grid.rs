@@ -108,6 +108,9 @@ pub struct Grid {
     pub interior_spans: Vec<(u32, u32)>,
 }
 
+/// Most cells a grid may have (0.8 GB per gas field).
+pub const MAX_CELLS: usize = 100_000_000;
+
 impl Grid {
     /// Build the grid: the cell count along each axis is the size over h rounded to the
     /// nearest integer (at least 3), so the modelled size is `n·h`.
@@ -131,17 +134,31 @@ impl Grid {
                     size[a]
                 ));
             }
+            if !(c <= MAX_CELLS as f64) {
+                return Err(format!(
+                    "{c:.3e} cells along one axis (size {} m over step {} m) is too many (limit {MAX_CELLS} cells in all); use a larger grid step",
+                    crate::error::num(size[a]),
+                    crate::error::num(h)
+                ));
+            }
             n[a] = c as usize;
         }
-        let total = n[0] * n[1] * n[2];
         // 100 M cells is 0.8 GB per gas field (plus scratch): beyond that a 24 GB machine runs
-        // out of memory with three gases, and the run would take hours anyway
-        if total > 100_000_000 {
-            return Err(format!(
-                "{total} cells ({} × {} × {}) is too many (limit 100 million); use a larger grid step",
-                n[0], n[1], n[2]
-            ));
-        }
+        // out of memory with three gases, and the run would take hours anyway. Checked
+        // arithmetic: the product of three large counts must not wrap around to a small one.
+        let total = n[0]
+            .checked_mul(n[1])
+            .and_then(|t| t.checked_mul(n[2]))
+            .filter(|t| *t <= MAX_CELLS)
+            .ok_or_else(|| {
+                format!(
+                    "{:.3e} cells ({} × {} × {}) is too many (limit {MAX_CELLS}); use a larger grid step",
+                    n[0] as f64 * n[1] as f64 * n[2] as f64,
+                    n[0],
+                    n[1],
+                    n[2]
+                )
+            })?;
         for f in open {
             if !shape.faces().contains(f) {
                 return Err(format!("face '{}' does not exist on this shape", f.name()));

@@ -275,11 +275,18 @@ impl<'a> Simulation<'a> {
             };
             let n_total = bal.pv(r0) / rt;
             if !(n_total > 0.0) {
-                return Err(input(format!(
+                // name the field that pulled the bubble's pressure down: the elasticity law
+                // when Ω(R0) outweighs the Laplace term, else the fixed gases
+                let field = if bal.internal_pressure(r0) < p0 {
+                    "material.elasticity"
+                } else {
+                    "material.bubble_fixed_gases_pa"
+                };
+                return Err(Error::Input(crate::error::InputError::new(format!(
                     "bubble {id}: no simulated gas at Laplace equilibrium with R0 = {r0} m: the pressure in the bubble, {:.0} Pa, is not above the fixed partial pressure of the other gases (material.bubble_fixed_gases_pa = {:.0} Pa)",
                     bal.internal_pressure(r0),
                     params.bubble_fixed_gases
-                )));
+                )).field(field)));
             }
             bubbles.push(Bubble {
                 id,
@@ -821,7 +828,13 @@ impl<'a> Simulation<'a> {
             }
             let min = self.record(profile, &fresh, observer)?;
             log.min_concentration = log.min_concentration.min(min);
-            if num.record_interval > 0.0 {
+            let behind = (self.time + 1e-9 - log.next_record) / num.record_interval;
+            if num.record_interval > 0.0
+                && (behind > 1e6 || self.time + num.record_interval == self.time)
+            {
+                // an interval too small to step through (or to move the clock at all): jump
+                log.next_record = self.time + num.record_interval;
+            } else if num.record_interval > 0.0 {
                 while log.next_record <= self.time + 1e-9 {
                     log.next_record += num.record_interval;
                 }
@@ -1036,7 +1049,8 @@ pub fn place_bubbles(params: &PhantomParams, grid: &Grid) -> Result<Vec<([f64; 3
                 if let Some((face, d)) = grid
                     .distance_to_faces(*p)
                     .into_iter()
-                    .find(|(_, d)| *d <= *r0)
+                    .find(|(_, d)| !(*d > *r0))
+                // NaN positions are outside too
                 {
                     let e = grid.extent();
                     return Err(input(format!(

@@ -177,6 +177,22 @@ pub fn parse(text: &str, path: &Path, units: &LegacyUnits) -> Result<PressureHis
                 ),
             ));
         }
+        if p > super::MAX_AMBIENT_PA {
+            return Err(err(
+                n,
+                "value",
+                format!(
+                    "{} in {:?} is {} Pa absolute, above the accepted {} Pa (200 bar)",
+                    crate::error::num(v),
+                    units.pressure,
+                    crate::error::num(p),
+                    crate::error::num(super::MAX_AMBIENT_PA)
+                ),
+            ));
+        }
+        if ts > super::MAX_DURATION_S {
+            return Err(err(n, "time", super::duration_message(ts)));
+        }
         times.push(ts);
         pres.push(p);
     }

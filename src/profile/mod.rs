@@ -31,6 +31,16 @@ pub struct LoadOptions {
     pub dive: Option<usize>,
 }
 
+/// Longest history accepted, s: 30 days simulated. Longer profiles, repeated cycles, dive logs
+/// and surface intervals are refused (exit 2) before any work starts.
+pub const MAX_DURATION_S: f64 = 30.0 * 86400.0;
+
+/// Highest absolute ambient pressure accepted, Pa (200 bar, about 2 000 m of sea water).
+pub const MAX_AMBIENT_PA: f64 = 2e7;
+
+/// Most breakpoints a history may have (a repeated cycle is counted whole).
+pub const MAX_BREAKPOINTS: usize = 1_000_000;
+
 /// How long a logged dive is watched at the surface after its last sample, s: the default
 /// watch time of the criteria protocol (`risk::Protocol`, 60 min), so that a dive-log run
 /// records the bubbles growing after surfacing and not only up to the last sample.
@@ -220,6 +230,16 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputErr
     legacy::read(path, &u)
 }
 
+/// The message for a history longer than [`MAX_DURATION_S`].
+pub fn duration_message(end_s: f64) -> String {
+    format!(
+        "the profile lasts {} s ({} days); the longest run accepted is {} days simulated ({MAX_DURATION_S} s)",
+        crate::error::num(end_s),
+        crate::error::num((end_s / 86400.0 * 10.0).round() / 10.0),
+        MAX_DURATION_S / 86400.0
+    )
+}
+
 /// A piecewise-linear ambient-pressure history with the breathing (or chamber) gas
 /// in force on each segment. Times in s, pressures absolute Pa.
 #[derive(Debug, Clone, PartialEq)]
@@ -252,10 +272,19 @@ impl PressureHistory {
         gas: Vec<GasMix>,
         vapour_pa: f64,
     ) -> Result<Self, String> {
-        if times_s.is_empty() || times_s.len() != ambient_pa.len() {
-            return Err(
-                "a profile needs at least one point, with a pressure for every time".into(),
-            );
+        if times_s.len() < 2 || times_s.len() != ambient_pa.len() {
+            // one rule for every reader: a single point has no duration to simulate
+            return Err(format!(
+                "a profile needs at least two points (a start and an end), with a pressure for every time (got {} time(s), {} pressure(s))",
+                times_s.len(),
+                ambient_pa.len()
+            ));
+        }
+        if times_s.len() > MAX_BREAKPOINTS {
+            return Err(format!(
+                "{} breakpoints is too many (limit {MAX_BREAKPOINTS})",
+                times_s.len()
+            ));
         }
         if times_s[0] != 0.0 {
             return Err(format!(
@@ -273,6 +302,10 @@ impl PressureHistory {
                 ));
             }
         }
+        let end = times_s[times_s.len() - 1];
+        if end > MAX_DURATION_S {
+            return Err(duration_message(end));
+        }
         if let Some((i, p)) = ambient_pa
             .iter()
             .enumerate()
@@ -280,6 +313,16 @@ impl PressureHistory {
         {
             return Err(format!(
                 "pressure at point {} is {p} Pa; absolute pressure must be positive",
+                i + 1
+            ));
+        }
+        if let Some((i, p)) = ambient_pa
+            .iter()
+            .enumerate()
+            .find(|(_, p)| **p > MAX_AMBIENT_PA)
+        {
+            return Err(format!(
+                "pressure at point {} is {p:e} Pa; the accepted range ends at {MAX_AMBIENT_PA:e} Pa (200 bar, about 2 000 m of sea water)",
                 i + 1
             ));
         }
@@ -402,6 +445,15 @@ impl PressureHistory {
     /// `other` must start at the pressure this one ends at.
     pub fn then(mut self, other: &PressureHistory) -> Result<Self, String> {
         let end = self.duration_s();
+        if end + other.duration_s() > MAX_DURATION_S {
+            return Err(duration_message(end + other.duration_s()));
+        }
+        if self.times_s.len() + other.times_s.len() > MAX_BREAKPOINTS {
+            return Err(format!(
+                "{} breakpoints is too many (limit {MAX_BREAKPOINTS})",
+                self.times_s.len() + other.times_s.len()
+            ));
+        }
         if (other.ambient_pa[0] - *self.ambient_pa.last().unwrap()).abs() > 1.0 {
             return Err(
                 "the appended profile must start at the pressure the first one ends at".into(),

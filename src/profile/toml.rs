@@ -404,6 +404,30 @@ pub fn validate(raw: RawProfile, text: &str, path: &Path) -> Result<TomlProfile,
         }
     }
 
+    // One rule for every reader: at least two points, and no longer than the duration limit.
+    if pts.len() < 2 {
+        return Err(cx.err(
+            pts[0].2,
+            pts_field,
+            "the profile has a single point, so nothing to simulate; give at least two points (a start and an end)",
+        ));
+    }
+    if let Some(&(end, _, off)) = pts.last() {
+        if end > super::MAX_DURATION_S {
+            return Err(cx.err(off, pts_field, super::duration_message(end)));
+        }
+    }
+    if let Some(&(_, p, off)) = pts.iter().find(|q| q.1 > super::MAX_AMBIENT_PA) {
+        return Err(cx.err(
+            off,
+            pts_field,
+            format!(
+                "{p:e} Pa absolute is above the accepted {:e} Pa (200 bar, about 2 000 m of sea water)",
+                super::MAX_AMBIENT_PA
+            ),
+        ));
+    }
+
     // Repeat the cycle.
     if let Some(r) = &raw.repeat {
         let n = *r.get_ref();
@@ -430,6 +454,26 @@ pub fn validate(raw: RawProfile, text: &str, path: &Path) -> Result<TomlProfile,
             ));
         }
         let period = pts[pts.len() - 1].0;
+        // check the size before building anything: a billion cycles must not be materialised
+        let total_s = period * n as f64;
+        if total_s > super::MAX_DURATION_S {
+            return Err(cx.err(
+                r.span().start,
+                "repeat",
+                format!("repeat = {n}: {}", super::duration_message(total_s)),
+            ));
+        }
+        let total_points = (pts.len() - 1) as f64 * n as f64 + 1.0;
+        if total_points > super::MAX_BREAKPOINTS as f64 {
+            return Err(cx.err(
+                r.span().start,
+                "repeat",
+                format!(
+                    "repeat = {n} gives {total_points:.3e} breakpoints; the limit is {}",
+                    super::MAX_BREAKPOINTS
+                ),
+            ));
+        }
         let cycle: Vec<_> = pts[1..].to_vec();
         for k in 1..n as usize {
             for &(t, p, off) in &cycle {

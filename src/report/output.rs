@@ -13,6 +13,13 @@
 //! - **On any error nothing half-written remains**: the staging folder is removed and the
 //!   target is left exactly as it was (if the final swap fails, the old folder is renamed back).
 //!
+//! - **User files are never deleted.** The marker lists every file the commit wrote (its
+//!   manifest); a folder holding any other file (a profile copied in, notes) is refused, and so
+//!   is a folder that holds an input of the run ([`OutputSet::commit_with_inputs`]).
+//! - **No debris.** Staging (`.<name>.staging-PID-N`), old (`.<name>.old-PID-N`) and temporary
+//!   (`.<name>.tmp-PID-N`) entries left by a process that no longer runs (killed between two
+//!   renames) are removed by the next commit into the same place.
+//!
 //! Between the two renames of a replacement the target name is briefly absent; a reader
 //! never sees a partial folder.
 
@@ -32,6 +39,34 @@ pub struct OutputSet {
 
 /// Distinguishes staging folders of several commits in one process.
 static COUNTER: AtomicUsize = AtomicUsize::new(0);
+
+/// Number of commits under way in this process: a second Ctrl-C waits for them (see
+/// [`commit_in_progress`]) so that it never leaves a half-swapped folder.
+static COMMITTING: AtomicUsize = AtomicUsize::new(0);
+
+/// Whether a commit (or an atomic file write) is under way in this process. An interrupt
+/// handler that ends the process at once should wait while this is true (a few ms).
+pub fn commit_in_progress() -> bool {
+    COMMITTING.load(Ordering::SeqCst) > 0
+}
+
+/// Counts a commit as under way while alive.
+struct Committing;
+impl Committing {
+    fn start() -> Self {
+        COMMITTING.fetch_add(1, Ordering::SeqCst);
+        Committing
+    }
+}
+impl Drop for Committing {
+    fn drop(&mut self) {
+        COMMITTING.fetch_sub(1, Ordering::SeqCst);
+    }
+}
+
+/// First line of the marker file; the lines after `files:` are the manifest.
+const MARKER_HEADER: &str =
+    "This folder was written whole by decophantom; the next run into it replaces it.";
 
 fn io_err(path: &Path, source: std::io::Error) -> Error {
     Error::Io {
@@ -113,8 +148,16 @@ impl OutputSet {
 
     /// Write the set as the whole content of `dir` (see the module documentation).
     pub fn commit(&self, dir: impl AsRef<Path>) -> Result<(), Error> {
+        self.commit_with_inputs(dir, &[])
+    }
+
+    /// [`commit`](Self::commit), refusing first (exit 2, nothing written) when `dir` is, or
+    /// holds, one of the run's `inputs`.
+    pub fn commit_with_inputs(&self, dir: impl AsRef<Path>, inputs: &[&Path]) -> Result<(), Error> {
         self.check_paths()?;
         let dir = dir.as_ref();
+        let _guard = Committing::start();
+        check_target(dir, inputs)?;
         let name = dir
             .file_name()
             .ok_or_else(|| {
@@ -143,14 +186,6 @@ impl OutputSet {
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => false,
             Err(e) => return Err(io_err(dir, e)),
         };
-        if exists && !is_ours_or_empty(dir)? {
-            return Err(InputError::new(format!(
-                "'{}' exists and was not written by decophantom (no {MARKER} file); choose a new folder or empty this one",
-                dir.display()
-            ))
-            .field("--out")
-            .into());
-        }
         std::fs::create_dir_all(&parent).map_err(|e| io_err(&parent, e))?;
         let tag = format!(
             "{}-{}",
@@ -182,8 +217,9 @@ impl OutputSet {
             return Err(io_err(dir, e));
         }
         sync_dir(&parent);
-        // The new folder is complete and in place; the old one is only garbage now.
-        let _ = std::fs::remove_dir_all(&old);
+        // The new folder is complete and in place; the old one is only garbage now (it may be
+        // read-only: make it writable first, so that no `.old` folder is left behind).
+        remove_own_dir(&old);
         Ok(())
     }
 
@@ -195,10 +231,12 @@ impl OutputSet {
             }
             write_synced(&path, bytes)?;
         }
-        write_synced(
-            &staging.join(MARKER),
-            b"This folder was written whole by decophantom; the next run into it replaces it.\n",
-        )
+        let mut marker = format!("{MARKER_HEADER}\nfiles:\n");
+        for (rel, _) in &self.files {
+            marker.push_str(&rel.to_string_lossy().replace('\\', "/"));
+            marker.push('\n');
+        }
+        write_synced(&staging.join(MARKER), marker.as_bytes())
     }
 }
 
@@ -216,18 +254,171 @@ fn sync_dir(dir: &Path) {
     }
 }
 
-fn is_ours_or_empty(dir: &Path) -> Result<bool, Error> {
-    if dir.join(MARKER).is_file() {
-        return Ok(true);
+/// Check an output folder before any work is done (and again at commit): it must be a
+/// folder or absent, empty or written by decophantom, hold no file the tool did not write (its
+/// manifest), and be neither an input of the run nor hold one. Also removes debris of earlier
+/// interrupted commits beside it. Errors are bad input naming `--out` (exit 2).
+pub fn check_target(dir: &Path, inputs: &[&Path]) -> Result<(), Error> {
+    let out_err = |m: String| -> Error { InputError::new(m).in_file(dir).field("--out").into() };
+    let name = dir
+        .file_name()
+        .ok_or_else(|| {
+            out_err("the output folder has no name; give a folder such as reports/run1".into())
+        })?
+        .to_string_lossy()
+        .into_owned();
+    let parent = match dir.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    clean_debris(&parent, &name);
+    // an input is the output, or lies inside it (symlinks and `..` resolved)
+    let canon = |p: &Path| std::fs::canonicalize(p).ok();
+    if let Some(d) = canon(dir) {
+        for input in inputs {
+            if let Some(i) = canon(input) {
+                if i == d || i.starts_with(&d) {
+                    return Err(out_err(format!(
+                        "the output folder holds an input of this run ({}); outputs never replace inputs: choose another folder or move the input out",
+                        input.display()
+                    )));
+                }
+            }
+        }
     }
-    let mut it = std::fs::read_dir(dir).map_err(|e| io_err(dir, e))?;
-    Ok(it.next().is_none())
+    match std::fs::symlink_metadata(dir) {
+        Ok(m) if m.is_dir() => {}
+        Ok(_) => {
+            return Err(out_err(
+                "exists and is not a folder; choose another output folder".into(),
+            ))
+        }
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(io_err(dir, e)),
+    }
+    let marker = dir.join(MARKER);
+    if !marker.is_file() {
+        let mut it = std::fs::read_dir(dir).map_err(|e| io_err(dir, e))?;
+        if it.next().is_none() {
+            return Ok(());
+        }
+        return Err(out_err(format!(
+            "exists and was not written by decophantom (no {MARKER} file); choose a new folder or empty this one"
+        )));
+    }
+    let text = std::fs::read_to_string(&marker).map_err(|e| io_err(&marker, e))?;
+    let Some((_, list)) = text.split_once("\nfiles:\n") else {
+        // a marker of an older version, without a manifest: replaced as before
+        return Ok(());
+    };
+    let written: std::collections::HashSet<&str> = list.lines().collect();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for entry in std::fs::read_dir(&d).map_err(|e| io_err(&d, e))? {
+            let entry = entry.map_err(|e| io_err(&d, e))?;
+            let path = entry.path();
+            let is_dir = entry.file_type().map(|t| t.is_dir()).unwrap_or(false);
+            if is_dir {
+                stack.push(path);
+                continue;
+            }
+            let rel = path.strip_prefix(dir).unwrap_or(&path);
+            let rel_s = rel.to_string_lossy().replace('\\', "/");
+            if rel_s != MARKER && !written.contains(rel_s.as_str()) {
+                return Err(out_err(format!(
+                    "holds '{rel_s}', which decophantom did not write; a replaced folder would lose it: move it out or choose another folder"
+                )));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Whether process `pid` is alive; `None` where it cannot be told (no `/proc`).
+fn pid_alive(pid: u32) -> Option<bool> {
+    if pid == std::process::id() {
+        return Some(true);
+    }
+    let proc_root = Path::new("/proc");
+    if !proc_root.join("self").exists() {
+        return None;
+    }
+    Some(proc_root.join(pid.to_string()).exists())
+}
+
+/// Remove `.<name>.staging-PID-N`, `.<name>.old-PID-N` and `.<name>.tmp-PID-N` entries in
+/// `parent` whose process is gone (best effort, never an error).
+fn clean_debris(parent: &Path, name: &str) {
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let file_name = entry.file_name().to_string_lossy().into_owned();
+        let Some(rest) = file_name.strip_prefix(&format!(".{name}.")) else {
+            continue;
+        };
+        let Some(tag) = ["staging-", "old-", "tmp-"]
+            .iter()
+            .find_map(|k| rest.strip_prefix(k))
+        else {
+            continue;
+        };
+        let Some((pid, n)) = tag.split_once('-') else {
+            continue;
+        };
+        let (Ok(pid), true) = (pid.parse::<u32>(), n.chars().all(|c| c.is_ascii_digit())) else {
+            continue;
+        };
+        if pid_alive(pid) != Some(false) {
+            continue;
+        }
+        let path = entry.path();
+        if entry.file_type().map(|t| t.is_dir()).unwrap_or(false) {
+            remove_own_dir(&path);
+        } else {
+            let _ = std::fs::remove_file(&path);
+        }
+    }
+}
+
+/// Remove a folder this tool wrote (an old or staging folder), making read-only folders in it
+/// writable first; best effort.
+fn remove_own_dir(dir: &Path) {
+    if std::fs::remove_dir_all(dir).is_ok() {
+        return;
+    }
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        if let Ok(m) = std::fs::symlink_metadata(&d) {
+            if m.is_dir() {
+                let mut perm = m.permissions();
+                #[allow(clippy::permissions_set_readonly_false)]
+                perm.set_readonly(false);
+                let _ = std::fs::set_permissions(&d, perm);
+                if let Ok(rd) = std::fs::read_dir(&d) {
+                    stack.extend(rd.flatten().map(|e| e.path()));
+                }
+            }
+        }
+    }
+    let _ = std::fs::remove_dir_all(dir);
 }
 
 /// Write one file whole or not at all: the bytes go to a temporary file beside the target,
 /// are flushed to disk, and the temporary file is renamed over the target.
 pub fn write_file_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
+    write_file_atomic_with_inputs(path, bytes, &[])
+}
+
+/// [`write_file_atomic`], refusing first (exit 2) when `path` is one of the run's `inputs`.
+pub fn write_file_atomic_with_inputs(
+    path: &Path,
+    bytes: &[u8],
+    inputs: &[&Path],
+) -> Result<(), Error> {
     use std::io::Write as _;
+    let _guard = Committing::start();
+    check_file_target(path, inputs)?;
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => PathBuf::from("."),
@@ -239,11 +430,6 @@ pub fn write_file_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
         })?
         .to_string_lossy()
         .into_owned();
-    if path.is_dir() {
-        return Err(Error::Input(
-            InputError::new("the output path is a folder; give a file name").in_file(path),
-        ));
-    }
     let tmp = dir.join(format!(
         ".{name}.tmp-{}-{}",
         std::process::id(),
@@ -259,6 +445,34 @@ pub fn write_file_atomic(path: &Path, bytes: &[u8]) -> Result<(), Error> {
         let _ = std::fs::remove_file(&tmp);
     }
     result
+}
+
+/// Check an output file before any work: not a folder, not one of `inputs` (symlinks and `..`
+/// resolved); removes `.NAME.tmp-PID-N` debris of dead processes beside it.
+pub fn check_file_target(path: &Path, inputs: &[&Path]) -> Result<(), Error> {
+    let out_err = |m: &str| -> Error { InputError::new(m).in_file(path).field("--out").into() };
+    let Some(name) = path.file_name() else {
+        return Err(out_err("the output path names no file"));
+    };
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    clean_debris(&dir, &name.to_string_lossy());
+    if path.is_dir() {
+        return Err(out_err("the output path is a folder; give a file name"));
+    }
+    if let Ok(o) = std::fs::canonicalize(path) {
+        if inputs
+            .iter()
+            .any(|i| std::fs::canonicalize(i).is_ok_and(|i| i == o))
+        {
+            return Err(out_err(
+                "the output file is an input of this run; outputs never replace inputs: give another file name",
+            ));
+        }
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -227,11 +227,14 @@ pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError
                 .unwrap_or_else(|| "kind".into());
             err(&field, m)
         })?;
-        if !(limit.is_finite() && limit > 0.0) {
+        // a limit so small or large that value/limit overflows is not a limit (1e-308 gave -inf
+        // margins on the log scale of the report)
+        if !(limit.is_finite() && (1e-9..=1e12).contains(&limit)) {
             return Err(err(
                 "limit",
                 format!(
-                    "must be positive (got {limit}); give it in {}",
+                    "must be positive, between 1e-9 and 1e12 (got {}); give it in {}",
+                    crate::error::num(limit),
                     if criterion.unit().is_empty() {
                         "the criterion's unit"
                     } else {

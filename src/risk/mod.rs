@@ -143,6 +143,22 @@ impl Score {
     }
 }
 
+/// Check scores before they are written or printed: a non-finite value, limit or margin is a
+/// bug or a numerical failure, never a result (the binary exits 3 with this message).
+pub fn check_finite(scores: &[Score]) -> Result<(), String> {
+    for s in scores {
+        for (what, v) in [("value", s.value), ("limit", s.limit), ("margin", s.margin)] {
+            if !v.is_finite() {
+                return Err(format!(
+                    "criterion '{}' ({}) gave a non-finite {what} ({v}); nothing was written",
+                    s.label, s.kind
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Score `value` against `limit`.
 pub fn score(label: &str, c: &dyn RiskCriterion, value: f64, limit: f64) -> Score {
     Score {
