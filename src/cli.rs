@@ -380,6 +380,10 @@ pub struct PlanArgs {
     pub json: bool,
     #[command(flatten)]
     pub settings: PlannerSettingsArgs,
+    /// Write the dive-profile figure here (SVG): depth, the ZH-L16C ceiling and a tissue
+    /// heat map, as DecoTengu's dt-plot and Subsurface's planner show them.
+    #[arg(long)]
+    pub plot: Option<std::path::PathBuf>,
 }
 
 /// Planner settings that replace the algorithm file's (echoed with the table).
@@ -490,6 +494,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 out: a.out,
                 overrides,
                 altitude_m,
+                plot: a.plot,
             };
             let algorithm = req.algorithm.display().to_string();
             let outcome = decophantom::app::plan::run(&req)?;

@@ -274,6 +274,23 @@ impl ZhL16 {
         out
     }
 
+    /// Each compartment's supersaturation as a fraction of its M-value gradient at ambient
+    /// `p_amb_bar`: (p_t − p_amb) / (M(p_amb) − p_amb) with M = p_amb/b + a (Baker,
+    /// "Clearing up the confusion about deep stops", 1998). Negative: on-gassing; 1: at the
+    /// M-value; the gradient factor the compartment is at.
+    pub fn gradient_fraction(&self, tissues: &Tissues, p_amb_bar: f64) -> [f64; COMPARTMENTS] {
+        let mut out = [0.0; COMPARTMENTS];
+        for (i, c) in self.compartments.iter().enumerate() {
+            let (pn, ph) = (tissues.n2_bar[i], tissues.he_bar[i]);
+            let p = pn + ph;
+            let a = (c.n2_a_bar * pn + c.he_a_bar * ph) / p;
+            let b = (c.n2_b * pn + c.he_b * ph) / p;
+            let m = p_amb_bar / b + a;
+            out[i] = (p - p_amb_bar) / (m - p_amb_bar);
+        }
+        out
+    }
+
     /// Ceiling (largest tolerated ambient pressure over the compartments), bar.
     pub fn ceiling(&self, tissues: &Tissues, gf: f64) -> f64 {
         self.tolerated(tissues, gf)

@@ -5,6 +5,7 @@
 pub mod buhlmann;
 pub mod config;
 pub mod conventions;
+pub mod loading;
 pub mod oxygen;
 pub mod registry;
 pub mod schedule;

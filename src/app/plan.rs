@@ -69,6 +69,8 @@ pub struct PlanRequest {
     pub overrides: Overrides,
     /// The altitude the surface pressure was computed from (`--altitude`), m, for the echo.
     pub altitude_m: Option<f64>,
+    /// Where to write the dive-profile figure (depth, ceiling, tissue heat map), if anywhere.
+    pub plot: Option<PathBuf>,
 }
 
 /// CNS oxygen clock above which the plan is warned about, % (NOAA Diving Manual: 100 % is
@@ -243,6 +245,16 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
             &[req.algorithm.as_path()],
         )?;
     }
+    if let Some(path) = &req.plot {
+        let svg = profile_figure(&schedule, &alg.conventions)
+            .to_svg()
+            .map_err(|e| crate::error::Error::Solver(e.to_string()))?;
+        crate::report::output::write_file_atomic_with_inputs(
+            path,
+            svg.as_bytes(),
+            &[req.algorithm.as_path()],
+        )?;
+    }
     let text = match req.format {
         PlanFormat::Toml => toml_text,
         PlanFormat::Csv => csv_table(&schedule),
@@ -405,6 +417,31 @@ fn check_plan_numbers(
         Some(b) => Err(crate::error::Error::Solver(format!(
             "the planner produced a non-finite number ({b}); nothing was printed or written"
         ))),
+    }
+}
+
+/// The dive-profile figure of a schedule: depth and the ZH-L16C ceiling at GF 100 % (the
+/// M-value line) over the ZH-L16C tissue heat map, sampled every 0.5 min — the Bühlmann view
+/// of any schedule, VPM-B's included.
+pub fn profile_figure(
+    schedule: &Schedule,
+    conventions: &crate::algorithm::Conventions,
+) -> crate::report::dive_plot::ProfileFigure {
+    use crate::report::dive_plot::{ProfileFigure, ProfileSample};
+    let samples = crate::algorithm::loading::loading(schedule, conventions, 1.0, 0.5)
+        .into_iter()
+        .map(|x| ProfileSample {
+            time_min: x.time_min,
+            depth_m: x.depth_m,
+            ceiling_m: x.ceiling_m,
+            rows: x.gradient.to_vec(),
+        })
+        .collect();
+    ProfileFigure {
+        title: format!("{}: dive profile and tissue loading", schedule.label),
+        ceiling_label: "ceiling, ZH-L16C at GF 100 %".into(),
+        rows_label: "ZH-L16C compartment".into(),
+        samples,
     }
 }
 

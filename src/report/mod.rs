@@ -3,6 +3,7 @@
 //! all-or-nothing writer for a folder of outputs ([`output`]). Nothing here knows about the
 //! model; callers build the values.
 
+pub mod dive_plot;
 pub mod html;
 pub mod output;
 pub mod overlay;

@@ -447,3 +447,93 @@ fn oxygen_warnings_and_refused_settings() {
         assert!(err.contains(field), "{extra:?}: {err}");
     }
 }
+
+/// `plan --plot` writes the dive-profile figure (well-formed SVG with both panels). The
+/// ZH-L16C loading it draws is consistent with the plans: a GF 30/85 plan and a VPM-B plan
+/// never go shallower than the GF-100 % ceiling (the M-value line), every compartment
+/// on-gasses on the descent, and the slowest compartment is still below ambient at the first
+/// stop while the fastest is above it.
+#[test]
+fn dive_profile_plot_and_the_tissue_loading_it_draws() {
+    use decophantom::algorithm::load_algorithm;
+    use decophantom::algorithm::loading::loading;
+    let dir = crate::common::tempdir("plan-plot");
+    for file in [
+        "algorithms/zhl16c-gf30-85.toml",
+        "algorithms/vpmb-2-baker.toml",
+    ] {
+        let svg_path = dir.join("p.svg");
+        let svg_s = svg_path.to_str().unwrap();
+        let (code, _, err) = plan(&[
+            "--algorithm",
+            file,
+            "--depth",
+            "60",
+            "--time",
+            "20",
+            "--gas",
+            "18/45",
+            "--deco-gas",
+            "50",
+            "--deco-gas",
+            "100",
+            "--plot",
+            svg_s,
+        ]);
+        assert_eq!(code, 0, "{err}");
+        let svg = std::fs::read_to_string(&svg_path).unwrap();
+        let doc = roxmltree::Document::parse(&svg).expect("well-formed SVG");
+        let texts: String = doc
+            .descendants()
+            .filter(|n| n.is_text())
+            .map(|n| n.text().unwrap())
+            .collect();
+        assert!(texts.contains("depth, m") && texts.contains("ZH-L16C compartment"));
+        let rects = doc
+            .descendants()
+            .filter(|n| n.tag_name().name() == "rect")
+            .count();
+        assert!(rects > 16 * 50, "heat map cells: {rects}");
+
+        let alg = load_algorithm(&root().join(file)).unwrap();
+        let (_, sched) = decophantom::app::plan::plan_dive(
+            &alg,
+            60.0,
+            20.0,
+            Some("18/45"),
+            &["50".to_string(), "100".to_string()],
+            None,
+        )
+        .unwrap();
+        let l = loading(&sched, &alg.conventions, 1.0, 0.25);
+        for x in &l {
+            assert!(
+                x.depth_m >= x.ceiling_m - 1e-6,
+                "{file}: at {:.2} min depth {:.2} m above the ceiling {:.2} m",
+                x.time_min,
+                x.depth_m,
+                x.ceiling_m
+            );
+        }
+        let descent_end = sched.legs[0].duration_s / 60.0;
+        for x in l
+            .iter()
+            .filter(|x| x.time_min > 0.1 && x.time_min <= descent_end)
+        {
+            assert!(x.gradient.iter().all(|&g| g < 0.0), "{file} descent {x:?}");
+        }
+        let first_stop = sched.stops[0].runtime_min;
+        let at = l
+            .iter()
+            .min_by(|a, b| {
+                (a.time_min - first_stop)
+                    .abs()
+                    .total_cmp(&(b.time_min - first_stop).abs())
+            })
+            .unwrap();
+        assert!(
+            at.gradient[0] > 0.0 && at.gradient[15] < 0.0,
+            "{file}: {at:?}"
+        );
+    }
+}
