@@ -556,7 +556,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         }
     }
     page.section("Sobol' indices over all five (not in the paper)");
-    page.text("Saltelli's A, B, A_B^i design over the five ranges at once (γ, L_N2, L_O2 and μ uniform, D log-uniform), first-order S1 and total ST with 95 % bootstrap intervals (500 resamples); μ's base is irrelevant here. To afford the runs the global analysis uses the coarse grid h = 80 µm (the bubble is a sub-grid object; the one-at-a-time directions at μ = 20 kPa are the same on it, `tests/integration/reproduce.rs`). With this few base rows the intervals are wide and an index can come out above 1 (estimator noise: the total variance is estimated from 2N runs): read the ranking, not the digits. Every run is in `sobol/sensitivity.csv`.");
+    page.text("Saltelli's A, B, A_B^i design over the five ranges at once (γ, L_N2, L_O2 and μ uniform, D log-uniform), first-order S1 and total ST with 95 % bootstrap intervals (500 resamples); μ's base is irrelevant here. To afford the runs the global analysis uses the coarse grid h = 80 µm (the bubble is a sub-grid object; the one-at-a-time directions at μ = 20 kPa are the same on it, `tests/integration/reproduce.rs`). The output is heavy-tailed: over μ uniform on 0–4 MPa only the few runs with a soft gel grow, so the variance-based estimators converge slowly, the intervals are wide and an index can come out above 1 (the total variance is estimated from 2N runs): read the ranking (μ first for both metrics, D second for t_max), not the digits. Every run is in `sobol/sensitivity.csv`.");
     page.table(&sobol_t);
     for (dir, set) in &nested {
         if *dir != "sobol" {
