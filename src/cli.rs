@@ -55,6 +55,21 @@ pub enum Command {
     Sensitivity(SensitivityArgs),
     /// Merge `sensitivity --shard` output folders and compute the indices and report.
     Merge(MergeArgs),
+    /// Regenerate the paper's computational figures (2a, 2b, 3, 5, 6): data, panels, claims vs ours.
+    Reproduce(ReproduceArgs),
+}
+
+/// Arguments of `reproduce`.
+#[derive(clap::Args, Debug)]
+pub struct ReproduceArgs {
+    /// fig2a, fig2b, fig3, fig5, fig6 or all.
+    pub figure: String,
+    /// Output folder (written whole: DIR/<figure>/..., DIR/README.md).
+    #[arg(long)]
+    pub out: std::path::PathBuf,
+    /// Reduced grids and designs (seconds, for a first look and the tests).
+    #[arg(long)]
+    pub quick: bool,
 }
 
 /// Arguments of `sensitivity`.
@@ -220,6 +235,10 @@ pub struct DiveArgs {
     /// Deco gas, MIX@SWITCH_DEPTH_M or MIX (switch at its MOD at 1.6 bar); repeatable.
     #[arg(long = "deco-gas")]
     pub deco_gas: Vec<String>,
+    /// Travel gas MIX@0..DEPTH_M, e.g. 21/35@0..60: breathed from the surface to DEPTH, then
+    /// the bottom gas (for hypoxic bottom mixes); available again on the ascent from DEPTH.
+    #[arg(long = "travel-gas")]
+    pub travel_gas: Option<String>,
 }
 
 /// Arguments of `evaluate`.
@@ -359,6 +378,80 @@ pub struct PlanArgs {
     /// Print the plan as JSON (schema decophantom.plan/1, docs/json.md) instead of the table.
     #[arg(long)]
     pub json: bool,
+    #[command(flatten)]
+    pub settings: PlannerSettingsArgs,
+}
+
+/// Planner settings that replace the algorithm file's (echoed with the table).
+#[derive(clap::Args, Debug)]
+pub struct PlannerSettingsArgs {
+    /// Gradient factors GF-LOW/GF-HIGH in %, e.g. 30/85 (ZH-L16 files).
+    #[arg(long, conflicts_with_all = ["gf_low", "gf_high"])]
+    pub gf: Option<String>,
+    /// GF-low, %.
+    #[arg(long, allow_hyphen_values = true)]
+    pub gf_low: Option<f64>,
+    /// GF-high, %.
+    #[arg(long, allow_hyphen_values = true)]
+    pub gf_high: Option<f64>,
+    /// Surface pressure, hPa (mbar), e.g. 1013.25.
+    #[arg(long, allow_hyphen_values = true, conflicts_with = "altitude")]
+    pub surface_pressure: Option<f64>,
+    /// Altitude of the dive site, m: surface pressure from the ICAO standard atmosphere.
+    #[arg(long, allow_hyphen_values = true)]
+    pub altitude: Option<f64>,
+    /// Descent rate, m/min.
+    #[arg(long, allow_hyphen_values = true)]
+    pub descent_rate: Option<f64>,
+    /// Ascent rate, m/min.
+    #[arg(long, allow_hyphen_values = true)]
+    pub ascent_rate: Option<f64>,
+    /// Depth of the last stop, m (3 or 6).
+    #[arg(long, allow_hyphen_values = true)]
+    pub last_stop: Option<f64>,
+}
+
+impl PlannerSettingsArgs {
+    /// The overrides, and the altitude they came from; bad values name the option.
+    fn overrides(
+        &self,
+    ) -> Result<
+        (decophantom::algorithm::config::Overrides, Option<f64>),
+        decophantom::error::InputError,
+    > {
+        use decophantom::algorithm::config::{isa_pressure_pa, parse_gf, Overrides};
+        let (gf_low, gf_high) = match &self.gf {
+            Some(g) => {
+                let (l, h) = parse_gf(g)?;
+                (Some(l), Some(h))
+            }
+            None => (self.gf_low, self.gf_high),
+        };
+        let surface_pressure_pa = match self.altitude {
+            Some(h) => {
+                if !(h.is_finite() && (-500.0..=5_500.0).contains(&h)) {
+                    return Err(decophantom::error::InputError::new(format!(
+                        "altitude {h} m is outside -500..5500 m"
+                    ))
+                    .in_file("<command line>")
+                    .field("--altitude"));
+                }
+                Some(isa_pressure_pa(h))
+            }
+            None => self.surface_pressure.map(|hpa| hpa * 100.0),
+        };
+        Ok((
+            Overrides {
+                gf_low,
+                gf_high,
+                surface_pressure_pa,
+                descent_rate_m_min: self.descent_rate,
+                ascent_rate_m_min: self.ascent_rate,
+                last_stop_m: self.last_stop,
+            },
+            self.altitude,
+        ))
+    }
 }
 
 /// Run a parsed command; returns the process exit code.
@@ -377,12 +470,14 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             Ok(0)
         }
         Command::Plan(a) => {
+            let (overrides, altitude_m) = a.settings.overrides()?;
             let req = decophantom::app::plan::PlanRequest {
                 algorithm: a.algorithm,
                 depth_m: a.dive.depth,
                 time_min: a.dive.time,
                 gas: a.dive.gas,
                 deco_gases: a.dive.deco_gas,
+                travel_gas: a.dive.travel_gas,
                 format: a
                     .format
                     .as_deref()
@@ -393,6 +488,8 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                     .as_deref()
                     .and_then(decophantom::app::plan::PlanFormat::parse),
                 out: a.out,
+                overrides,
+                altitude_m,
             };
             let algorithm = req.algorithm.display().to_string();
             let outcome = decophantom::app::plan::run(&req)?;
@@ -400,6 +497,9 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 print!("{}", decophantom::app::json::plan(&outcome, &algorithm));
             } else {
                 print!("{}", outcome.text);
+            }
+            for w in &outcome.warnings {
+                eprintln!("warning: {w}");
             }
             Ok(0)
         }
@@ -600,6 +700,34 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             }
             print!("{}", decophantom::app::sensitivity::summary_text(&r?));
             println!("wrote {}", a.out.display());
+            Ok(0)
+        }
+        Command::Reproduce(a) => {
+            // the command as a reader would type it (not argv[0]), so that re-running it
+            // leaves the committed reports/paper/ unchanged
+            let command = format!(
+                "decophantom reproduce {} --out {}{}",
+                a.figure,
+                a.out.display(),
+                if a.quick { " --quick" } else { "" }
+            );
+            let req = decophantom::app::reproduce::ReproduceRequest {
+                figure: a.figure,
+                out: a.out.clone(),
+                quick: a.quick,
+                command,
+            };
+            let bar = std::sync::Mutex::new(Progress::runs());
+            let r = decophantom::app::reproduce::run(&req, &|_fig, done, total| {
+                if let Ok(mut b) = bar.lock() {
+                    b.update(done as f64, total as f64);
+                }
+            });
+            if let Ok(b) = bar.lock() {
+                b.finish();
+            }
+            print!("{}", decophantom::app::reproduce::summary_text(&r?));
+            wrote(&a.out);
             Ok(0)
         }
         Command::Merge(a) => {

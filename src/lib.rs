@@ -18,6 +18,7 @@ pub mod gas;
 pub mod phantom;
 pub mod profile;
 pub mod report;
+pub mod reproduce;
 pub mod risk;
 pub mod sweep;
 pub mod units;

@@ -27,10 +27,14 @@ mod hardening;
 mod paper_findings;
 #[path = "integration/perfusion.rs"]
 mod perfusion;
+#[path = "integration/planner_cli.rs"]
+mod planner_cli;
 #[path = "integration/profiles.rs"]
 mod profiles;
 #[path = "integration/report.rs"]
 mod report;
+#[path = "integration/reproduce.rs"]
+mod reproduce;
 #[path = "integration/robustness.rs"]
 mod robustness;
 #[path = "integration/sweep.rs"]

@@ -617,6 +617,10 @@ impl ZhL16Gf {
         };
         // Descent and bottom.
         let bottom = plan.bottom_gas;
+        if let Some(t) = plan.travel_gas {
+            dive.gas = t.mix;
+            dive.travel(t.switch_depth_m, t.mix);
+        }
         dive.travel(plan.depth_m, bottom);
         let bottom_min = if c.bottom_time_includes_descent {
             plan.bottom_time_min - dive.runtime_min
@@ -642,7 +646,7 @@ impl ZhL16Gf {
         }
 
         // Deco gases, deepest switch first.
-        let mut deco: Vec<DecoGas> = plan.deco_gases.clone();
+        let mut deco: Vec<DecoGas> = plan.ascent_gases();
         deco.sort_by(|a, b| b.switch_depth_m.total_cmp(&a.switch_depth_m));
         let sp = c.stop_spacing_m;
 
@@ -851,6 +855,7 @@ mod tests {
             bottom_time_min: 25.0,
             bottom_gas: GasMix::AIR,
             deco_gases: vec![],
+            travel_gas: None,
         };
         let s = alg.plan(&plan).unwrap();
         assert!(!s.stops.is_empty());
@@ -872,6 +877,7 @@ mod tests {
             bottom_time_min: 25.0,
             bottom_gas: GasMix::AIR,
             deco_gases: vec![],
+            travel_gas: None,
         })
         .unwrap()
     }

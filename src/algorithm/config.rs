@@ -70,17 +70,194 @@ impl std::fmt::Debug for LoadedAlgorithm {
     }
 }
 
+/// Settings given on the command line (`plan --gf 30/85 --altitude 1500 ...`) that replace
+/// the algorithm file's. Every field is optional; `None` keeps the file's value.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Overrides {
+    /// Gradient factors (low, high), % (`--gf`, `--gf-low`, `--gf-high`); ZH-L16 only.
+    pub gf_low: Option<f64>,
+    /// GF-high, %.
+    pub gf_high: Option<f64>,
+    /// Surface pressure, Pa (`--surface-pressure` in hPa, or from `--altitude`).
+    pub surface_pressure_pa: Option<f64>,
+    /// Descent rate, m/min (`--descent-rate`).
+    pub descent_rate_m_min: Option<f64>,
+    /// Ascent rate, m/min (`--ascent-rate`).
+    pub ascent_rate_m_min: Option<f64>,
+    /// Depth of the last stop, m (`--last-stop`).
+    pub last_stop_m: Option<f64>,
+}
+
+/// Sea-level pressure of the ICAO Standard Atmosphere (ISO 2533:1975), Pa.
+pub const ISA_SEA_LEVEL_PA: f64 = 101_325.0;
+
+/// Surface pressure at a (geometric) altitude in the ICAO Standard Atmosphere troposphere
+/// (ISO 2533:1975): the geopotential height H = r0·z/(r0 + z) with r0 = 6 356 766 m, then
+/// p = p0·(1 − L·H/T0)^(g·M/(R·L)) with L = 0.0065 K/m, T0 = 288.15 K, g·M/(R·L) = 5.25588.
+/// Pa, for z in metres (valid to 11 km).
+pub fn isa_pressure_pa(altitude_m: f64) -> f64 {
+    const R0: f64 = 6_356_766.0;
+    let h = R0 * altitude_m / (R0 + altitude_m);
+    ISA_SEA_LEVEL_PA * (1.0 - 0.0065 * h / 288.15).powf(5.255_88)
+}
+
+/// Read `--gf 30/85` (GF-low/GF-high, %).
+pub fn parse_gf(s: &str) -> Result<(f64, f64), InputError> {
+    let bad = || {
+        InputError::new(format!(
+            "cannot read gradient factors '{s}'; write GF-LOW/GF-HIGH in %, e.g. 30/85"
+        ))
+        .in_file("<command line>")
+        .field("--gf")
+    };
+    let (l, h) = s.split_once('/').ok_or_else(bad)?;
+    let l: f64 = l.trim().parse().map_err(|_| bad())?;
+    let h: f64 = h.trim().parse().map_err(|_| bad())?;
+    Ok((l, h))
+}
+
+impl Overrides {
+    /// Whether nothing is overridden.
+    pub fn is_empty(&self) -> bool {
+        *self == Overrides::default()
+    }
+
+    /// Check the values before they reach an algorithm; the error names the option.
+    pub fn validate(&self) -> Result<(), InputError> {
+        let cmd = |opt: &str, msg: String| {
+            Err(InputError::new(msg)
+                .in_file("<command line>")
+                .field(opt.to_string()))
+        };
+        for (opt, v) in [("--gf-low", self.gf_low), ("--gf-high", self.gf_high)] {
+            if let Some(v) = v {
+                if !(v.is_finite() && v > 0.0 && v <= 150.0) {
+                    return cmd(
+                        opt,
+                        format!("gradient factor {v} % is out of range; use 1..100 (at most 150)"),
+                    );
+                }
+            }
+        }
+        if let (Some(l), Some(h)) = (self.gf_low, self.gf_high) {
+            if l > h {
+                return cmd(
+                    "--gf-low",
+                    format!("GF-low {l} % is above GF-high {h} %; GF-low must not exceed GF-high"),
+                );
+            }
+        }
+        if let Some(p) = self.surface_pressure_pa {
+            // 50 kPa ≈ 5 600 m in the standard atmosphere; 110 kPa is above any sea-level record.
+            if !(p.is_finite() && (50_000.0..=110_000.0).contains(&p)) {
+                return cmd(
+                    "--surface-pressure",
+                    format!(
+                        "surface pressure {} hPa is outside 500..1100 hPa (sea level to about 5 600 m)",
+                        p / 100.0
+                    ),
+                );
+            }
+        }
+        for (opt, v) in [
+            ("--descent-rate", self.descent_rate_m_min),
+            ("--ascent-rate", self.ascent_rate_m_min),
+        ] {
+            if let Some(v) = v {
+                if !(v.is_finite() && v > 0.0 && v <= 100.0) {
+                    return cmd(opt, format!("rate {v} m/min is outside (0, 100] m/min"));
+                }
+            }
+        }
+        if let Some(v) = self.last_stop_m {
+            if !(v.is_finite() && v > 0.0 && v <= 30.0) {
+                return cmd(
+                    "--last-stop",
+                    format!("last stop {v} m is outside (0, 30] m"),
+                );
+            }
+        }
+        Ok(())
+    }
+}
+
 /// Read and build an algorithm file.
 pub fn load_algorithm(path: &Path) -> Result<LoadedAlgorithm, InputError> {
+    load_algorithm_with(path, &Overrides::default())
+}
+
+/// Read and build an algorithm file with command-line settings replacing the file's.
+pub fn load_algorithm_with(
+    path: &Path,
+    overrides: &Overrides,
+) -> Result<LoadedAlgorithm, InputError> {
     let text = std::fs::read_to_string(path).map_err(|e| {
         InputError::new(format!("cannot read the algorithm file: {e}")).in_file(path)
     })?;
-    parse_algorithm(&text, path)
+    parse_algorithm_with(&text, path, overrides)
 }
 
 /// Build an algorithm from TOML text; `path` names it in errors.
 pub fn parse_algorithm(text: &str, path: &Path) -> Result<LoadedAlgorithm, InputError> {
-    let raw: RawAlgorithmFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+    parse_algorithm_with(text, path, &Overrides::default())
+}
+
+/// Build an algorithm from TOML text with command-line settings on top. An override that the
+/// algorithm does not have (`--gf` for VPM-B) is refused naming the option. When the gradient
+/// factors are overridden the file's `label` (which names its own factors) is replaced by the
+/// algorithm's own.
+pub fn parse_algorithm_with(
+    text: &str,
+    path: &Path,
+    overrides: &Overrides,
+) -> Result<LoadedAlgorithm, InputError> {
+    overrides.validate()?;
+    let mut raw: RawAlgorithmFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+    if overrides.gf_low.is_some() || overrides.gf_high.is_some() {
+        let has_gf = raw
+            .params
+            .as_ref()
+            .and_then(|p| p.as_table())
+            .is_some_and(|t| t.contains_key("gf_low") || t.contains_key("gf_high"));
+        if !has_gf {
+            let opt = if overrides.gf_low.is_some() {
+                "--gf-low"
+            } else {
+                "--gf-high"
+            };
+            return Err(InputError::new(format!(
+                "the algorithm in {} ({}) has no gradient factors; --gf applies to ZH-L16 files",
+                path.display(),
+                raw.kind
+            ))
+            .in_file("<command line>")
+            .field(opt));
+        }
+        let t = raw
+            .params
+            .as_mut()
+            .and_then(|p| p.as_table_mut())
+            .expect("checked above");
+        for (k, v) in [("gf_low", overrides.gf_low), ("gf_high", overrides.gf_high)] {
+            if let Some(v) = v {
+                t.insert(k.to_string(), toml::Value::Float(v));
+            }
+        }
+        raw.label = None;
+    }
+    let conv = raw.conventions.get_or_insert_with(Default::default);
+    if let Some(v) = overrides.surface_pressure_pa {
+        conv.surface_pressure_pa = Some(v);
+    }
+    if let Some(v) = overrides.descent_rate_m_min {
+        conv.descent_rate_m_min = Some(v);
+    }
+    if let Some(v) = overrides.ascent_rate_m_min {
+        conv.ascent_rate_m_min = Some(v);
+    }
+    if let Some(v) = overrides.last_stop_m {
+        conv.last_stop_m = Some(v);
+    }
     let at = |key: &str, field: &str, msg: String| {
         let mut e = InputError::new(msg).in_file(path).field(field);
         if let Some(l) = line_of_key(text, key) {
@@ -110,6 +287,17 @@ pub fn parse_algorithm(text: &str, path: &Path) -> Result<LoadedAlgorithm, Input
             .split_once(": ")
             .map(|(f, _)| f.trim())
             .filter(|f| !f.is_empty() && f.chars().all(|c| c.is_alphanumeric() || c == '_'));
+        let overridden = match field {
+            Some("gf_low") => overrides.gf_low.or(overrides.gf_high).map(|_| "--gf-low"),
+            Some("gf_high") => overrides.gf_high.or(overrides.gf_low).map(|_| "--gf-high"),
+            _ => None,
+        };
+        if let Some(opt) = overridden {
+            let rest = msg.split_once(": ").map_or(msg.as_str(), |(_, r)| r);
+            return InputError::new(format!("{rest} (with the file's other gradient factor)"))
+                .in_file("<command line>")
+                .field(opt);
+        }
         match field {
             Some(f) => {
                 let rest = msg.split_once(": ").map_or(msg.as_str(), |(_, r)| r);

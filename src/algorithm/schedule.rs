@@ -50,6 +50,21 @@ impl DecoGas {
 pub const MAX_PLAN_DEPTH_M: f64 = 1000.0;
 
 impl DivePlan {
+    /// The gases available on the ascent: the deco gases, and the travel gas from its switch
+    /// depth unless a deco gas is switched to at the same depth.
+    pub fn ascent_gases(&self) -> Vec<DecoGas> {
+        let mut out = self.deco_gases.clone();
+        if let Some(t) = self.travel_gas {
+            if !out
+                .iter()
+                .any(|d| (d.switch_depth_m - t.switch_depth_m).abs() < 1e-9)
+            {
+                out.push(t);
+            }
+        }
+        out
+    }
+
     /// Check the plan: depth and time positive, bottom gas breathable at the surface (not
     /// hypoxic) and at the bottom (within its MOD), deco gases within their MOD at their switch
     /// depth, shallower than the bottom, at distinct positive depths. Errors name the
@@ -94,10 +109,45 @@ impl DivePlan {
         }
         let ppo2 = |mix: GasMix, d: f64| mix.o2 * conventions.pressure_at(d) / 1e5;
         let g = self.bottom_gas;
-        if ppo2(g, 0.0) < HYPOXIC_PPO2_BAR - 1e-12 {
+        if let Some(tg) = &self.travel_gas {
+            let lab = tg.mix.label();
+            let err = |msg: String| Err(InputError::new(msg).field("travel-gas"));
+            if ppo2(tg.mix, 0.0) < HYPOXIC_PPO2_BAR - 1e-12 {
+                return err(format!(
+                    "travel gas {lab} is hypoxic at the surface (ppO2 {:.3} bar < {HYPOXIC_PPO2_BAR} bar)",
+                    ppo2(tg.mix, 0.0)
+                ));
+            }
+            if !(tg.switch_depth_m.is_finite()
+                && tg.switch_depth_m > 0.0
+                && tg.switch_depth_m < self.depth_m)
+            {
+                return err(format!(
+                    "travel gas {lab}: switch depth {} m must be positive and shallower than the dive ({} m)",
+                    tg.switch_depth_m, self.depth_m
+                ));
+            }
+            let m = mod_m(tg.mix, MAX_PPO2_BAR, conventions).round();
+            if tg.switch_depth_m > m + 1e-9 {
+                return err(format!(
+                    "travel gas {lab} breathed to {} m is beyond its MOD {m} m (ppO2 {MAX_PPO2_BAR} bar)",
+                    tg.switch_depth_m
+                ));
+            }
+            if ppo2(g, tg.switch_depth_m) < HYPOXIC_PPO2_BAR - 1e-12 {
+                return Err(InputError::new(format!(
+                    "bottom gas {} is hypoxic at the travel-gas switch depth {} m (ppO2 {:.3} bar < {HYPOXIC_PPO2_BAR} bar); switch deeper",
+                    g.label(),
+                    tg.switch_depth_m,
+                    ppo2(g, tg.switch_depth_m)
+                ))
+                .field("travel-gas"));
+            }
+        } else if ppo2(g, 0.0) < HYPOXIC_PPO2_BAR - 1e-12 {
             return Err(InputError::new(format!(
                 "bottom gas {} is hypoxic at the surface (ppO2 {:.3} bar < {HYPOXIC_PPO2_BAR} bar); \
-                 it cannot be breathed on the descent — choose a mix with more oxygen",
+                 it cannot be breathed on the descent — choose a mix with more oxygen, or give a \
+                 travel gas (--travel-gas 21/35@0..60)",
                 g.label(),
                 ppo2(g, 0.0)
             ))
@@ -177,6 +227,46 @@ pub struct DivePlan {
     pub bottom_gas: GasMix,
     /// Decompression gases.
     pub deco_gases: Vec<DecoGas>,
+    /// Travel gas breathed from the surface down to its `switch_depth_m`, where the diver
+    /// switches to the bottom gas (needed for hypoxic bottom mixes). On the ascent it is
+    /// available again from that depth, like a deco gas (as Subsurface's planner uses every
+    /// gas carried); `None`: the bottom gas from the surface.
+    #[serde(default)]
+    pub travel_gas: Option<DecoGas>,
+}
+
+/// Parse a travel gas `21/35@0..60` or `21/35@60`: the mix, breathed from the surface to the
+/// depth after the `@` (m), where the bottom gas takes over.
+pub fn parse_travel_gas(s: &str) -> Result<DecoGas, String> {
+    let (mix_s, range) = s.split_once('@').ok_or_else(|| {
+        format!("travel gas '{s}' needs its depth range: write MIX@0..DEPTH_M, e.g. 21/35@0..60")
+    })?;
+    let mix = GasMix::parse(mix_s)?;
+    let until = match range.split_once("..") {
+        Some((from, to)) => {
+            let from: f64 = from
+                .trim()
+                .trim_end_matches('m')
+                .parse()
+                .map_err(|_| format!("cannot read the start depth in '{s}'"))?;
+            if from != 0.0 {
+                return Err(format!(
+                    "travel gas '{s}' starts at {from} m; a travel gas is breathed from the surface (write @0..DEPTH)"
+                ));
+            }
+            to
+        }
+        None => range,
+    };
+    let switch_depth_m: f64 = until
+        .trim()
+        .trim_end_matches('m')
+        .parse()
+        .map_err(|_| format!("cannot read the switch depth in '{s}': write MIX@0..DEPTH_M"))?;
+    Ok(DecoGas {
+        mix,
+        switch_depth_m,
+    })
 }
 
 /// The kind of a schedule leg.

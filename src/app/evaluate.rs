@@ -424,7 +424,7 @@ pub fn plan_candidates(
 ) -> Result<Vec<Candidate>, InputError> {
     let mut out: Vec<Candidate> = Vec::new();
     for (alg, source) in algorithms {
-        let (_, schedule) = plan_dive(alg, depth_m, time_min, gas, deco_gases)?;
+        let (_, schedule) = plan_dive(alg, depth_m, time_min, gas, deco_gases, None)?;
         let mut label = alg.label.clone();
         if out.iter().any(|c| c.label == label) {
             let stem = Path::new(source)

@@ -133,6 +133,12 @@ struct PlanJson<'a> {
     schedule: ScheduleJson,
     cns_percent: f64,
     otu: f64,
+    /// No-decompression limit, min, when the dive has no stops (null otherwise, or when
+    /// there is none within a day; `ndl_searched` says which).
+    ndl_min: Option<f64>,
+    ndl_searched: bool,
+    settings: std::collections::BTreeMap<String, String>,
+    warnings: &'a [String],
 }
 
 /// `plan --json`.
@@ -143,6 +149,10 @@ pub fn plan(outcome: &PlanOutcome, algorithm: &str) -> String {
         schedule: (&outcome.schedule).into(),
         cns_percent: outcome.oxygen.cns_percent,
         otu: outcome.oxygen.otu,
+        ndl_min: outcome.ndl_min.flatten(),
+        ndl_searched: outcome.ndl_min.is_some(),
+        settings: outcome.settings.iter().cloned().collect(),
+        warnings: &outcome.warnings,
     })
 }
 

@@ -15,6 +15,7 @@ pub mod evaluate;
 pub mod fit;
 pub mod json;
 pub mod plan;
+pub mod reproduce;
 pub mod sensitivity;
 pub mod simulate;
 pub mod synth;

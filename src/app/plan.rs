@@ -1,8 +1,9 @@
 //! `decophantom plan`: load an algorithm file, plan a dive, format the stop table.
 
+use crate::algorithm::config::{load_algorithm_with, Overrides};
 use crate::algorithm::oxygen::{self, OxygenExposure};
-use crate::algorithm::schedule::{gas_text, ScheduleSummary};
-use crate::algorithm::{load_algorithm, DecoGas, DivePlan, LoadedAlgorithm, Schedule};
+use crate::algorithm::schedule::{gas_text, parse_travel_gas, ScheduleSummary};
+use crate::algorithm::{DecoGas, DivePlan, LoadedAlgorithm, Schedule};
 use crate::error::InputError;
 use crate::gas::GasMix;
 use std::fmt::Write as _;
@@ -55,6 +56,8 @@ pub struct PlanRequest {
     pub gas: Option<String>,
     /// Deco gases, `50@21` or `50` (switch at the MOD at 1.6 bar).
     pub deco_gases: Vec<String>,
+    /// Travel gas `21/35@0..60`: from the surface to 60 m, then the bottom gas.
+    pub travel_gas: Option<String>,
     /// Format of the printed table.
     pub format: PlanFormat,
     /// Where to write the schedule, if anywhere (whole or not at all).
@@ -62,7 +65,20 @@ pub struct PlanRequest {
     /// Format of `out` when given explicitly (`--format`); else from its extension
     /// (`.csv` waypoints, `.md` the table, anything else the schedule TOML).
     pub out_format: Option<PlanFormat>,
+    /// Command-line settings replacing the algorithm file's (`--gf`, `--ascent-rate` ...).
+    pub overrides: Overrides,
+    /// The altitude the surface pressure was computed from (`--altitude`), m, for the echo.
+    pub altitude_m: Option<f64>,
 }
+
+/// CNS oxygen clock above which the plan is warned about, % (NOAA Diving Manual: 100 % is
+/// the single-exposure limit of the CNS clock).
+pub const CNS_WARN_PERCENT: f64 = 100.0;
+/// Oxygen tolerance units above which a single-day plan is warned about (Hamilton's REPEX
+/// single-day limit of 300 OTU for repetitive exposures; 850 for a single exceptional one).
+pub const OTU_WARN: f64 = 300.0;
+/// Longest bottom time searched for a no-decompression limit, min (a day).
+pub const NDL_SEARCH_MAX_MIN: f64 = 1440.0;
 
 /// The format `--out` is written in: the explicit one, else from the extension. An explicit
 /// format that contradicts a known extension (`--format toml --out s.csv`) is refused.
@@ -94,6 +110,14 @@ pub struct PlanOutcome {
     pub schedule: Schedule,
     /// CNS % and OTU.
     pub oxygen: OxygenExposure,
+    /// The no-decompression limit when the dive has no stops, whole min at the planned depth
+    /// on the planned gases (`None`: the dive has stops; `Some(None)`: no limit within
+    /// [`NDL_SEARCH_MAX_MIN`]).
+    pub ndl_min: Option<Option<f64>>,
+    /// Settings used (algorithm, gradient factors, conventions), as echoed with the table.
+    pub settings: Vec<(String, String)>,
+    /// Warnings (CNS above 100 %, OTU above 300).
+    pub warnings: Vec<String>,
     /// The text to print, in the requested format.
     pub text: String,
 }
@@ -106,6 +130,7 @@ pub fn plan_dive(
     time_min: f64,
     gas: Option<&str>,
     deco_gases: &[String],
+    travel_gas: Option<&str>,
 ) -> Result<(DivePlan, Schedule), InputError> {
     let cmd =
         |field: &str, msg: String| InputError::new(msg).in_file("<command line>").field(field);
@@ -117,11 +142,15 @@ pub fn plan_dive(
         .iter()
         .map(|s| DecoGas::parse(s, &alg.conventions).map_err(|m| cmd("--deco-gas", m)))
         .collect::<Result<Vec<_>, _>>()?;
+    let travel_gas = travel_gas
+        .map(|t| parse_travel_gas(t).map_err(|m| cmd("--travel-gas", m)))
+        .transpose()?;
     let plan = DivePlan {
         depth_m,
         bottom_time_min: time_min,
         bottom_gas,
         deco_gases,
+        travel_gas,
     };
     plan.validate(&alg.conventions).map_err(|e| {
         let f = e.field.clone().map(|f| format!("--{f}"));
@@ -160,16 +189,36 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
         }
         None => None,
     };
-    let alg = load_algorithm(&req.algorithm)?;
+    let alg = load_algorithm_with(&req.algorithm, &req.overrides)?;
     let (plan, schedule) = plan_dive(
         &alg,
         req.depth_m,
         req.time_min,
         req.gas.as_deref(),
         &req.deco_gases,
+        req.travel_gas.as_deref(),
     )?;
     let oxygen = oxygen::exposure(&schedule);
     check_plan_numbers(&schedule, &oxygen)?;
+    let ndl_min = if schedule.stops.is_empty() {
+        Some(no_deco_limit(&alg, &plan))
+    } else {
+        None
+    };
+    let settings = settings(&alg, req);
+    let mut warnings = Vec::new();
+    if oxygen.cns_percent > CNS_WARN_PERCENT {
+        warnings.push(format!(
+            "CNS oxygen clock {:.0} % exceeds {CNS_WARN_PERCENT:.0} % (NOAA single-exposure limit)",
+            oxygen.cns_percent
+        ));
+    }
+    if oxygen.otu > OTU_WARN {
+        warnings.push(format!(
+            "{:.0} OTU exceeds {OTU_WARN:.0} (REPEX daily limit for repetitive exposure)",
+            oxygen.otu
+        ));
+    }
     let summary = ScheduleSummary {
         runtime_min: Some(schedule.runtime_min()),
         cns_percent: Some(oxygen.cns_percent),
@@ -177,11 +226,16 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
         algorithm: Some(req.algorithm.display().to_string()),
     };
     let toml_text = schedule.to_toml_string(Some(&summary));
+    let extras = MdExtras {
+        ndl_min,
+        settings: &settings,
+        warnings: &warnings,
+    };
     if let Some((path, f)) = out {
         let bytes = match f {
             PlanFormat::Toml => toml_text.clone(),
             PlanFormat::Csv => waypoints_csv(&schedule),
-            PlanFormat::Md => markdown(&schedule, &plan, &oxygen),
+            PlanFormat::Md => markdown(&schedule, &plan, &oxygen, &extras),
         };
         crate::report::output::write_file_atomic_with_inputs(
             path,
@@ -192,11 +246,14 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
     let text = match req.format {
         PlanFormat::Toml => toml_text,
         PlanFormat::Csv => csv_table(&schedule),
-        PlanFormat::Md => markdown(&schedule, &plan, &oxygen),
+        PlanFormat::Md => markdown(&schedule, &plan, &oxygen, &extras),
     };
     Ok(PlanOutcome {
         schedule,
         oxygen,
+        ndl_min,
+        settings,
+        warnings,
         text,
     })
 }
@@ -230,6 +287,125 @@ fn check_plan_numbers(
             "the planner produced a non-finite number ({b}); nothing was printed or written"
         ))),
     }
+}
+
+/// The longest whole-minute bottom time at the plan's depth and gases that needs no stop
+/// (the no-decompression limit), found by doubling and bisection over the algorithm itself —
+/// the same algorithm, conventions and overrides as the plan, so it agrees with it by
+/// construction. `None` when even [`NDL_SEARCH_MAX_MIN`] needs no stop. Call only for a plan
+/// that has no stops.
+pub fn no_deco_limit(alg: &LoadedAlgorithm, plan: &DivePlan) -> Option<f64> {
+    let no_stops = |t: f64| {
+        let p = DivePlan {
+            bottom_time_min: t,
+            ..plan.clone()
+        };
+        match alg.algorithm.plan(&p) {
+            Ok(s) => s.stops.is_empty(),
+            Err(_) => false,
+        }
+    };
+    let mut lo = plan.bottom_time_min.floor().max(1.0);
+    if !no_stops(lo) {
+        // a fractional planned time that needs no stop while its floor is refused
+        // (bottom time including the descent): the plan's own time is the limit found
+        return Some(plan.bottom_time_min);
+    }
+    let mut hi = lo * 2.0;
+    while no_stops(hi) {
+        lo = hi;
+        if hi >= NDL_SEARCH_MAX_MIN {
+            return None;
+        }
+        hi = (hi * 2.0).min(NDL_SEARCH_MAX_MIN);
+    }
+    while hi - lo > 1.0 {
+        let mid = ((lo + hi) / 2.0).floor();
+        if no_stops(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    Some(lo)
+}
+
+/// The settings the plan used, as `(name, value)` rows: what `dt-lint` echoes.
+fn settings(alg: &LoadedAlgorithm, req: &PlanRequest) -> Vec<(String, String)> {
+    let c = &alg.conventions;
+    let o = &req.overrides;
+    let mark = |set: bool| if set { " (command line)" } else { "" };
+    let mut rows = vec![
+        (
+            "algorithm".to_string(),
+            format!("{} ({}, {})", alg.label, alg.kind, req.algorithm.display()),
+        ),
+        (
+            "surface pressure".to_string(),
+            match req.altitude_m {
+                Some(h) => format!(
+                    "{:.2} hPa (altitude {h} m, ICAO standard atmosphere){}",
+                    c.surface_pressure_pa / 100.0,
+                    mark(true)
+                ),
+                None => format!(
+                    "{:.2} hPa{}",
+                    c.surface_pressure_pa / 100.0,
+                    mark(o.surface_pressure_pa.is_some())
+                ),
+            },
+        ),
+        (
+            "pressure per metre".to_string(),
+            format!("{} hPa/m", c.pa_per_m / 100.0),
+        ),
+        (
+            "water vapour".to_string(),
+            format!("{} hPa", c.water_vapour_pa / 100.0),
+        ),
+        (
+            "descent rate".to_string(),
+            format!(
+                "{} m/min{}",
+                c.descent_rate_m_min,
+                mark(o.descent_rate_m_min.is_some())
+            ),
+        ),
+        (
+            "ascent rate".to_string(),
+            format!(
+                "{} m/min{}",
+                c.ascent_rate_m_min,
+                mark(o.ascent_rate_m_min.is_some())
+            ),
+        ),
+        (
+            "stops".to_string(),
+            format!(
+                "every {} m, last at {} m{}",
+                c.stop_spacing_m,
+                c.last_stop_m,
+                mark(o.last_stop_m.is_some())
+            ),
+        ),
+    ];
+    if o.gf_low.is_some() || o.gf_high.is_some() {
+        rows.insert(
+            1,
+            (
+                "gradient factors".to_string(),
+                "from the command line (in the label)".to_string(),
+            ),
+        );
+    }
+    rows
+}
+
+/// What the Markdown table shows beside the stops.
+struct MdExtras<'a> {
+    ndl_min: Option<Option<f64>>,
+    settings: &'a [(String, String)],
+    warnings: &'a [String],
 }
 
 /// Whether two paths name the same existing file.
@@ -291,18 +467,60 @@ fn csv_table(s: &Schedule) -> String {
     out
 }
 
-fn markdown(s: &Schedule, plan: &DivePlan, o: &OxygenExposure) -> String {
+fn markdown(s: &Schedule, plan: &DivePlan, o: &OxygenExposure, x: &MdExtras) -> String {
+    // one precision for every time in the table: whole minutes when all are whole, else 0.1
+    let whole = s
+        .stops
+        .iter()
+        .flat_map(|st| [st.stop_min, st.runtime_min])
+        .chain([s.runtime_min(), plan.bottom_time_min])
+        .all(|t| (t - t.round()).abs() < 1e-9);
+    let m = |t: f64| {
+        if whole {
+            format!("{:.0}", t)
+        } else {
+            format!("{:.1}", t)
+        }
+    };
     let mut out = String::new();
     let _ = writeln!(
         out,
         "# {}: {} m for {} min on {}\n",
         s.label,
         plan.depth_m,
-        fmt_min(plan.bottom_time_min),
+        m(plan.bottom_time_min),
         gas_text(plan.bottom_gas)
     );
+    if !x.settings.is_empty() {
+        out.push_str("Settings:\n\n");
+        for (k, v) in x.settings {
+            let _ = writeln!(out, "- {k}: {v}");
+        }
+        out.push('\n');
+    }
     if s.stops.is_empty() {
-        let _ = writeln!(out, "No decompression stops.\n");
+        match x.ndl_min {
+            Some(Some(ndl)) => {
+                let _ = writeln!(
+                    out,
+                    "No decompression stops. No-decompression limit at {} m on {}: {} min.\n",
+                    plan.depth_m,
+                    gas_text(plan.bottom_gas),
+                    m(ndl)
+                );
+            }
+            Some(None) => {
+                let _ = writeln!(
+                    out,
+                    "No decompression stops. No-decompression limit at {} m on {}: none within {NDL_SEARCH_MAX_MIN:.0} min.\n",
+                    plan.depth_m,
+                    gas_text(plan.bottom_gas)
+                );
+            }
+            None => {
+                let _ = writeln!(out, "No decompression stops.\n");
+            }
+        }
     } else {
         out.push_str("| depth_m | stop_min | runtime_min | gas |\n|---:|---:|---:|---|\n");
         for st in &s.stops {
@@ -310,8 +528,8 @@ fn markdown(s: &Schedule, plan: &DivePlan, o: &OxygenExposure) -> String {
                 out,
                 "| {} | {} | {} | {} |",
                 st.depth_m,
-                fmt_min(st.stop_min),
-                fmt_min(st.runtime_min),
+                m(st.stop_min),
+                m(st.runtime_min),
                 gas_text(st.gas)
             );
         }
@@ -323,13 +541,18 @@ fn markdown(s: &Schedule, plan: &DivePlan, o: &OxygenExposure) -> String {
             "Gas switch to {} at {} m (runtime {} min).",
             gas_text(g.gas),
             g.depth_m,
-            fmt_min(g.runtime_min)
+            m(g.runtime_min)
         );
     }
-    let deco: f64 = s.stops.iter().map(|st| st.stop_min).sum();
-    let _ = writeln!(out, "Total dive time: {} min", fmt_min(s.runtime_min()));
-    let _ = writeln!(out, "Total stop time: {} min", fmt_min(deco));
+    let _ = writeln!(out, "Total dive time: {} min", m(s.runtime_min()));
+    if !s.stops.is_empty() {
+        let deco: f64 = s.stops.iter().map(|st| st.stop_min).sum();
+        let _ = writeln!(out, "Total stop time: {} min", m(deco));
+    }
     let _ = writeln!(out, "CNS: {:.1} %", o.cns_percent);
     let _ = writeln!(out, "OTU: {:.1}", o.otu);
+    for w in x.warnings {
+        let _ = writeln!(out, "Warning: {w}");
+    }
     out
 }

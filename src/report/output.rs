@@ -109,6 +109,13 @@ impl OutputSet {
             .map(|(_, b)| b.as_slice())
     }
 
+    /// Add every file of `other` under the folder `prefix` (relative, `/`-separated).
+    pub fn nest(&mut self, prefix: impl AsRef<Path>, other: OutputSet) {
+        for (p, b) in other.files {
+            self.files.push((prefix.as_ref().join(p), b));
+        }
+    }
+
     /// Check the relative paths: no absolute paths, `..`, empty names, duplicates, the marker
     /// name, or a path that is both a file and a folder of another.
     fn check_paths(&self) -> Result<(), InputError> {

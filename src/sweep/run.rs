@@ -371,6 +371,35 @@ pub fn run_study(
     Ok(results)
 }
 
+/// Run every run of a study in memory (no journal, no output folder), in parallel; for callers
+/// that put the study's files into a larger output set (`reproduce fig3`).
+pub fn run_all(study: &Study, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<Results, Error> {
+    validate(study)?;
+    let values = study.spec.values();
+    let total = values.len();
+    let count = AtomicUsize::new(0);
+    let mut out: Vec<(Row, Course)> = values
+        .par_iter()
+        .enumerate()
+        .map(|(i, v)| {
+            let r = one(study, i, v);
+            progress(count.fetch_add(1, Ordering::Relaxed) + 1, total);
+            r
+        })
+        .collect();
+    out.sort_by_key(|r| r.0.index);
+    let (rows, courses) = out
+        .into_iter()
+        .map(|(r, c)| (r.clone(), (r.index, c)))
+        .unzip();
+    Ok(Results {
+        spec: study.spec.clone(),
+        rows,
+        courses,
+        resumed: 0,
+    })
+}
+
 /// The files of a finished shard (or whole study).
 pub fn outputs(res: &Results, shard: Shard, command: &str) -> Result<OutputSet, Error> {
     let spec = &res.spec;

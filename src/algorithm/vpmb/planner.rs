@@ -78,7 +78,7 @@ fn anint(x: f64) -> f64 {
 
 impl<'a> Planner<'a> {
     pub(super) fn new(alg: &'a VpmB, plan: &'a DivePlan) -> Self {
-        let mut deco_gases = plan.deco_gases.clone();
+        let mut deco_gases = plan.ascent_gases();
         deco_gases.sort_by(|a, b| b.switch_depth_m.total_cmp(&a.switch_depth_m));
         Planner {
             alg,
@@ -234,19 +234,41 @@ impl<'a> Planner<'a> {
         let mut onset = [Onset::default(); N];
         let t_surface = self.surface_tissues();
         let mut t = t_surface;
-        let descent = self.travel(&mut t, 0.0, depth, c.descent_rate_m_min, gas);
-        let (p0, p1) = (self.pressure(0.0), self.pressure(depth));
-        self.crush_segment(
-            &mut max,
-            &mut onset,
-            &t_surface,
-            &t,
-            p0,
-            p1,
-            c.descent_rate_m_min * c.pa_per_m,
-            descent,
-            gas,
-        );
+        // descent: on the travel gas to its switch depth, then on the bottom gas
+        let mut segments = Vec::new();
+        match self.plan.travel_gas {
+            Some(tg) => {
+                segments.push((0.0, tg.switch_depth_m, tg.mix));
+                segments.push((tg.switch_depth_m, depth, gas));
+            }
+            None => segments.push((0.0, depth, gas)),
+        }
+        let mut descent = 0.0;
+        let mut legs = Vec::new();
+        for &(d0, d1, mix) in &segments {
+            let t0 = t;
+            let time = self.travel(&mut t, d0, d1, c.descent_rate_m_min, mix);
+            self.crush_segment(
+                &mut max,
+                &mut onset,
+                &t0,
+                &t,
+                self.pressure(d0),
+                self.pressure(d1),
+                c.descent_rate_m_min * c.pa_per_m,
+                time,
+                mix,
+            );
+            descent += time;
+            legs.push(Leg {
+                kind: LegKind::Descent,
+                start_depth_m: d0,
+                end_depth_m: d1,
+                duration_s: time * 60.0,
+                gas: mix,
+            });
+        }
+        let p1 = self.pressure(depth);
         let bottom = if c.bottom_time_includes_descent {
             self.plan.bottom_time_min - descent
         } else {
@@ -258,22 +280,13 @@ impl<'a> Planner<'a> {
         self.crush_segment(
             &mut max, &mut onset, &t_before, &t, p1, p1, 0.0, bottom, gas,
         );
-        let legs = vec![
-            Leg {
-                kind: LegKind::Descent,
-                start_depth_m: 0.0,
-                end_depth_m: depth,
-                duration_s: descent * 60.0,
-                gas,
-            },
-            Leg {
-                kind: LegKind::Bottom,
-                start_depth_m: depth,
-                end_depth_m: depth,
-                duration_s: bottom * 60.0,
-                gas,
-            },
-        ];
+        legs.push(Leg {
+            kind: LegKind::Bottom,
+            start_depth_m: depth,
+            end_depth_m: depth,
+            duration_s: bottom * 60.0,
+            gas,
+        });
         (
             Bottom {
                 tissues: t,

@@ -1,0 +1,601 @@
+//! Fig. 3: the paper's one-at-a-time sensitivity analysis (§2.3.1) of the peak radius R_max and
+//! the time to it t_max to γ, L_N2, L_O2, μ and D, built on the `sensitivity` machinery
+//! ([`crate::sweep`]): one bubble R0 = 40 µm at the centre of a 1.28 mm cube, saturated at
+//! 30 msw, brought to the surface in 3.75 min. Run at the caption's modal values and again at
+//! μ = 20 kPa (where the README's verification found the paper's directions), plus Sobol'
+//! indices over all five at once (the global analysis the paper did not do).
+
+use super::{add_verdicts, discrepancies, report_err, s3, Agreement, FigureOutput, Progress};
+use super::{Settings, Verdict};
+use crate::error::{Error, InputError};
+use crate::fit::paths;
+use crate::report::html::Page;
+use crate::report::output::OutputSet;
+use crate::report::plot::BarChart;
+use crate::report::table::{Cell, Column, Table};
+use crate::sweep::report::indices;
+use crate::sweep::run::{outputs, run_all, Results, Shard, Study};
+use crate::sweep::{Method, Metric, Param, StudySpec};
+use std::path::Path;
+
+/// The preset phantom (Fig. 3 caption).
+pub const PHANTOM: &str = include_str!("../../profiles/phantoms/fig3-modal.toml");
+/// The decompression (§2.3.1).
+pub const PROFILE: &str = include_str!("../../profiles/sensitivity-30m.toml");
+
+/// D at the caption's modal value, m²/s (the `scale:` factor 1).
+pub const D_MODAL: f64 = 1.4e-9;
+
+/// The five parameters: (symbol, path, low, high). Ranges from Table 1; L_N2's upper end is
+/// inferred (see the section text): Table 1 gives one value, 0.014, and the caption's modal
+/// 0.0436 is the midpoint of 0.014..0.0732, as every other modal value is of its range.
+pub fn parameters() -> Vec<(&'static str, Param)> {
+    let p = |path: &str, lo: f64, hi: f64, base: f64| Param {
+        path: path.into(),
+        lo,
+        hi,
+        log: lo > 0.0 && hi / lo > 10.0,
+        base,
+    };
+    vec![
+        ("γ", p("material.surface_tension", 0.042, 0.07, 0.056)),
+        ("L_N2", p("gases.n2.ostwald", 0.014, 0.0732, 0.0436)),
+        ("L_O2", p("gases.o2.ostwald", 0.013, 0.027, 0.02)),
+        ("μ", p("material.elasticity.shear_modulus", 0.0, 4e6, 2e6)),
+        (
+            "D",
+            p(
+                "scale:gases.*.diffusivity",
+                1e-10 / D_MODAL,
+                2.7e-9 / D_MODAL,
+                1.0,
+            ),
+        ),
+    ]
+}
+
+fn study(
+    method: Method,
+    samples: usize,
+    mu_base: f64,
+    settings: &Settings,
+) -> Result<Study, Error> {
+    let path = Path::new("profiles/phantoms/fig3-modal.toml");
+    let mut doc: toml::Table = PHANTOM
+        .parse()
+        .map_err(|e| InputError::new(format!("{e}")).in_file(path))?;
+    let set = |doc: &mut toml::Table, p: &str, v: f64| {
+        paths::set(doc, p, v).map_err(|m| Error::from(InputError::new(m).in_file(path)))
+    };
+    set(&mut doc, "material.elasticity.shear_modulus", mu_base)?;
+    if settings.quick {
+        set(&mut doc, "geometry.grid_step_m", 80e-6)?;
+    }
+    let profile =
+        crate::profile::toml::parse(PROFILE, Path::new("profiles/sensitivity-30m.toml"))?.history;
+    let mut params: Vec<Param> = parameters().into_iter().map(|x| x.1).collect();
+    params[3].base = mu_base;
+    Ok(Study {
+        spec: StudySpec {
+            method,
+            samples,
+            seed: 2017,
+            params,
+            metrics: vec![Metric::parse("r_max")?, Metric::parse("t_max")?],
+        },
+        doc,
+        phantom_path: path.to_path_buf(),
+        profile,
+    })
+}
+
+/// One OAT row per parameter: (symbol, [R_max lo, R_max hi, range, normalised], [t_max …]).
+type OatRow = (&'static str, [f64; 4], [f64; 4]);
+
+fn oat_rows(res: &Results) -> Vec<OatRow> {
+    let (_, rows) = indices(res);
+    let n = res.spec.samples;
+    parameters()
+        .iter()
+        .enumerate()
+        .map(|(i, (sym, p))| {
+            let get = |m: usize| -> [f64; 4] {
+                let lo = res.rows[1 + i * n].metrics[m];
+                let hi = res.rows[i * n + n].metrics[m];
+                let r = rows
+                    .iter()
+                    .find(|r| r.0 == res.spec.metrics[m].name() && r.1 == p.path)
+                    .map(|r| r.2.clone())
+                    .unwrap_or_default();
+                let (min, max, norm) = (
+                    r.get(4).copied().unwrap_or(f64::NAN),
+                    r.get(5).copied().unwrap_or(f64::NAN),
+                    r.get(6).copied().unwrap_or(f64::NAN),
+                );
+                [lo, hi, max - min, norm]
+            };
+            (*sym, get(0), get(1))
+        })
+        .collect()
+}
+
+/// Sign of hi − lo with a dead band: `band` absolute (t_max: 1 s, below the 2 s frame interval)
+/// or, when `band` is 0, 1e-6 of the value.
+fn direction(lo: f64, hi: f64, band: f64) -> i8 {
+    let d = hi - lo;
+    let band = if band > 0.0 {
+        band
+    } else {
+        1e-6 * lo.abs().max(hi.abs())
+    };
+    if !d.is_finite() || d.abs() <= band {
+        0
+    } else if d > 0.0 {
+        1
+    } else {
+        -1
+    }
+}
+
+fn arrow(d: i8) -> &'static str {
+    match d {
+        1 => "up",
+        -1 => "down",
+        _ => "no change",
+    }
+}
+
+/// The paper's directions: R_max falls with D, μ, γ and rises with L_N2, L_O2; t_max falls with all.
+fn paper_direction(sym: &str, metric: usize) -> i8 {
+    match (sym, metric) {
+        ("L_N2" | "L_O2", 0) => 1,
+        _ => -1,
+    }
+}
+
+fn direction_verdicts(rows: &[OatRow], label: &str, key: &str) -> Vec<Verdict> {
+    let mut out = Vec::new();
+    for (m, mname, claim) in [
+        (0, "R_max", "'increases in the parameters D, μ and γ led to a decrease in the maximum bubble radius (R_max) … Increases in both LN2 and LO2 led to an increase in R_max' (§2.3.1)"),
+        (1, "t_max", "'increases in the parameters D, μ and γ led to … a decrease in the time taken to reach this maximum (t_max). Increases in both LN2 and LO2 led to … a decrease in t_max' (§2.3.1)"),
+    ] {
+        let mut agree = 0;
+        let mut parts = Vec::new();
+        let mut wrong = Vec::new();
+        for r in rows {
+            let v = if m == 0 { r.1 } else { r.2 };
+            let d = direction(v[0], v[1], if m == 0 { 0.0 } else { 1.0 });
+            let ok = d == paper_direction(r.0, m);
+            if ok {
+                agree += 1;
+            } else if d == 0 {
+                wrong.push(format!("{}: no change beyond {}", r.0, if m == 0 { "1e-6 of R_max" } else { "1 s (frames every 2 s)" }));
+            } else {
+                wrong.push(format!("{}: the opposite direction", r.0));
+            }
+            let unit = if m == 0 { "µm" } else { "s" };
+            let scale = if m == 0 { 1e6 } else { 1.0 };
+            parts.push(format!(
+                "{} {} ({} → {} {unit})",
+                r.0,
+                arrow(d),
+                s3(v[0] * scale),
+                s3(v[1] * scale)
+            ));
+        }
+        let a = match agree {
+            5 => Agreement::Yes,
+            0 => Agreement::No,
+            _ => Agreement::Partly,
+        };
+        out.push(Verdict::new(
+            format!("{key}:{mname}-directions"),
+            claim,
+            format!("{label}: {agree} of 5 as the paper. {}", parts.join("; ")),
+            a,
+            if a == Agreement::Yes {
+                String::new()
+            } else {
+                why_directions(&wrong, m, key)
+            },
+        ));
+    }
+    out
+}
+
+fn why_directions(wrong: &[String], metric: usize, key: &str) -> String {
+    let mut s = wrong.join("; ");
+    if key == "modal" {
+        s.push_str(". At the modal μ = 2 MPa the hyperelastic Ω (≈ 2.5μ = 5 MPa within a few per cent of strain) stops diffusive growth: R_max is the Boyle/Laplace expansion during the ascent and t_max is the end of the ascent, so the parameters that act through diffusion barely move them, and a faster gas exchange (higher L) empties the stiffly held bubble sooner. Either the paper scaled μ differently in its code or its Fig. 3 runs used another Ω; the figure itself is not in the text to tell");
+    } else if metric == 1 && wrong.len() == 1 && wrong[0].starts_with('γ') {
+        s.push_str(". Surface tension at R ≈ 100 µm adds about 1 kPa to the bubble's pressure, too little to move the time of the peak");
+    }
+    s
+}
+
+fn ranking_verdicts(rows: &[OatRow], label: &str, key: &str) -> Vec<Verdict> {
+    let argmax = |f: &dyn Fn(&OatRow) -> f64| -> &'static str {
+        rows.iter()
+            .filter(|r| f(r).is_finite())
+            .fold(("", f64::NEG_INFINITY), |a, r| {
+                let v = f(r);
+                if v > a.1 {
+                    (r.0, v)
+                } else {
+                    a
+                }
+            })
+            .0
+    };
+    let range_r = argmax(&|r| r.1[2]);
+    let range_t = argmax(&|r| r.2[2]);
+    let sens_r = argmax(&|r| r.1[3].abs());
+    let sens_t = argmax(&|r| r.2[3].abs());
+    let list = |m: usize| -> String {
+        rows.iter()
+            .map(|r| {
+                let v = if m == 0 { r.1 } else { r.2 };
+                format!("{} {}", r.0, s3(v[3]))
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let mu_least = |m: usize| -> bool {
+        let mu = rows
+            .iter()
+            .find(|r| r.0 == "μ")
+            .map(|r| if m == 0 { r.1[3] } else { r.2[3] });
+        let mu = mu.unwrap_or(f64::NAN).abs();
+        rows.iter()
+            .filter(|r| r.0 != "μ" && r.0 != "D")
+            .all(|r| (if m == 0 { r.1[3] } else { r.2[3] }).abs() > mu)
+    };
+    let ranges = |m: usize| -> String {
+        rows.iter()
+            .map(|r| {
+                let v = if m == 0 { r.1[2] * 1e6 } else { r.2[2] };
+                format!("{} {}", r.0, s3(v))
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    let range_ok = (range_r == "μ") as u8 + (range_t == "D") as u8;
+    let sens_ok = (sens_r == "D") as u8 + (sens_t == "D") as u8;
+    let mu_ok = mu_least(0) as u8 + mu_least(1) as u8;
+    let grade = |n: u8, of: u8| match n {
+        x if x == of => Agreement::Yes,
+        0 => Agreement::No,
+        _ => Agreement::Partly,
+    };
+    vec![
+        Verdict::new(
+            format!("{key}:largest-range"),
+            "'μ has the largest effect upon R_max, while D has the largest effect upon t_max' (§2.3.1, Fig. 3b: range over each parameter's physiological range)",
+            format!(
+                "{label}: largest range of R_max from {range_r}, of t_max from {range_t}. Ranges of R_max (µm): {}; of t_max (s): {}",
+                ranges(0),
+                ranges(1)
+            ),
+            grade(range_ok, 2),
+            if range_ok == 2 { "" } else { "see the directions: where growth is stopped by μ, the parameters acting through diffusion move R_max and t_max little" },
+        ),
+        Verdict::new(
+            format!("{key}:most-sensitive-d"),
+            "'the parameter to which R_max and t_max are most sensitive is D' (§2.3.1, Fig. 3c); abstract: 'the diffusion coefficient was the most influential material parameter'",
+            format!(
+                "{label}: largest |normalised sensitivity| of R_max: {sens_r}, of t_max: {sens_t}. (ΔR_max/Δx)(x/R_max): {}; (Δt_max/Δx)(x/t_max): {}",
+                list(0),
+                list(1)
+            ),
+            grade(sens_ok, 2),
+            if sens_ok == 2 {
+                ""
+            } else if key == "modal" {
+                "at μ = 2 MPa growth is stopped and only μ moves R_max and t_max. (Normalised here as (Δmetric/Δx)·(x_base/metric_base) between the range's ends; the paper's Fig. 3c is 'Δ bubble metric/Δ parameter value', whose normalisation the text does not give)"
+            } else {
+                "R_max responds most to how much N2 the gel holds (L_N2 over a five-fold range), D most to how fast it is delivered (t_max). (Normalised here as (Δmetric/Δx)·(x_base/metric_base) between the range's ends; the paper's Fig. 3c is 'Δ bubble metric/Δ parameter value', whose normalisation the text does not give)"
+            },
+        ),
+        Verdict::new(
+            format!("{key}:mu-insensitive"),
+            "'R_max and t_max are relatively insensitive to μ … LN2, LO2 and γ all have a similar influence that is larger than that of μ' (§2.3.1)",
+            format!(
+                "{label}: |normalised sensitivity| of μ below those of γ, L_N2 and L_O2: R_max {}, t_max {}",
+                if mu_least(0) { "yes" } else { "no" },
+                if mu_least(1) { "yes" } else { "no" }
+            ),
+            grade(mu_ok, 2),
+            if mu_ok == 2 {
+                ""
+            } else if key == "modal" {
+                "with μ's base at 2 MPa, where it halts growth, μ's own normalised sensitivity is large and the others' nearly zero"
+            } else {
+                "t_max barely depends on γ, L_N2 and L_O2 either; their normalised sensitivities of t_max are as small as μ's"
+            },
+        ),
+    ]
+}
+
+/// Surface tension's share of the bubble pressure at the surface, 2γ/R / (P_atm + 2γ/R).
+pub fn tension_share(gamma: f64, r: f64) -> f64 {
+    let s = 2.0 * gamma / r;
+    s / (crate::units::ATM_PA + s)
+}
+
+/// Compute the figure.
+pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Error> {
+    let (levels, n_sobol) = if settings.quick { (3, 4) } else { (5, 16) };
+    let mut files = OutputSet::new();
+    let mut verdicts = Vec::new();
+    let mut tables = Vec::new();
+    let mut base_rows: Vec<(&str, &str, Vec<OatRow>)> = Vec::new();
+    let mut nested = Vec::new();
+    for (key, label, mu, dir) in [
+        ("modal", "modal values (μ = 2 MPa)", 2e6, "oat-modal"),
+        ("mu20k", "μ = 20 kPa, others modal", 2e4, "oat-mu20k"),
+    ] {
+        let st = study(Method::Oat, levels, mu, settings)?;
+        let name = format!("fig3 {dir}");
+        let res = run_all(&st, &|d, t| progress(&name, d, t))?;
+        let rows = oat_rows(&res);
+        verdicts.extend(direction_verdicts(&rows, label, key));
+        verdicts.extend(ranking_verdicts(&rows, label, key));
+        let mut t = Table::new(
+            format!("One at a time, {label}"),
+            vec![
+                Column::plain("parameter"),
+                Column::plain("range"),
+                Column::new("R_max at low", "µm"),
+                Column::new("R_max at high", "µm"),
+                Column::plain("normalised sensitivity of R_max"),
+                Column::new("t_max at low", "s"),
+                Column::new("t_max at high", "s"),
+                Column::plain("normalised sensitivity of t_max"),
+            ],
+        );
+        for ((sym, p), r) in parameters().iter().zip(&rows) {
+            let range = if *sym == "D" {
+                format!("{}–{} m²/s (log)", s3(p.lo * D_MODAL), s3(p.hi * D_MODAL))
+            } else {
+                format!("{}–{}", s3(p.lo), s3(p.hi))
+            };
+            t.push(vec![
+                Cell::text(*sym),
+                Cell::text(range),
+                Cell::text(s3(r.1[0] * 1e6)),
+                Cell::text(s3(r.1[1] * 1e6)),
+                Cell::text(s3(r.1[3])),
+                Cell::text(s3(r.2[0])),
+                Cell::text(s3(r.2[1])),
+                Cell::text(s3(r.2[3])),
+            ])
+            .map_err(report_err)?;
+        }
+        tables.push(t);
+        base_rows.push((key, label, rows.clone()));
+        let set = outputs(
+            &res,
+            Shard::WHOLE,
+            &format!("decophantom reproduce fig3 ({dir})"),
+        )?;
+        nested.push((dir, set.clone()));
+        files.nest(dir, set);
+    }
+    // Sobol' over all five
+    let st = study(Method::Sobol, n_sobol, 2e6, settings)?;
+    let res = run_all(&st, &|d, t| progress("fig3 sobol", d, t))?;
+    let (_, srows) = indices(&res);
+    let mut sobol_t = Table::new(
+        format!(
+            "Sobol' indices, N = {n_sobol} base rows ({} runs)",
+            res.rows.len()
+        ),
+        vec![
+            Column::plain("metric"),
+            Column::plain("parameter"),
+            Column::plain("S1 [95 % interval]"),
+            Column::plain("ST [95 % interval]"),
+        ],
+    );
+    let syms = parameters();
+    let mut top = Vec::new();
+    for m in ["r_max", "t_max"] {
+        let mut best = ("", f64::NEG_INFINITY);
+        for r in srows.iter().filter(|r| r.0 == m) {
+            let sym = syms.iter().find(|s| s.1.path == r.1).map_or("?", |s| s.0);
+            sobol_t
+                .push(vec![
+                    Cell::text(m),
+                    Cell::text(sym),
+                    Cell::text(format!("{} [{}, {}]", s3(r.2[0]), s3(r.2[1]), s3(r.2[2]))),
+                    Cell::text(format!("{} [{}, {}]", s3(r.2[3]), s3(r.2[4]), s3(r.2[5]))),
+                ])
+                .map_err(report_err)?;
+            if r.2[3] > best.1 {
+                best = (sym, r.2[3]);
+            }
+        }
+        top.push((m, best));
+    }
+    verdicts.push(Verdict::new(
+        "sobol:most-influential",
+        "abstract: 'A sensitivity analysis indicated that the diffusion coefficient was the most influential material parameter' (one at a time, §2.3.1)",
+        format!(
+            "Sobol' over all five at once (μ uniform on 0–4 MPa, D log-uniform): the largest total index of R_max is {}'s ({}), of t_max {}'s ({}); N = {n_sobol}, wide intervals (an index above 1 is estimator noise)",
+            top[0].1 .0,
+            s3(top[0].1 .1),
+            top[1].1 .0,
+            s3(top[1].1 .1)
+        ),
+        if top.iter().all(|t| t.1 .0 == "D") {
+            Agreement::Yes
+        } else if top.iter().any(|t| t.1 .0 == "D") {
+            Agreement::Partly
+        } else {
+            Agreement::No
+        },
+        if top.iter().all(|t| t.1 .0 == "D") { "" } else { "over Table 1's μ range (0–4 MPa) most gels are stiff enough to stop diffusive growth, so μ decides whether the bubble grows at all; a one-at-a-time analysis at one base point cannot see that" },
+    ));
+    let set = outputs(&res, Shard::WHOLE, "decophantom reproduce fig3 (sobol)")?;
+    nested.push(("sobol", set.clone()));
+    files.nest("sobol", set);
+
+    // the surface-tension arithmetic of §2.3.1
+    let shares = [
+        (0.04, 40e-6, 2.0),
+        (0.073, 40e-6, 3.5),
+        (0.04, 2e-6, 27.0),
+        (0.073, 2e-6, 36.0),
+    ];
+    let ours: Vec<f64> = shares
+        .iter()
+        .map(|(g, r, _)| tension_share(*g, *r) * 100.0)
+        .collect();
+    let close: Vec<bool> = shares
+        .iter()
+        .zip(&ours)
+        .map(|(s, o)| (o - s.2).abs() <= 0.1 * s.2 + 0.3)
+        .collect();
+    verdicts.push(Verdict::new(
+        "surface-tension-share",
+        "'For the lowest and highest values of surface tension used in these simulations (γ = 0.04 and γ = 0.073 N m⁻¹) the surface tension contribution to the total bubble pressure is only 2% and 3.5%, respectively, at the initial radius of 0.04 mm. If an initial radius of 0.002 mm was used the proportions would be 27% and 36%' (§2.3.1)",
+        format!(
+            "2γ/R ÷ (P_atm + 2γ/R) at the surface: {} % and {} % at 0.04 mm; {} % and {} % at 0.002 mm",
+            s3(ours[0]),
+            s3(ours[1]),
+            s3(ours[2]),
+            s3(ours[3])
+        ),
+        if close.iter().all(|x| *x) {
+            Agreement::Yes
+        } else if close.iter().any(|x| *x) {
+            Agreement::Partly
+        } else {
+            Agreement::No
+        },
+        "the 36 % does not follow from 2γ/R at 1 atm (42 %); γ/R would give 27 % for γ = 0.073 but then 17 % for 0.04. Likely an arithmetic slip in the text; it does not affect the simulations",
+    ));
+
+    // paper-style panels: 3b (ranges) and 3c (normalised sensitivities) at each base
+    let mut bars: Vec<(String, String, String)> = Vec::new();
+    for (key, label, rows) in &base_rows {
+        let cats: Vec<String> = rows.iter().map(|r| r.0.to_string()).collect();
+        let bar = |title: String, y: &str, groups: Vec<String>, vals: Vec<Vec<f64>>| {
+            BarChart {
+                title,
+                x_label: "parameter".into(),
+                y_label: y.into(),
+                categories: cats.clone(),
+                groups,
+                values: vals,
+                reference: None,
+                size: (960, 480),
+            }
+            .to_svg()
+            .map_err(report_err)
+        };
+        let ends = vec!["lowest value".to_string(), "highest value".to_string()];
+        bars.push((
+            format!("fig3b-rmax-{key}.svg"),
+            bar(
+                format!("Fig. 3b(i): R_max at the ends of each range ({label})"),
+                "R_max (µm)",
+                ends.clone(),
+                rows.iter().map(|r| vec![r.1[0] * 1e6, r.1[1] * 1e6]).collect(),
+            )?,
+            format!("R_max at the lowest and highest value of each parameter's range, the others at the base ({label}; Fig. 3b(i))."),
+        ));
+        bars.push((
+            format!("fig3b-tmax-{key}.svg"),
+            bar(
+                format!("Fig. 3b(ii): t_max at the ends of each range ({label})"),
+                "t_max (s)",
+                ends,
+                rows.iter().map(|r| vec![r.2[0], r.2[1]]).collect(),
+            )?,
+            format!("t_max at the lowest and highest value of each parameter's range ({label}; Fig. 3b(ii))."),
+        ));
+        bars.push((
+            format!("fig3c-{key}.svg"),
+            bar(
+                format!("Fig. 3c: normalised sensitivities ({label})"),
+                "(Δmetric/Δx)·(x/metric)",
+                vec!["R_max".into(), "t_max".into()],
+                rows.iter().map(|r| vec![r.1[3], r.2[3]]).collect(),
+            )?,
+            format!("Normalised sensitivities of R_max and t_max ({label}; Fig. 3c)."),
+        ));
+    }
+
+    let mut page = Page::new("Fig. 3: sensitivity of R_max and t_max to the material parameters");
+    page.text("**The paper** (§2.3.1): 'Simulations were conducted on a 1.28 mm^3 grid with h = R0 = 0.04 mm … A single bubble located at the centre of the grid was exposed to a decompression corresponding to a depth change of 30 m in 3.75 min (ascent rate approx. 0.133 m s^-1). The tissue was assumed to be saturated with air at the start of the decompression … From figure 3a, it can be seen that increases in the parameters D, μ and γ led to a decrease in the maximum bubble radius (R_max) and a decrease in the time taken to reach this maximum (t_max). Increases in both LN2 and LO2 led to an increase in R_max but a decrease in t_max. … From this top panel it can be seen that μ has the largest effect upon R_max, while D has the largest effect upon t_max. … These results show that R_max and t_max are relatively insensitive to μ and that its large impact is due to its wide physiological range. LN2, LO2 and γ all have a similar influence that is larger than that of μ but the parameter to which R_max and t_max are most sensitive is D.' Caption: 'the fixed parameter values are the modal values of the range (γ = 0.056 N m^-1, LN2 = 0.0436, LO2 = 0.02, μ = 2 × 10^6 Pa, D = 1.4 × 10^-9 m^2 s^-1)'.");
+    add_verdicts(&mut page, &verdicts);
+    page.section("One at a time");
+    page.text("Both analyses vary each parameter over its range at the levels below with the others at their base values; 'normalised sensitivity' is (metric at the highest level − at the lowest)/(highest − lowest) × base value / metric at base. The second analysis moves only μ's base to 20 kPa, the stiffness at which the bubble can still grow by diffusion.");
+    for t in &tables {
+        page.table(t);
+    }
+    for (f, svg, cap) in &bars {
+        page.figure(svg, Some(f), cap.clone()).map_err(report_err)?;
+        files.add(f.clone(), svg.clone());
+    }
+    page.section("Radius time courses (Fig. 3a)");
+    for (dir, set) in &nested {
+        if *dir == "sobol" {
+            continue;
+        }
+        for (i, (sym, _)) in parameters().iter().enumerate() {
+            let f = format!("courses-{i}.svg");
+            if let Some(svg) = set.get(&f) {
+                let svg = String::from_utf8_lossy(svg).into_owned();
+                page.figure(
+                    &svg,
+                    Some(&format!("{dir}/{f}")),
+                    format!("{sym} varied ({dir}); D is shown as its factor on the modal 1.4e-9 m²/s (the `scale:` parameter)."),
+                )
+                .map_err(report_err)?;
+            }
+        }
+    }
+    page.section("Sobol' indices over all five (not in the paper)");
+    page.text("Saltelli's A, B, A_B^i design over the five ranges at once (γ, L_N2, L_O2 and μ uniform, D log-uniform), first-order S1 and total ST with 95 % bootstrap intervals (500 resamples); μ's base is irrelevant here. With this few base rows the intervals are wide and an index can come out above 1 (estimator noise: the total variance is estimated from 2N runs): read the ranking, not the digits. Every run is in `sobol/sensitivity.csv`.");
+    page.table(&sobol_t);
+    for (dir, set) in &nested {
+        if *dir != "sobol" {
+            continue;
+        }
+        for (i, m) in ["R_max", "t_max"].iter().enumerate() {
+            let f = format!("bars-{i}.svg");
+            if let Some(svg) = set.get(&f) {
+                let svg = String::from_utf8_lossy(svg).into_owned();
+                page.figure(
+                    &svg,
+                    Some(&format!("sobol/{f}")),
+                    format!("Sobol' indices of {m}."),
+                )
+                .map_err(report_err)?;
+            }
+        }
+    }
+    page.section("Equations and parameters");
+    page.text(format!(
+        "The full model (diffusion 2.1 in the gel with Henry's law 2.2 at the open faces, the bubble's moles with the Laplace balance 2.4, hyperelastic Ω 2.9, D_surf = D_bulk) on the preset `profiles/phantoms/fig3-modal.toml`: a {} cube, h = {}, one bubble R0 = 40 µm at the centre, R_min = 40 µm, air (N2 + O2, each with its own L and the same D), saturated at 30 msw; profile `profiles/sensitivity-30m.toml` (30 msw to the surface in 3.75 min, then 90 min). Ranges (Table 1): γ 0.042–0.07 N/m, L_O2 0.013–0.027, μ 0–4 MPa, D 1e-10–2.7e-9 m²/s (both gases; log-spaced levels, the range spanning more than a decade). L_N2: Table 1 gives a single value (0.014); the caption's modal 0.0436 is the midpoint of 0.014–0.0732, the rule that reproduces every other modal value (0.056, 0.02, 2e6, 1.4e-9 are the midpoints of their ranges), so 0.014–0.0732 is used. One-at-a-time: {} levels per parameter, {} runs per analysis. Sobol': N = {}, {} runs, seed 2017. Metrics: R_max, the largest radius over the run, and t_max, its time (`r_max`, `t_max` of `decophantom sensitivity`). Every run of each design: `oat-modal/`, `oat-mu20k/`, `sobol/` (sensitivity.csv, indices.csv, courses.csv, report.md); the same designs run with `decophantom sensitivity --phantom profiles/phantoms/fig3-modal.toml --profile profiles/sensitivity-30m.toml --param material.surface_tension=0.042..0.07 --param gases.n2.ostwald=0.014..0.0732 --param gases.o2.ostwald=0.013..0.027 --param material.elasticity.shear_modulus=0..4e6 --param 'scale:gases.*.diffusivity=0.0714285714285714..1.928571428571429' --metric r_max --metric t_max --method oat --samples {}`.",
+        "1.28 mm",
+        if settings.quick { "80 µm (--quick)" } else { "40 µm" },
+        levels,
+        1 + 5 * levels,
+        n_sobol,
+        n_sobol * 7,
+        levels
+    ));
+    page.section("Where the paper disagrees with itself");
+    page.text(format!(
+        "- **L_N2's range** is not given (Table 1: 0.014 only); the caption's modal 0.0436 is neither 0.014 nor 0.145.\n{}",
+        discrepancies(&["gamma", "ln2", "units"])
+    ));
+    Ok(FigureOutput {
+        files,
+        page,
+        verdicts,
+    })
+}
