@@ -161,6 +161,16 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
         })?;
         let time = number(cols[2], "time_s")?;
         let radius = number(cols[3], "radius_m")?;
+        if !(0.0..=crate::profile::MAX_DURATION_S).contains(&time) {
+            return Err(err(
+                "time_s",
+                format!(
+                    "time {} s is outside 0 ..= {} s (30 days)",
+                    crate::error::num(time),
+                    crate::profile::MAX_DURATION_S
+                ),
+            ));
+        }
         if radius < 0.0 {
             return Err(err(
                 "radius_m",

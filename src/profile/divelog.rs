@@ -553,10 +553,25 @@ fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
             .and_then(num);
         let (surface_pa, density_kg_m3) = environment(surface, density, &mut notes);
 
-        let raw: Vec<(f64, f64, usize)> = src
-            .children_named("sample")
-            .filter_map(|s| Some((time_s(s.attr("time")?)?, num(s.attr("depth")?)?, s.offset)))
-            .collect();
+        // a sample without a time or depth (temperature only) is skipped; one whose time or
+        // depth is there but not a finite number is an error naming its line
+        let mut raw: Vec<(f64, f64, usize)> = Vec::new();
+        for s in src.children_named("sample") {
+            let (Some(t), Some(d)) = (s.attr("time"), s.attr("depth")) else {
+                continue;
+            };
+            let Some(t) = time_s(t) else {
+                return Err(cx.err(s, "sample.time", format!("time '{t}' is not a finite time")));
+            };
+            let Some(d) = num(d) else {
+                return Err(cx.err(
+                    s,
+                    "sample.depth",
+                    format!("depth '{d}' is not a finite number"),
+                ));
+            };
+            raw.push((t, d, s.offset));
+        }
         let first_sample = raw.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
         let samples = normalise(raw, cx, dive, &mut notes)?;
 

@@ -160,7 +160,7 @@ impl ProfileFigure {
                 .map_err(|e| err(e.to_string()))?;
             let row_tick = |v: &f64| {
                 let r = nrows as f64 - v.floor();
-                if (1.0..=n).contains(&r) && (r as usize == 1 || (r as usize) % 4 == 0) {
+                if (1.0..=n).contains(&r) && (r as usize == 1 || (r as usize).is_multiple_of(4)) {
                     format!("{}", r as usize)
                 } else {
                     String::new()

@@ -570,7 +570,9 @@ fn every_committed_phantom_and_profile_is_within_the_ranges() {
         for e in std::fs::read_dir(&d).unwrap().flatten() {
             let p = e.path();
             if p.is_dir() {
-                stack.push(p);
+                if !p.ends_with("hostile") {
+                    stack.push(p);
+                }
                 continue;
             }
             if p.extension().is_none_or(|x| x != "toml") {
@@ -621,4 +623,71 @@ fn legacy_files_and_the_elasticity_command_check_their_numbers() {
         assert_refused(&o, &[flag]);
         assert!(o.stdout.is_empty());
     }
+}
+
+/// Every file of the committed corpus `tests/data/hostile/<reader>/` (the hostile-user cases of
+/// issue 11, one file per case) is refused by its reader, quickly, without a panic, naming the
+/// file, and the line where the file name says `.L<line>.`.
+#[test]
+fn hostile_corpus_is_refused_by_every_reader() {
+    use decophantom::algorithm::conventions::DECOTENGU;
+    use decophantom::error::InputError;
+    let corpus = root().join("tests/data/hostile");
+    let mut count = 0;
+    for reader in std::fs::read_dir(&corpus).unwrap().flatten() {
+        let name = reader.file_name().to_string_lossy().into_owned();
+        if !reader.path().is_dir() {
+            continue;
+        }
+        for f in std::fs::read_dir(reader.path()).unwrap().flatten() {
+            let p = f.path();
+            let text = std::fs::read_to_string(&p).unwrap();
+            let t = std::time::Instant::now();
+            let r: Result<(), InputError> = match name.as_str() {
+                "phantom" => parse_phantom(&text, &p).map(|_| ()),
+                "profile" => decophantom::profile::toml::parse(&text, &p).map(|_| ()),
+                "legacy" => decophantom::profile::legacy::read(
+                    &p,
+                    &decophantom::profile::legacy::LegacyUnits::new(
+                        decophantom::units::TimeUnit::Min,
+                        decophantom::units::PressureUnit::Msw,
+                    ),
+                )
+                .map(|_| ()),
+                "waypoints" => decophantom::algorithm::waypoints::read_schedule(
+                    &p,
+                    &DECOTENGU,
+                    decophantom::gas::GasMix::AIR,
+                )
+                .and_then(|s| {
+                    s.to_pressure_history()
+                        .map_err(|m| InputError::new(m).in_file(&p))
+                })
+                .map(|_| ()),
+                "schedule" => {
+                    decophantom::algorithm::Schedule::from_toml_str(&text, &p).map(|_| ())
+                }
+                "algorithm" => decophantom::algorithm::load_algorithm(&p).map(|_| ()),
+                "criteria" => decophantom::risk::config::parse_criteria(&text, &p).map(|_| ()),
+                "divelog" => decophantom::profile::load(&p, &Default::default()).map(|_| ()),
+                "measurements" => decophantom::fit::data::read_measurements(&p).map(|_| ()),
+                other => panic!("no reader for corpus folder '{other}'"),
+            };
+            let e = match r {
+                Ok(()) => panic!("{} was accepted", p.display()),
+                Err(e) => e,
+            };
+            assert!(t.elapsed().as_secs() < 5, "{}", p.display());
+            assert!(e.file.is_some(), "{}: {e}", p.display());
+            let fname = p.file_name().unwrap().to_string_lossy().into_owned();
+            if let Some(l) = fname
+                .split('.')
+                .find_map(|part| part.strip_prefix('L').and_then(|n| n.parse().ok()))
+            {
+                assert_eq!(e.line, Some(l), "{}: {e}", p.display());
+            }
+            count += 1;
+        }
+    }
+    assert!(count >= 30, "{count}");
 }
