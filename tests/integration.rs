@@ -19,6 +19,8 @@ mod evaluate;
 mod events;
 #[path = "integration/fixed_gases.rs"]
 mod fixed_gases;
+#[path = "integration/gas_convention.rs"]
+mod gas_convention;
 #[path = "integration/growth.rs"]
 mod growth;
 #[path = "integration/paper_findings.rs"]

@@ -49,7 +49,9 @@ pub struct BubbleFrame {
     pub area: f64,
     /// Gas amounts, mol, in the run's gas order.
     pub moles: Vec<f64>,
-    /// Total dissolved-gas tension of the gel at the coupling sphere, Pa (Σ_g C̄_ρ·R_u·T/L_g).
+    /// Total gas tension of the gel at the coupling sphere, Pa: Σ_g C̄_ρ·R_u·T/L_g over the
+    /// simulated gases plus the fixed partial pressure of the others (`bubble_fixed_gases`,
+    /// which the tissue around the bubble holds too: the same convention on both sides).
     pub gel_tension: f64,
     /// Centre, m.
     pub position: [f64; 3],
@@ -64,7 +66,8 @@ pub struct Frame {
     pub ambient: f64,
     /// Active bubbles.
     pub bubbles: Vec<BubbleFrame>,
-    /// Largest supersaturation in the gel, Σ_g tension − P_amb, Pa (over all inside cells).
+    /// Largest supersaturation in the gel, Σ_g tension + p_fixed − P_amb, Pa (over all inside
+    /// cells; p_fixed = `bubble_fixed_gases`, 0 for a lab gel).
     pub max_supersaturation: f64,
     /// Gas dissolved in the grid, mol, per gas.
     pub grid_moles: Vec<f64>,
@@ -404,7 +407,7 @@ impl<'a> Simulation<'a> {
         };
         let ng = self.gases.len();
         let rho = self.coupling_radius(r);
-        let mut tension = 0.0;
+        let mut tension = self.params.bubble_fixed_gases;
         let mut cbar = [0.0; Gas::ALL.len()];
         for g in 0..ng {
             let cb = self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], self.time)
@@ -922,7 +925,7 @@ impl<'a> Simulation<'a> {
         }
     }
 
-    /// One parallel pass over the grid: the largest supersaturation Σ_g C_g·R_u·T/L_g − P_amb (Pa),
+    /// One parallel pass over the grid: the largest supersaturation Σ_g C_g·R_u·T/L_g + p_fixed − P_amb (Pa),
     /// the gas dissolved in the grid per gas (mol) and the lowest concentration of any gas
     /// (mol/m³). Per-plane results are combined in plane order, independent of the thread count.
     fn gel_state(&self, ambient: f64) -> (f64, Vec<f64>, f64) {
@@ -965,7 +968,7 @@ impl<'a> Simulation<'a> {
         }
         let v = self.grid.cell_volume();
         (
-            max_t - ambient,
+            max_t + self.params.bubble_fixed_gases - ambient,
             sums.into_iter().map(|x| x * v).collect(),
             min_c,
         )

@@ -219,7 +219,10 @@ fn evaluate_writes_a_consistent_well_formed_report() {
             .find(|m| m[0] == r[0] && m[1] == r[1] && m[2] == r[3] && m[3] == r[4])
             .unwrap_or_else(|| panic!("scores.csv row {r:?} not in report.md"));
         let (csv_v, md_v): (f64, f64) = (r[5].parse().unwrap(), m[4].parse().unwrap());
-        assert!((csv_v - md_v).abs() <= 5e-4 * csv_v.abs() + 1e-300, "{r:?} vs {m:?}");
+        assert!(
+            (csv_v - md_v).abs() <= 5e-4 * csv_v.abs() + 1e-300,
+            "{r:?} vs {m:?}"
+        );
         assert_eq!(m[8], r[9]);
     }
     // full precision: margin = limit − value exactly as computed, value_over_limit = value/limit
