@@ -3,6 +3,8 @@
 mod algorithms;
 #[path = "integration/analytic.rs"]
 mod analytic;
+#[path = "integration/bubble_steps.rs"]
+mod bubble_steps;
 #[path = "integration/cli_simulate.rs"]
 mod cli_simulate;
 #[path = "integration/common.rs"]

@@ -142,7 +142,7 @@ fn surface_bubble_dissolves_at_the_oxygen_window_rate() {
             got * 1e6,
             w * 1e6
         );
-        assert!((got / w - 1.0).abs() < 0.04, "t = {t}: {got} vs {w}");
+        assert!((got / w - 1.0).abs() < 0.01, "t = {t}: {got} vs {w}");
     }
     eprintln!(
         "earlier convention (resolved 1-D): R = {:.1?} µm, dissolved at {old_t:.0} s",
