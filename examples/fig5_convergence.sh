@@ -9,9 +9,9 @@ bin=${1:-target/release/decophantom}
 dir=$(mktemp -d)
 level() { # $1 grid step (m), $2 step scale
     num=$(awk -v s="$2" 'BEGIN { printf "max_step_s = %g\\nmax_pressure_change = %g\\nmax_content_change = %g\\nbubble_tolerance = %g", 30 * s, 0.01 * s, 0.03 * s, 0.007 * s }')
-    sed -e "s/^max_step_s = 30.0/$num/" \
+    sed -e "s/^max_step_s = 30.0/$num/" -e "s/^grid_step_m = 86.5e-6/grid_step_m = $1/" \
         profiles/phantoms/hydrogel.toml > "$dir/p.toml"
-    "$bin" simulate --profile profiles/fig5-dive.toml --phantom "$dir/p.toml" --grid-step "$1" \
+    "$bin" simulate --profile profiles/fig5-dive.toml --phantom "$dir/p.toml" \
         --out "$dir/out-$1" --quiet > /dev/null
     r=$(grep '^max_radius_m' "$dir/out-$1/summary.toml" | cut -d= -f2)
     v=$(grep '^peak_total_volume_m3' "$dir/out-$1/summary.toml" | cut -d= -f2)
