@@ -138,7 +138,10 @@ fn epstein_plesset_dissolution() {
         let h = r0 / cells;
         let (hist, t_sim) = ep_case(r0, h, 10.0 * r0, 1.3 * t_ep);
         let at = |t: f64| {
-            let i = hist.partition_point(|x| x.0 <= t).min(hist.len() - 1).max(1);
+            let i = hist
+                .partition_point(|x| x.0 <= t)
+                .min(hist.len() - 1)
+                .max(1);
             let (a, b) = (hist[i - 1], hist[i]);
             a.1 + (b.1 - a.1) * (t - a.0) / (b.0 - a.0)
         };
