@@ -19,6 +19,24 @@ pub const FSW_PA: f64 = ATM_PA / 33.0;
 /// Body/incubation temperature of the gels, K (37 °C, the paper's section 3.2).
 pub const BODY_TEMPERATURE_K: f64 = 310.15;
 
+/// One millimetre of mercury (torr), Pa: 101 325/760 (exact by definition of the torr; the
+/// physiology texts below give partial pressures in mmHg).
+pub const MMHG_PA: f64 = ATM_PA / 760.0;
+/// Water-vapour pressure in the lungs and tissue at 37 °C, Pa: 47 mmHg = 6.27 kPa (saturated
+/// vapour at body temperature). Sources: Guyton & Hall, *Textbook of Medical Physiology*, 13th
+/// ed., ch. 40 (alveolar air: P_H2O 47 mmHg); West, *Respiratory Physiology: The Essentials*,
+/// 9th ed., ch. 1 and 3. Bühlmann and DecoTengu use 0.0627 bar.
+pub const BODY_WATER_VAPOUR_PA: f64 = 6_270.0;
+/// Partial pressure of CO2 in a bubble in tissue, Pa: 5.3 kPa (40 mmHg, the alveolar and
+/// arterial PCO2; mixed venous is 45–46 mmHg = 6.0–6.1 kPa). Sources: Guyton & Hall, 13th ed.,
+/// ch. 40–41 (alveolar PCO2 40 mmHg, venous 45 mmHg); West, 9th ed., ch. 5 and 6. 5.3 kPa is the
+/// figure of the usual oxygen-window arithmetic; `[protocol] co2_pa` changes it.
+pub const TISSUE_CO2_PA: f64 = 5_300.0;
+/// Partial pressure of O2 in a bubble in metabolising tissue, Pa: 5.3 kPa (40 mmHg, the
+/// mixed-venous PO2 breathing air at 1 atm). Sources: Guyton & Hall, 13th ed., ch. 41 (venous
+/// PO2 40 mmHg); West, 9th ed., ch. 6 (mixed venous PO2 40 mmHg).
+pub const VENOUS_O2_PA: f64 = 5_300.0;
+
 /// Pressure units accepted in profiles and on the command line.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 #[serde(rename_all = "kebab-case")]

@@ -3,6 +3,8 @@
 mod algorithms;
 #[path = "integration/analytic.rs"]
 mod analytic;
+#[path = "integration/bubble_steps.rs"]
+mod bubble_steps;
 #[path = "integration/cli_simulate.rs"]
 mod cli_simulate;
 #[path = "integration/common.rs"]
@@ -19,6 +21,8 @@ mod evaluate;
 mod events;
 #[path = "integration/fixed_gases.rs"]
 mod fixed_gases;
+#[path = "integration/gas_convention.rs"]
+mod gas_convention;
 #[path = "integration/growth.rs"]
 mod growth;
 #[path = "integration/hardening.rs"]

@@ -5,11 +5,14 @@
 //! schedule to the phantom, running the matrix in parallel, building the report) are public
 //! so `check` and `demo` use the same path.
 //!
-//! Linking a dive to the phantom ([`dive_history`]): the ambient pressure of the schedule acts
-//! on the gel; its open faces are held in equilibrium with the inspired inert-gas partial
-//! pressures, fraction × (ambient − water vapour), with the water vapour of the schedule (its
-//! algorithm's conventions) or the criteria file's `protocol.water_vapour_pa`; O2 is left out
-//! unless the protocol sets `oxygen_at_faces`. The phantom starts saturated at the surface
+//! Linking a dive to the phantom ([`dive_history`], [`breathed_gas_params`]): the ambient
+//! pressure of the schedule acts on the gel; the breathed-gas convention of the criteria
+//! file's `[protocol]` ([`Protocol`]) holds on both sides of every bubble's interface — the open
+//! faces are in equilibrium with the inspired inert-gas partial pressures,
+//! fraction × (ambient − P_H2O), and every bubble holds the gases that are not simulated at
+//! fixed partial pressures, P_H2O + P_CO2 + P_vO2 (6.27 + 5.3 + 5.3 kPa by default; the same
+//! P_H2O on both sides, whatever water vapour the schedule's planner used); O2 is left out of
+//! the gel unless the protocol sets `oxygen_at_faces`. The phantom starts saturated at the surface
 //! with the first leg's gas; the schedule is followed by `protocol.observe_after_surfacing_min`
 //! at the surface on air. A repetitive dive (`repeat_after_min`) appends a surface interval
 //! on air and the same schedule again, so the gel and the bubbles carry over.
@@ -224,9 +227,8 @@ pub fn dive_history(
         )));
     }
     let mut dive = schedule.to_pressure_history().map_err(bad)?;
-    if let Some(v) = protocol.water_vapour_pa {
-        dive.vapour_pa = v;
-    }
+    // the protocol's P_H2O, the one held in the bubbles too ([`breathed_gas_params`])
+    dive.vapour_pa = protocol.water_vapour_pa;
     let surface = schedule.surface_pressure_pa;
     let at_surface = |s: f64| {
         PressureHistory::with_gas(
@@ -267,6 +269,28 @@ pub fn dive_history(
         ));
     }
     Ok(h)
+}
+
+/// The phantom's parameters for a breathed-gas run under `protocol`: every bubble holds the
+/// gases that are not simulated at p_fixed = P_H2O + P_CO2 + P_vO2
+/// ([`Protocol::bubble_fixed_gases_pa`]), the counterpart of the faces of [`dive_history`].
+/// A phantom file that sets its own `material.bubble_fixed_gases_pa` is refused: for a
+/// breathed gas the criteria protocol sets it.
+pub fn breathed_gas_params(
+    params: &PhantomParams,
+    protocol: &Protocol,
+) -> Result<PhantomParams, InputError> {
+    if params.bubble_fixed_gases != 0.0 {
+        return Err(InputError::new(format!(
+            "the phantom sets bubble_fixed_gases_pa = {} Pa; for a breathed gas the criteria file's [protocol] sets the bubble's fixed gases (water_vapour_pa + co2_pa + venous_o2_pa = {} Pa): remove it from the phantom",
+            params.bubble_fixed_gases,
+            protocol.bubble_fixed_gases_pa()
+        ))
+        .field("material.bubble_fixed_gases_pa"));
+    }
+    let mut p = params.clone();
+    p.bubble_fixed_gases = protocol.bubble_fixed_gases_pa();
+    Ok(p)
 }
 
 /// One run of the matrix: a candidate under one elasticity law.
@@ -332,12 +356,15 @@ pub fn run_matrix(
         .flat_map(|c| laws.iter().map(move |l| (c, *l)))
         .collect();
     let total = jobs.len() as f64;
+    breathed_gas_params(&phantom.params, &criteria.protocol)
+        .map_err(|e| Error::Input(e.in_file(&phantom.source)))?;
     let shared = Mutex::new((vec![0.0f64; jobs.len()], progress));
     let results: Vec<Result<RunOutcome, Error>> = jobs
         .par_iter()
         .enumerate()
         .map(|(j, &(c, law))| {
-            let params = phantom.with_law(law)?;
+            let params = breathed_gas_params(&phantom.with_law(law)?, &criteria.protocol)
+                .map_err(Error::Input)?;
             let mut cb = |t: f64, end: f64| {
                 if let Ok(mut g) = shared.lock() {
                     let (fr, cb) = &mut *g;
@@ -879,10 +906,14 @@ pub fn add_report(
     };
 
     page.section("Inputs");
-    let vapour = match proto.water_vapour_pa {
-        Some(v) => format!("{v} Pa for every schedule (criteria file)"),
-        None => "each schedule's own (its algorithm's conventions)".into(),
-    };
+    let vapour = format!(
+        "{} Pa for every schedule; every bubble holds the gases not simulated at {} Pa (water vapour {} + CO2 {} + venous O2 {} Pa, criteria `[protocol]`)",
+        proto.water_vapour_pa,
+        proto.bubble_fixed_gases_pa(),
+        proto.water_vapour_pa,
+        proto.co2_pa,
+        proto.venous_o2_pa
+    );
     let mut inputs = format!(
         "- Dive: **{}**{}\n- Phantom: **{}** from {} — grid step {:.1} µm, {} cells inside; {}\n- Criteria: `{}`{}\n- Linking: ambient pressure of the schedule at the gel; open faces in equilibrium with the inspired {} partial pressures, fraction × (ambient − water vapour), water vapour {}; saturated at the surface at t = 0; watched {} min at the surface on air after the schedule ends.\n- Elasticity laws: {} (μ = {} Pa; M = {:e} Pa/m³ and K = {:e} Pa where the phantom gives none: the paper's Fig. 2a values 5e-2 Pa/µm³ and 2.2 GPa).",
         ctx.dive,
@@ -1237,10 +1268,10 @@ mod tests {
     fn linking_subtracts_vapour_keeps_helium_and_drops_oxygen() {
         let p = Protocol {
             observe_after_surfacing_s: 600.0,
-            water_vapour_pa: None,
-            oxygen_at_faces: false,
+            ..Default::default()
         };
-        let h = dive_history(&schedule(6270.0), &p, None).unwrap();
+        // the protocol's vapour (6270 Pa) replaces the schedule's own (4930 Pa)
+        let h = dive_history(&schedule(4930.0), &p, None).unwrap();
         // at the bottom (t = 500 s): ambient 101325 + 40·10000 = 501325 Pa; He 0.45 and N2 0.37
         // of (501325 − 6270) = 495055 Pa → 222774.75 and 183170.35 Pa; O2 left out.
         assert!((h.ambient(500.0) - 501_325.0).abs() < 1e-6);
@@ -1253,7 +1284,7 @@ mod tests {
         assert!((h.inspired_partial_pressure(Gas::N2, 1700.0) - 75_093.45).abs() < 1e-6);
         // the protocol's vapour replaces the schedule's; O2 kept when asked
         let p2 = Protocol {
-            water_vapour_pa: Some(0.0),
+            water_vapour_pa: 0.0,
             oxygen_at_faces: true,
             ..p
         };

@@ -98,6 +98,7 @@ struct RawNumerics {
     max_step_s: Option<f64>,
     max_pressure_change: Option<f64>,
     max_content_change: Option<f64>,
+    bubble_tolerance: Option<f64>,
     kernel_min_cells: Option<f64>,
     coupling_gap_cells: Option<f64>,
     record_interval_s: Option<f64>,
@@ -514,6 +515,16 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
         max_content_change: positive(
             "numerics.max_content_change",
             n.max_content_change.unwrap_or(d.max_content_change),
+        )?,
+        bubble_tolerance: in_range(
+            "numerics.bubble_tolerance",
+            positive(
+                "numerics.bubble_tolerance",
+                n.bubble_tolerance.unwrap_or(d.bubble_tolerance),
+            )?,
+            1e-6,
+            1.0,
+            "(relative change)",
         )?,
         kernel_min_cells: in_range(
             "numerics.kernel_min_cells",

@@ -5,8 +5,9 @@
 //! description = "what these limits are for"
 //! [protocol]
 //! observe_after_surfacing_min = 60   # watch the phantom this long at the surface (default 60)
-//! water_vapour_pa = 6270             # optional: same vapour for every schedule (default: each
-//!                                    # schedule's own, from its algorithm's conventions)
+//! water_vapour_pa = 6270             # H2O at the faces and in every bubble (default 6270)
+//! co2_pa = 5300                      # CO2 in every bubble (default 5300; 0 with O2 at the faces)
+//! venous_o2_pa = 5300                # metabolic O2 in every bubble (default 5300; not with O2 at the faces)
 //! oxygen_at_faces = false            # default false: only N2 and He reach the open faces
 //! [[criterion]]
 //! kind = "peak-total-volume"         # registry key (risk::REGISTRY)
@@ -34,18 +35,49 @@ struct RawCriteriaFile {
 struct RawProtocol {
     observe_after_surfacing_min: Option<f64>,
     water_vapour_pa: Option<f64>,
+    co2_pa: Option<f64>,
+    venous_o2_pa: Option<f64>,
     oxygen_at_faces: Option<bool>,
 }
 
-/// How a dive schedule drives the phantom.
+/// How a dive schedule drives the phantom: the breathed-gas convention.
+///
+/// The phantom stands for tissue breathing the schedule's gas. One convention holds on both
+/// sides of every bubble's interface:
+/// - **at the open faces** (and hence in the gel far from bubbles) each simulated gas is at its
+///   inspired partial pressure with water vapour taken out, f_g·(P_amb − P_H2O) (the alveolar
+///   inert-gas pressure of Schreiner's equation and the Bühlmann planners); O2 is not simulated
+///   unless `oxygen_at_faces` (tissue consumes it);
+/// - **in every bubble** the gases that are not simulated sit at fixed partial pressures —
+///   water vapour P_H2O (the same value as at the faces), CO2 P_CO2 and, when O2 is not
+///   simulated, the venous O2 P_vO2 — and the simulated gases hold the rest of the bubble's
+///   pressure, P_B − p_fixed with p_fixed = P_H2O + P_CO2 + P_vO2
+///   ([`Protocol::bubble_fixed_gases_pa`], passed to the phantom's `bubble_fixed_gases`).
+///
+/// A bubble in tissue at rest at the surface on air then sees the physiological inherent
+/// unsaturation (the "oxygen window"): P_amb − [f_N2(P_amb − P_H2O) + P_H2O + P_CO2 + P_vO2]
+/// = f_O2(P_amb − P_H2O) − P_vO2 − P_CO2 = 19.96 − 5.3 − 5.3 = 9.36 kPa with the defaults,
+/// plus its own Laplace pressure. (Before this convention the bubbles held inert gas only
+/// against faces with vapour and O2 taken out: 26.2 kPa of built-in unsaturation.)
+/// With `oxygen_at_faces` the phantom does not metabolise: O2 is simulated like N2, the faces
+/// hold every gas at f_g(P_amb − P_H2O), the bubble holds water vapour (and `co2_pa` if set),
+/// and the total at the faces equals ambient.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Protocol {
     /// Time the phantom is watched at the surface after the schedule ends, s (bubbles in gel
     /// grow for tens of minutes after surfacing). Default 3600.
     pub observe_after_surfacing_s: f64,
-    /// Water-vapour pressure subtracted at the open faces, Pa, for every schedule; `None`:
-    /// each schedule's own (its algorithm's conventions).
-    pub water_vapour_pa: Option<f64>,
+    /// Water-vapour pressure P_H2O, Pa: subtracted from ambient at the open faces for every
+    /// schedule (whatever its planner assumed) and held in every bubble. Default 6 270 Pa
+    /// ([`crate::units::BODY_WATER_VAPOUR_PA`], 47 mmHg at 37 °C).
+    pub water_vapour_pa: f64,
+    /// Partial pressure of CO2 in every bubble, P_CO2, Pa. Default 5 300 Pa
+    /// ([`crate::units::TISSUE_CO2_PA`], 40 mmHg); 0 when `oxygen_at_faces`.
+    pub co2_pa: f64,
+    /// Partial pressure of metabolic (venous) O2 in every bubble, P_vO2, Pa, when O2 is not a
+    /// simulated gas. Default 5 300 Pa ([`crate::units::VENOUS_O2_PA`], 40 mmHg); 0 (and not
+    /// allowed otherwise) when `oxygen_at_faces`.
+    pub venous_o2_pa: f64,
     /// Let the breathed O2 reach the open faces too (default false: the faces are in
     /// equilibrium with the inspired inert gases, N2 and He, only — living tissue
     /// metabolises oxygen).
@@ -56,9 +88,19 @@ impl Default for Protocol {
     fn default() -> Self {
         Protocol {
             observe_after_surfacing_s: 3600.0,
-            water_vapour_pa: None,
+            water_vapour_pa: crate::units::BODY_WATER_VAPOUR_PA,
+            co2_pa: crate::units::TISSUE_CO2_PA,
+            venous_o2_pa: crate::units::VENOUS_O2_PA,
             oxygen_at_faces: false,
         }
+    }
+}
+
+impl Protocol {
+    /// p_fixed = P_H2O + P_CO2 + P_vO2, Pa: the partial pressure of the gases that are not
+    /// simulated, held in every bubble (the phantom's `bubble_fixed_gases`).
+    pub fn bubble_fixed_gases_pa(&self) -> f64 {
+        self.water_vapour_pa + self.co2_pa + self.venous_o2_pa
     }
 }
 
@@ -156,16 +198,48 @@ pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError
         }
         protocol.observe_after_surfacing_s = m * 60.0;
     }
-    if let Some(v) = rp.water_vapour_pa {
-        if !(v.is_finite() && (0.0..20_000.0).contains(&v)) {
+    protocol.oxygen_at_faces = rp.oxygen_at_faces.unwrap_or(false);
+    if protocol.oxygen_at_faces {
+        // no metabolism: O2 is simulated, neither consumed nor replaced by CO2
+        protocol.co2_pa = 0.0;
+        protocol.venous_o2_pa = 0.0;
+        if rp.venous_o2_pa.is_some_and(|v| v != 0.0) {
             return Err(top(
-                "protocol.water_vapour_pa",
-                format!("must be in 0..20000 Pa (alveolar at 37 °C: 6270) (got {v})"),
+                "protocol.venous_o2_pa",
+                "cannot be used with oxygen_at_faces = true: O2 is then a simulated gas in the bubble; remove venous_o2_pa or set oxygen_at_faces = false".into(),
             ));
         }
-        protocol.water_vapour_pa = Some(v);
     }
-    protocol.oxygen_at_faces = rp.oxygen_at_faces.unwrap_or(false);
+    for (key, value, slot, typical) in [
+        (
+            "protocol.water_vapour_pa",
+            rp.water_vapour_pa,
+            &mut protocol.water_vapour_pa,
+            "at 37 °C: 6270",
+        ),
+        (
+            "protocol.co2_pa",
+            rp.co2_pa,
+            &mut protocol.co2_pa,
+            "alveolar/venous: 5300",
+        ),
+        (
+            "protocol.venous_o2_pa",
+            rp.venous_o2_pa,
+            &mut protocol.venous_o2_pa,
+            "mixed venous: 5300",
+        ),
+    ] {
+        if let Some(v) = value {
+            if !(v.is_finite() && (0.0..20_000.0).contains(&v)) {
+                return Err(top(
+                    key,
+                    format!("must be in 0..20000 Pa ({typical}) (got {v})"),
+                ));
+            }
+            *slot = v;
+        }
+    }
     if raw.criterion.is_empty() {
         return Err(InputError::new(
             "no criteria: add at least one [[criterion]] with kind and limit",
@@ -282,8 +356,22 @@ mod tests {
         assert_eq!(c.criteria[1].label, "P");
         assert_eq!(c.criteria[0].limit, 200.0);
         assert_eq!(c.protocol.observe_after_surfacing_s, 1800.0);
-        assert_eq!(c.protocol.water_vapour_pa, Some(6270.0));
+        assert_eq!(c.protocol.water_vapour_pa, 6270.0);
         assert!(!c.protocol.oxygen_at_faces);
+        // defaults: Guyton & Hall / West figures, 47 + 40 + 40 mmHg ≈ 6.27 + 5.3 + 5.3 kPa
+        assert_eq!(c.protocol.bubble_fixed_gases_pa(), 16_870.0);
+        let o = parse("[protocol]\noxygen_at_faces = true\nwater_vapour_pa = 6000\n[[criterion]]\nkind = \"peak-radius\"\nlimit = 1\n").unwrap();
+        assert_eq!(o.protocol.bubble_fixed_gases_pa(), 6000.0);
+        let e = parse("[protocol]\noxygen_at_faces = true\nvenous_o2_pa = 5300\n[[criterion]]\nkind = \"peak-radius\"\nlimit = 1\n").unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("protocol.venous_o2_pa"), "{e}");
+        let e =
+            parse("[protocol]\nco2_pa = -1\n[[criterion]]\nkind = \"peak-radius\"\nlimit = 1\n")
+                .unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(2), Some("protocol.co2_pa")),
+            "{e}"
+        );
     }
 
     #[test]

@@ -1,5 +1,7 @@
 //! `peak-supersaturation`: the largest supersaturation of the gel over the run, kPa:
-//! Σ_gases tension − P_amb. `at = "gel"` (default) takes the largest over every gel cell
+//! Σ_gases tension + p_fixed − P_amb, with p_fixed the partial pressure of the gases that are
+//! not simulated (water vapour, CO2, venous O2 of the breathed-gas convention; 0 in a lab gel),
+//! which tissue holds as the bubbles do. `at = "gel"` (default) takes the largest over every gel cell
 //! (the frame's `max_supersaturation`); `at = "bubbles"` the largest at the bubbles' coupling
 //! spheres (gel tension around each bubble − P_amb).
 
@@ -50,8 +52,12 @@ impl RiskCriterion for PeakSupersaturation {
     }
     fn describe(&self) -> String {
         match self.at {
-            Where::Gel => "peak gel supersaturation Σ tension − P_amb (all gel cells)".into(),
-            Where::Bubbles => "peak gel supersaturation Σ tension − P_amb at the bubbles".into(),
+            Where::Gel => {
+                "peak gel supersaturation Σ tension + p_fixed − P_amb (all gel cells)".into()
+            }
+            Where::Bubbles => {
+                "peak gel supersaturation Σ tension + p_fixed − P_amb at the bubbles".into()
+            }
         }
     }
 }

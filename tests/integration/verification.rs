@@ -514,41 +514,16 @@ fn surface_case(
     (p, rec.frames)
 }
 
-/// The surface layer of thickness δ with D_surf in series with the gel (sim.rs): with
-/// D_surf = D_bulk the flux is the plain Henry-interface flux 4πD(C̄_ρ − C_s)/(1/R − 1/ρ)
-/// (steady diffusion between concentric spheres, Crank, The Mathematics of Diffusion, §6.2),
-/// and law "equal" and law "fold" with k = 1 give identical histories. With D_surf = D_bulk/30
-/// the bubble grows more slowly.
+/// Law "equal" and law "fold" with k = 1 give identical histories, and with D_surf = D_bulk/30
+/// the bubble grows more slowly. Whether the layer's flux is right is not judged here against the
+/// code's own formula but in `growth::growth_with_a_surface_layer_matches_the_resolved_reference`,
+/// against an independent, fully resolved 1-D solution with the layer (D_surf = D, D/10, D/30).
 #[test]
 fn surface_layer_reduces_to_the_henry_interface() {
-    let (p, equal) = surface_case(Arc::new(EqualToBulk));
+    let (_, equal) = surface_case(Arc::new(EqualToBulk));
     let (_, fold1) = surface_case(Arc::new(Fold { fold: 1.0 }));
     let (_, fold30) = surface_case(Arc::new(Fold { fold: 30.0 }));
     assert_eq!(equal, fold1, "law 'equal' and 'fold' with k = 1 differ");
-
-    // First step against the plain Henry interface, computed here from the recorded state:
-    // C̄_ρ from the gel tension at the coupling sphere (pure N2: C = L·p/(R_uT)), C_s from
-    // Henry's law at P_B = P_amb + 2γ/R (eq. 2.4 with Ω = 0), and the coupling radius
-    // ρ = max(R, kernel_min·h, R + δ) + gap·h of sim.rs with this phantom's settings.
-    let (f0, f1) = (&equal[0], &equal[1]);
-    let rt = GAS_CONSTANT * p.temperature;
-    let (l, d, h) = (0.014, 2e-9, p.grid_step);
-    let b = &f0.bubbles[0];
-    let r = b.radius;
-    let num = p.numerics;
-    let rho = r
-        .max(num.kernel_min_cells * h)
-        .max(r + p.surface_layer_thickness)
-        + num.coupling_gap_cells * h;
-    let c_bar = l * b.gel_tension / rt;
-    let c_s = l * (f0.ambient + 2.0 * p.surface_tension / r) / rt;
-    let dt = f1.time - f0.time;
-    let want = 4.0 * PI * d * (c_bar - c_s) / (1.0 / r - 1.0 / rho) * dt;
-    let got = f1.bubbles[0].moles[0] - b.moles[0];
-    assert!(
-        (got / want - 1.0).abs() < 1e-9,
-        "first-step uptake {got:e} vs Henry interface {want:e} mol"
-    );
 
     // D_surf < D_bulk: slower growth throughout.
     let r_at = |frames: &[decophantom::phantom::sim::Frame], t: f64| {
