@@ -201,6 +201,16 @@ pub fn schreiner(p_alv_bar: f64, rate_bar_min: f64, t_min: f64, k: f64, p0_bar: 
         - (p_alv_bar - p0_bar - rate_bar_min / k) * (-k * t_min).exp()
 }
 
+/// Compartment `i`'s total inert pressure and its a, b weighted by the N2 and He pressures
+/// (Baker, "Understanding M-values", 1998).
+fn mixed(c: &Compartment, tissues: &Tissues, i: usize) -> (f64, f64, f64) {
+    let (pn, ph) = (tissues.n2_bar[i], tissues.he_bar[i]);
+    let p = pn + ph;
+    let a = (c.n2_a_bar * pn + c.he_a_bar * ph) / p;
+    let b = (c.n2_b * pn + c.he_b * ph) / p;
+    (p, a, b)
+}
+
 /// The ZH-L16 tissue model (no planning): coefficients, decay constants and water vapour.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ZhL16 {
@@ -265,10 +275,7 @@ impl ZhL16 {
     pub fn tolerated(&self, tissues: &Tissues, gf: f64) -> [f64; COMPARTMENTS] {
         let mut out = [0.0; COMPARTMENTS];
         for (i, c) in self.compartments.iter().enumerate() {
-            let (pn, ph) = (tissues.n2_bar[i], tissues.he_bar[i]);
-            let p = pn + ph;
-            let a = (c.n2_a_bar * pn + c.he_a_bar * ph) / p;
-            let b = (c.n2_b * pn + c.he_b * ph) / p;
+            let (p, a, b) = mixed(c, tissues, i);
             out[i] = (p - a * gf) / (gf / b + 1.0 - gf);
         }
         out
@@ -281,10 +288,7 @@ impl ZhL16 {
     pub fn gradient_fraction(&self, tissues: &Tissues, p_amb_bar: f64) -> [f64; COMPARTMENTS] {
         let mut out = [0.0; COMPARTMENTS];
         for (i, c) in self.compartments.iter().enumerate() {
-            let (pn, ph) = (tissues.n2_bar[i], tissues.he_bar[i]);
-            let p = pn + ph;
-            let a = (c.n2_a_bar * pn + c.he_a_bar * ph) / p;
-            let b = (c.n2_b * pn + c.he_b * ph) / p;
+            let (p, a, b) = mixed(c, tissues, i);
             let m = p_amb_bar / b + a;
             out[i] = (p - p_amb_bar) / (m - p_amb_bar);
         }
