@@ -15,6 +15,8 @@ mod convergence;
 mod defects;
 #[path = "integration/discover.rs"]
 mod discover;
+#[path = "integration/displacement.rs"]
+mod displacement;
 #[path = "integration/evaluate.rs"]
 mod evaluate;
 #[path = "integration/events.rs"]

@@ -102,6 +102,10 @@ struct RawNumerics {
     kernel_min_cells: Option<f64>,
     coupling_gap_cells: Option<f64>,
     record_interval_s: Option<f64>,
+    displace_gel: Option<bool>,
+    displace_min_cells: Option<f64>,
+    displace_step_cells: Option<f64>,
+    displace_reach: Option<f64>,
 }
 
 /// Smallest initial bubble radius accepted, m (0.1 µm: the Laplace pressure 2γ/R is then
@@ -547,6 +551,37 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
             "cells",
         )?,
         implicit_cost_ratio: d.implicit_cost_ratio,
+        displace_gel: n.displace_gel.unwrap_or(d.displace_gel),
+        displace_min_cells: in_range(
+            "numerics.displace_min_cells",
+            positive(
+                "numerics.displace_min_cells",
+                n.displace_min_cells.unwrap_or(d.displace_min_cells),
+            )?,
+            0.5,
+            1000.0,
+            "cells",
+        )?,
+        displace_step_cells: in_range(
+            "numerics.displace_step_cells",
+            positive(
+                "numerics.displace_step_cells",
+                n.displace_step_cells.unwrap_or(d.displace_step_cells),
+            )?,
+            1e-3,
+            10.0,
+            "cells",
+        )?,
+        displace_reach: in_range(
+            "numerics.displace_reach",
+            positive(
+                "numerics.displace_reach",
+                n.displace_reach.unwrap_or(d.displace_reach),
+            )?,
+            1.0,
+            100.0,
+            "bubble radii",
+        )?,
         record_interval: match n.record_interval_s {
             // 0 (every step) or a positive interval long enough to move the clock: a tiny one
             // (1e-308 s) would never advance the next-frame time

@@ -106,6 +106,11 @@ pub struct Grid {
     /// Per x-row (index j + ny·k): the range [i0, i1) of cells whose six sides are all interior
     /// faces (empty when i0 ≥ i1). The explicit kernel runs a branch-free stencil there.
     pub interior_spans: Vec<(u32, u32)>,
+    /// Cells taken out of the gel by bubbles ([`Grid::set_excluded`]): while excluded a cell is
+    /// outside the phantom for the solvers, and its neighbours' faces toward it are sealed.
+    excluded: std::collections::HashSet<u32>,
+    /// The codes the mask gave each cell that exclusion has changed, to restore them.
+    base_codes: std::collections::HashMap<u32, [u8; 3]>,
 }
 
 /// Most cells a grid may have (0.8 GB per gas field).
@@ -233,21 +238,10 @@ impl Grid {
                 }
             }
         }
-        let full = SIDE_INTERIOR | (SIDE_INTERIOR << 2) | INSIDE_BIT;
-        let mut interior_spans = vec![(0u32, 0u32); n[1] * n[2]];
-        for (row, span) in interior_spans.iter_mut().enumerate() {
-            let base = row * n[0];
-            let is_full = |i: usize| (0..3).all(|d| codes[d][base + i] == full);
-            if let Some(i0) = (0..n[0]).find(|&i| is_full(i)) {
-                let mut i1 = i0;
-                while i1 < n[0] && is_full(i1) {
-                    i1 += 1;
-                }
-                *span = (i0 as u32, i1 as u32);
-            }
-        }
-        Ok(Grid {
-            interior_spans,
+        let mut grid = Grid {
+            excluded: Default::default(),
+            base_codes: Default::default(),
+            interior_spans: vec![(0u32, 0u32); n[1] * n[2]],
             n,
             h,
             shape,
@@ -255,7 +249,118 @@ impl Grid {
             codes,
             open_cells,
             n_inside,
-        })
+        };
+        for row in 0..n[1] * n[2] {
+            grid.interior_spans[row] = grid.interior_span(row);
+        }
+        Ok(grid)
+    }
+
+    /// Take cells out of the gel (`excluded = true`: a bubble occupies them) or give them back
+    /// (issue 8, item 5). An excluded cell is outside the phantom for both diffusion schemes,
+    /// for [`Grid::kernel`], [`Grid::interpolate`] and [`Grid::integrate`]; the faces of its
+    /// neighbours toward it become sealed (no flux into the bubble through the grid: the bubble
+    /// exchanges gas only through its own flux law). Cells with an open side are never
+    /// excluded (the caller filters them with [`Grid::has_open_side`]; a bubble reaching an
+    /// open face ends the run anyway). The explicit kernel's interior spans of the rows touched
+    /// are recomputed.
+    pub fn set_excluded(&mut self, cells: &[usize], excluded: bool) {
+        if cells.is_empty() {
+            return;
+        }
+        let strides = [1usize, self.n[0], self.n[0] * self.n[1]];
+        let mut touched: Vec<usize> = Vec::with_capacity(cells.len() * 7);
+        for &idx in cells {
+            touched.push(idx);
+            let base = self.base_of(idx);
+            for d in 0..3 {
+                if base[d] & 3 == SIDE_INTERIOR {
+                    touched.push(idx - strides[d]);
+                }
+                if (base[d] >> 2) & 3 == SIDE_INTERIOR {
+                    touched.push(idx + strides[d]);
+                }
+            }
+        }
+        touched.sort_unstable();
+        touched.dedup();
+        for &idx in &touched {
+            let base = self.base_of(idx);
+            self.base_codes.entry(idx as u32).or_insert(base);
+        }
+        for &idx in cells {
+            if excluded {
+                self.excluded.insert(idx as u32);
+            } else {
+                self.excluded.remove(&(idx as u32));
+            }
+        }
+        for &idx in &touched {
+            let base = self.base_codes[&(idx as u32)];
+            for d in 0..3 {
+                self.codes[d][idx] = if self.excluded.contains(&(idx as u32)) {
+                    0
+                } else {
+                    let mut m = base[d] & 3;
+                    let mut p = (base[d] >> 2) & 3;
+                    if m == SIDE_INTERIOR && self.excluded.contains(&((idx - strides[d]) as u32)) {
+                        m = SIDE_SEALED;
+                    }
+                    if p == SIDE_INTERIOR && self.excluded.contains(&((idx + strides[d]) as u32)) {
+                        p = SIDE_SEALED;
+                    }
+                    m | (p << 2) | (base[d] & INSIDE_BIT)
+                };
+            }
+        }
+        let mut rows: Vec<usize> = touched.iter().map(|idx| idx / self.n[0]).collect();
+        rows.dedup();
+        rows.sort_unstable();
+        rows.dedup();
+        for row in rows {
+            self.interior_spans[row] = self.interior_span(row);
+        }
+    }
+
+    /// Whether cell `idx` is taken out of the gel by a bubble.
+    pub fn is_excluded(&self, idx: usize) -> bool {
+        self.excluded.contains(&(idx as u32))
+    }
+
+    /// Whether cell `idx` is inside the phantom as the mask made it (excluded or not).
+    pub fn inside_phantom(&self, idx: usize) -> bool {
+        self.base_of(idx)[0] & INSIDE_BIT != 0
+    }
+
+    /// Whether cell `idx` has a side on an open face.
+    pub fn has_open_side(&self, idx: usize) -> bool {
+        let base = self.base_of(idx);
+        (0..3).any(|d| base[d] & 3 == SIDE_OPEN || (base[d] >> 2) & 3 == SIDE_OPEN)
+    }
+
+    fn base_of(&self, idx: usize) -> [u8; 3] {
+        self.base_codes.get(&(idx as u32)).copied().unwrap_or([
+            self.codes[0][idx],
+            self.codes[1][idx],
+            self.codes[2][idx],
+        ])
+    }
+
+    /// The first run of cells of x-row `row` whose six sides are all interior faces.
+    fn interior_span(&self, row: usize) -> (u32, u32) {
+        let full = SIDE_INTERIOR | (SIDE_INTERIOR << 2) | INSIDE_BIT;
+        let base = row * self.n[0];
+        let is_full = |i: usize| (0..3).all(|d| self.codes[d][base + i] == full);
+        match (0..self.n[0]).find(|&i| is_full(i)) {
+            Some(i0) => {
+                let mut i1 = i0;
+                while i1 < self.n[0] && is_full(i1) {
+                    i1 += 1;
+                }
+                (i0 as u32, i1 as u32)
+            }
+            None => (0, 0),
+        }
     }
 
     /// Total number of cells (inside and outside).

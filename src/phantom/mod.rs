@@ -3,6 +3,7 @@
 pub mod bubble;
 pub mod config;
 pub mod diffusion;
+pub mod displacement;
 pub mod elasticity;
 pub mod grid;
 pub mod params;

@@ -80,6 +80,20 @@ pub struct Numerics {
     /// kernel`: 148 against 1 133 M cell-updates/s on 128×128×32, a ratio of 7.7). 1 = always
     /// implicit above the limit.
     pub implicit_cost_ratio: f64,
+    /// Bubbles displace the gel ([`super::displacement`], issue 8 item 5): a bubble of radius
+    /// at least `displace_min_cells`·h takes the cells inside it out of the gel and pushes the
+    /// gel around it outward as it grows (back as it shrinks). Default true; false gives the
+    /// paper's model, where the gel inside a bubble keeps diffusing.
+    pub displace_gel: bool,
+    /// Smallest radius that displaces the gel, in grid steps. Default 2 (a smaller bubble is a
+    /// sub-grid sink; the gel volume it overlaps, below (4/3)π(2h)³, vanishes as h → 0).
+    pub displace_min_cells: f64,
+    /// Change of radius between two displacements of the gel, in grid steps. Default 0.1
+    /// (the displacement lags the wall by at most 0.1·h).
+    pub displace_step_cells: f64,
+    /// Reach of the displacement: the gel is moved out to this × R + 2h from the centre.
+    /// Default 3 (see [`super::displacement`]).
+    pub displace_reach: f64,
 }
 
 impl Default for Numerics {
@@ -93,6 +107,10 @@ impl Default for Numerics {
             coupling_gap_cells: 1.0,
             record_interval: 1.0,
             implicit_cost_ratio: 8.0,
+            displace_gel: true,
+            displace_min_cells: 2.0,
+            displace_step_cells: 0.1,
+            displace_reach: 3.0,
         }
     }
 }

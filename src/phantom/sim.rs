@@ -22,6 +22,7 @@
 
 use super::bubble::{Balance, Bubble, BubbleFate};
 use super::diffusion;
+use super::displacement::{self, Displaced};
 use super::grid::{Face, Grid};
 use super::params::{BubblePlacement, PhantomParams};
 use crate::error::Error;
@@ -220,6 +221,11 @@ pub struct Simulation<'a> {
     sphere: Vec<[f64; 3]>,
     kernel: Vec<(usize, f64)>,
     steps_state: Vec<StepExchange>,
+    /// Per bubble: the gel it displaces ([`displacement`]).
+    displaced: Vec<Displaced>,
+    /// Change of the grid's gas by displacement since the balance reference, mol: gel pushed
+    /// beyond the reach of the displacement or swallowed by a bubble ([`Self::displace`]).
+    displaced_gas: f64,
 }
 
 fn fibonacci_sphere(n: usize) -> Vec<[f64; 3]> {
@@ -338,8 +344,13 @@ impl<'a> Simulation<'a> {
             sphere: Vec::new(),
             kernel: Vec::new(),
             steps_state: Vec::new(),
+            displaced: Vec::new(),
+            displaced_gas: 0.0,
         };
-        sim.initial_total = sim.total_moles();
+        // bubbles placed large enough take their cells out of the gel before the balance
+        // reference is taken (the gel was never there)
+        sim.displace();
+        sim.rebase_balance();
         Ok(sim)
     }
 
@@ -366,6 +377,7 @@ impl<'a> Simulation<'a> {
     /// Reset the gas-balance reference to the current state (after editing fields).
     pub fn rebase_balance(&mut self) {
         self.inflow = 0.0;
+        self.displaced_gas = 0.0;
         self.initial_total = self.total_moles();
     }
 
@@ -396,12 +408,27 @@ impl<'a> Simulation<'a> {
         }
     }
 
-    fn kernel_radius(&self, r: f64) -> f64 {
-        r.max(self.params.numerics.kernel_min_cells * self.grid.h)
+    /// Change of the grid's gas by the gel's displacement since the balance reference, mol
+    /// ([`Self::displace`]; part of the gas balance).
+    pub fn displaced_gas(&self) -> f64 {
+        self.displaced_gas
     }
 
-    fn coupling_radius(&self, r: f64) -> f64 {
-        self.kernel_radius(r)
+    /// Radius of bubble `i`'s sink kernel: max(R, kernel_min_cells·h), or, once the bubble
+    /// holds cells out of the gel, the shell out to R + kernel_min_cells·h around them.
+    fn kernel_radius(&self, i: usize) -> f64 {
+        let r = self.bubbles[i].radius;
+        let k = self.params.numerics.kernel_min_cells * self.grid.h;
+        if self.displaced.get(i).is_some_and(|d| !d.cells.is_empty()) {
+            r + k
+        } else {
+            r.max(k)
+        }
+    }
+
+    fn coupling_radius(&self, i: usize) -> f64 {
+        let r = self.bubbles[i].radius;
+        self.kernel_radius(i)
             .max(r + self.params.surface_layer_thickness)
             + self.params.numerics.coupling_gap_cells * self.grid.h
     }
@@ -434,7 +461,7 @@ impl<'a> Simulation<'a> {
             (b.position, b.radius, b.initial_radius)
         };
         let ng = self.gases.len();
-        let rho = self.coupling_radius(r);
+        let rho = self.coupling_radius(i);
         let mut tension = self.params.bubble_fixed_gases;
         let mut cbar = [0.0; Gas::ALL.len()];
         for g in 0..ng {
@@ -447,6 +474,11 @@ impl<'a> Simulation<'a> {
         if r <= self.params.min_radius {
             return tension;
         }
+        // the gel moves with the wall only where the bubble displaces it
+        let wall_speed = match self.displaced.get(i) {
+            Some(d) if !d.cells.is_empty() => d.wall_speed,
+            _ => 0.0,
+        };
         let b = &self.bubbles[i];
         // the simulated gases' share of P_B (eq. 2.4 less the fixed partial pressure)
         let pb = self.balance_for(b, ambient).simulated_pressure(r);
@@ -460,7 +492,8 @@ impl<'a> Simulation<'a> {
                 continue;
             }
             let resistance = (1.0 / r - 1.0 / outer) / ds + (1.0 / outer - 1.0 / rho) / d;
-            j[g] = 4.0 * PI * (cbar[g] - cs) / resistance;
+            j[g] = 4.0 * PI * (cbar[g] - cs) / resistance
+                * displacement::convection_factor(r * r * wall_speed * resistance);
         }
         tension
     }
@@ -528,6 +561,7 @@ impl<'a> Simulation<'a> {
                 f64::INFINITY
             };
             self.coalesce(t1, p1, &mut log.events)?;
+            self.displace();
             self.check_health()?;
             self.observe(profile, p1, &tensions, observer, &mut log, false)?;
             if log.ending != Ending::Completed || self.time >= end - 1e-9 {
@@ -535,7 +569,9 @@ impl<'a> Simulation<'a> {
             }
         }
         let total = self.total_moles();
-        let balance = ((total - self.initial_total - self.inflow) / self.initial_total).abs();
+        let balance = ((total - self.initial_total - self.inflow - self.displaced_gas)
+            / self.initial_total)
+            .abs();
         if !(balance < BALANCE_LIMIT) {
             return Err(Error::Solver(format!(
                 "gas balance lost: |gas now − gas at start − gas in through open faces and perfusion| is {balance:.3e} of the start; the run is not trustworthy"
@@ -701,10 +737,7 @@ impl<'a> Simulation<'a> {
     /// sphere ρ ([`Self::deposit`] never overdraws a cell). Returns what was moved per gas.
     fn take_from_grid(&mut self, i: usize, dn: &[f64]) -> [f64; Gas::ALL.len()] {
         let mut out = [0.0; Gas::ALL.len()];
-        let (pos, a) = (
-            self.bubbles[i].position,
-            self.kernel_radius(self.bubbles[i].radius),
-        );
+        let (pos, a) = (self.bubbles[i].position, self.kernel_radius(i));
         let mut kernel = std::mem::take(&mut self.kernel);
         self.grid.kernel(pos, a, &mut kernel);
         let mut wide = Vec::new();
@@ -717,7 +750,7 @@ impl<'a> Simulation<'a> {
                 // the kernel ran dry: the rest comes from the shell out to the coupling
                 // sphere ρ, the gel next to the bubble
                 if wide.is_empty() {
-                    let rho = self.coupling_radius(self.bubbles[i].radius);
+                    let rho = self.coupling_radius(i);
                     self.grid.kernel(pos, rho, &mut wide);
                 }
                 taken += self.deposit(g, &wide, want - taken);
@@ -808,6 +841,123 @@ impl<'a> Simulation<'a> {
             self.update_radii(p1)?;
         }
         Ok(worst)
+    }
+
+    /// Phase 7b: bubbles displace the gel ([`displacement`], issue 8 item 5). A bubble of
+    /// radius R ≥ `displace_min_cells`·h holds the cells inside R out of the gel; whenever its
+    /// radius has moved by `displace_step_cells`·h since the last displacement, the gel around
+    /// it is moved radially as an incompressible medium ([`displacement::remap`], out to
+    /// `displace_reach`·R + 2h), the cells it has grown over leave the gel (their gel has been
+    /// carried outward by the remap) and the cells it has shrunk off come back with the gel
+    /// that flowed in. A dissolved or merged bubble gives its cells back at the mean of their
+    /// neighbours; a merged bubble re-takes its cells about its new centre. Every change of the
+    /// grid's gas here is added to `displaced_gas`, which the gas balance carries.
+    fn displace(&mut self) {
+        let num = self.params.numerics;
+        if !num.displace_gel {
+            return;
+        }
+        let h = self.grid.h;
+        let h3 = self.grid.cell_volume();
+        self.displaced
+            .resize(self.bubbles.len(), Displaced::default());
+        for i in 0..self.bubbles.len() {
+            let b = &self.bubbles[i];
+            let st = &mut self.displaced[i];
+            let (r_last, t_last) = st.last;
+            st.wall_speed = if self.time > t_last && b.active() && r_last > 0.0 {
+                (b.radius - r_last) / (self.time - t_last)
+            } else {
+                0.0
+            };
+            st.last = (if b.active() { b.radius } else { 0.0 }, self.time);
+            let st = &self.displaced[i];
+            let (r_new, centre) = if b.active() && b.radius >= num.displace_min_cells * h {
+                (b.radius, b.position)
+            } else {
+                (0.0, b.position)
+            };
+            let moved_centre = st.centre != centre && !st.cells.is_empty();
+            if !moved_centre && (r_new - st.radius).abs() < num.displace_step_cells * h {
+                continue;
+            }
+            if r_new == 0.0 && st.cells.is_empty() {
+                self.displaced[i].radius = 0.0;
+                continue;
+            }
+            // the gel's move (only about a fixed centre: a merge moves the centre, and its
+            // rearrangement of the gel is not modelled)
+            let remapped = if moved_centre || !b.active() {
+                Vec::new()
+            } else {
+                let reach = num.displace_reach * r_new.max(st.radius) + 2.0 * h;
+                displacement::remap(&self.grid, &self.fields, centre, st.radius, r_new, reach)
+            };
+            let new_cells = if r_new > 0.0 {
+                displacement::covered_cells(&self.grid, centre, r_new)
+            } else {
+                Vec::new()
+            };
+            let old_cells = std::mem::take(&mut self.displaced[i].cells);
+            let mut take: Vec<usize> = Vec::new();
+            let mut keep: Vec<usize> = Vec::new();
+            for &idx in &new_cells {
+                if old_cells.binary_search(&idx).is_ok() {
+                    keep.push(idx);
+                } else if !self.grid.is_excluded(idx) {
+                    take.push(idx);
+                }
+            }
+            let give: Vec<usize> = old_cells
+                .iter()
+                .copied()
+                .filter(|idx| new_cells.binary_search(idx).is_err())
+                .collect();
+            // cells grown over leave the gel with their gas
+            for &idx in &take {
+                for f in self.fields.iter_mut() {
+                    self.displaced_gas -= f[idx] * h3;
+                    f[idx] = 0.0;
+                }
+            }
+            self.grid.set_excluded(&take, true);
+            self.grid.set_excluded(&give, false);
+            for (idx, values) in &remapped {
+                if !self.grid.inside(*idx) {
+                    continue;
+                }
+                for (f, v) in self.fields.iter_mut().zip(values) {
+                    self.displaced_gas += (v - f[*idx]) * h3;
+                    f[*idx] = *v;
+                }
+            }
+            if remapped.is_empty() && !give.is_empty() {
+                // no remap: the cells given back take the gel next to them, outer cells first
+                let mut order = give.clone();
+                let dist = |idx: usize| {
+                    let [nx, ny, _] = self.grid.n;
+                    let p = [idx % nx, (idx / nx) % ny, idx / (nx * ny)];
+                    (0..3)
+                        .map(|a| ((p[a] as f64 + 0.5) * h - centre[a]).powi(2))
+                        .sum::<f64>()
+                };
+                order.sort_by(|a, b| dist(*b).total_cmp(&dist(*a)));
+                for idx in order {
+                    for f in self.fields.iter_mut() {
+                        let v = displacement::neighbour_mean(&self.grid, f, idx, 0.0);
+                        self.displaced_gas += (v - f[idx]) * h3;
+                        f[idx] = v;
+                    }
+                }
+            }
+            let mut cells = keep;
+            cells.extend(take);
+            cells.sort_unstable();
+            let st = &mut self.displaced[i];
+            st.cells = cells;
+            st.radius = r_new;
+            st.centre = centre;
+        }
     }
 
     /// Take `dn` mol of gas `g` from the grid through the kernel (give it back when negative) and
@@ -1155,7 +1305,9 @@ impl<'a> Simulation<'a> {
                 .filter(|b| b.active())
                 .map(|b| b.total_moles())
                 .sum::<f64>();
-        let balance = ((total - self.initial_total - self.inflow) / self.initial_total).abs();
+        let balance = ((total - self.initial_total - self.inflow - self.displaced_gas)
+            / self.initial_total)
+            .abs();
         if !(balance < BALANCE_LIMIT) {
             return Err(Error::Solver(format!(
                 "gas balance lost at t = {:.3} s: |gas now − gas at start − gas in through open faces and perfusion| is {balance:.3e} of the start; the run is not trustworthy",
