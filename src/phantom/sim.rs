@@ -349,7 +349,7 @@ impl<'a> Simulation<'a> {
         };
         // bubbles placed large enough take their cells out of the gel before the balance
         // reference is taken (the gel was never there)
-        sim.displace();
+        sim.displace(p0);
         sim.rebase_balance();
         Ok(sim)
     }
@@ -474,7 +474,8 @@ impl<'a> Simulation<'a> {
         if r <= self.params.min_radius {
             return tension;
         }
-        // the gel moves with the wall only where the bubble displaces it
+        // the gel in the shell moves with the wall where the bubble displaces it (around a
+        // sub-grid bubble the grid's gel does not move, and neither does the shell's)
         let wall_speed = match self.displaced.get(i) {
             Some(d) if !d.cells.is_empty() => d.wall_speed,
             _ => 0.0,
@@ -561,7 +562,7 @@ impl<'a> Simulation<'a> {
                 f64::INFINITY
             };
             self.coalesce(t1, p1, &mut log.events)?;
-            self.displace();
+            self.displace(p1);
             self.check_health()?;
             self.observe(profile, p1, &tensions, observer, &mut log, false)?;
             if log.ending != Ending::Completed || self.time >= end - 1e-9 {
@@ -852,7 +853,7 @@ impl<'a> Simulation<'a> {
     /// that flowed in. A dissolved or merged bubble gives its cells back at the mean of their
     /// neighbours; a merged bubble re-takes its cells about its new centre. Every change of the
     /// grid's gas here is added to `displaced_gas`, which the gas balance carries.
-    fn displace(&mut self) {
+    fn displace(&mut self, ambient: f64) {
         let num = self.params.numerics;
         if !num.displace_gel {
             return;
@@ -891,7 +892,21 @@ impl<'a> Simulation<'a> {
                 Vec::new()
             } else {
                 let reach = num.displace_reach * r_new.max(st.radius) + 2.0 * h;
-                displacement::remap(&self.grid, &self.fields, centre, st.radius, r_new, reach)
+                // Henry's law at the wall: the gel next to the bubble
+                let ps = self.balance_for(b, ambient).simulated_pressure(b.radius);
+                let n = b.total_moles();
+                let wall: Vec<f64> = (0..self.gases.len())
+                    .map(|g| self.ostwald[g] * (b.moles[g] / n) * ps / self.rt)
+                    .collect();
+                displacement::remap(
+                    &self.grid,
+                    &self.fields,
+                    &wall,
+                    centre,
+                    st.radius,
+                    r_new,
+                    reach,
+                )
             };
             let new_cells = if r_new > 0.0 {
                 displacement::covered_cells(&self.grid, centre, r_new)

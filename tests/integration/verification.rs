@@ -419,7 +419,8 @@ fn dive_profile() -> PressureHistory {
     .unwrap()
 }
 
-/// Item 4: sealed phantom, total gas (grid + bubbles) constant to 1e-9 relative over the dive;
+/// Item 4: sealed phantom, total gas (grid + bubbles, and the gas the bubbles' displacement
+/// carried out of the modelled gel) constant to 1e-9 relative over the dive;
 /// with open faces the balance error (which counts the gas that came in through the faces) is
 /// below 1e-9 too.
 #[test]
@@ -467,10 +468,14 @@ fn total_gas_is_conserved_over_a_dive() {
             s.gas_balance_error
         );
         if sealed {
+            // what the bubbles' displacement carried out of the modelled gel is counted apart
+            // (src/phantom/displacement.rs); everything else is conserved to round-off
+            let displaced = sim.displaced_gas();
             assert!(
-                (total1 / total0 - 1.0).abs() < 1e-9,
-                "sealed phantom: total gas drifted by {:e}",
-                total1 / total0 - 1.0
+                ((total1 - displaced) / total0 - 1.0).abs() < 1e-9,
+                "sealed phantom: total gas drifted by {:e} (displaced {:e})",
+                total1 / total0 - 1.0,
+                displaced / total0
             );
         }
     }
