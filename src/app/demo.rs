@@ -176,6 +176,8 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         "time (s)",
         "radius (µm)",
     );
+    // four of the five laws give nearly the same curve: dashes and markers tell them apart
+    overlay.distinct = true;
     for (name, run) in names.iter().zip(&runs) {
         let b0: Vec<(f64, f64)> = run
             .frames
@@ -200,7 +202,7 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
                 Cell::fixed(max, 2),
                 Cell::fixed(last_cycle, 2),
                 Cell::fixed(fin, 2),
-                Cell::sci(run.summary.gas_balance_error, 2),
+                Cell::sig(run.summary.gas_balance_error, 2),
             ])
             .map_err(Error::Solver)?;
         overlay = overlay.with(Series::new(*name, b0));
@@ -234,15 +236,17 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
     set.add("elasticity-fig2a.csv", super::elasticity::to_csv(&rows));
     let mut fig2a = LinePlot::new(
         "Final radius without mass transfer, 1e6 → 1e4 Pa (Fig. 2a)",
-        "log10 of the initial radius R0 in µm",
+        "initial radius R0 (µm)",
         "final radius (µm)",
     );
+    fig2a.log_x = true;
     fig2a.log_y = true;
+    fig2a.distinct = true;
     for name in &names {
         let pts = rows
             .iter()
             .filter(|r| r.1 == *name)
-            .filter_map(|r| r.2.map(|rf| (r.0.log10() + 6.0, rf * 1e6)))
+            .filter_map(|r| r.2.map(|rf| (r.0 * 1e6, rf * 1e6)))
             .collect();
         fig2a = fig2a.with(Series::new(*name, pts));
     }

@@ -27,6 +27,7 @@ use crate::gas::GasMix;
 use crate::phantom::config::parse_phantom;
 use crate::phantom::elasticity::{law_names, AllLawParams, ElasticityLaw};
 use crate::phantom::params::PhantomParams;
+use crate::phantom::sim::Frame;
 use crate::profile::PressureHistory;
 use crate::report::html::Page;
 use crate::report::output::OutputSet;
@@ -742,9 +743,9 @@ pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
                 Cell::text(r.law),
                 Cell::text(&s.label),
                 Cell::text(s.unit),
-                Cell::sci(s.value, 4),
-                Cell::sci(s.limit, 4),
-                Cell::sci(s.margin, 4),
+                Cell::sig(s.value, 4),
+                Cell::sig(s.limit, 4),
+                Cell::sig(s.margin, 4),
                 Cell::fixed(s.ratio(), 3),
                 Cell::text(if s.pass { "pass" } else { "FAIL" }),
             ])
@@ -864,11 +865,35 @@ fn runs_table(ev: &Evaluation) -> Result<Table, Error> {
             Cell::text(ending_text(&s.ending)),
             Cell::fixed(s.end_time / 60.0, 1),
             Cell::text(format!("{} + {}", s.steps.0, s.steps.1)),
-            Cell::sci(s.gas_balance_error, 2),
+            Cell::sig(s.gas_balance_error, 2),
         ])
         .map_err(Error::Solver)?;
     }
     Ok(t)
+}
+
+/// What the `peak-area-growth-rate` criterion with `window = "after-surfacing"` takes the
+/// peak of: from `surfaced_s` on, at the midpoint of each pair of recorded frames, the largest
+/// dA/dt of a single bubble, (time s, m²/s).
+pub fn area_rate_after_surfacing(frames: &[Frame], surfaced_s: f64) -> Vec<(f64, f64)> {
+    let data = RunData {
+        frames,
+        surfaced_s: Some(surfaced_s),
+    };
+    let mut all: Vec<(f64, f64)> =
+        series::per_bubble(data.window(crate::risk::Window::AfterSurfacing), |b| b.area)
+            .values()
+            .flat_map(|pts| series::rate(pts))
+            .collect();
+    all.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    for (t, r) in all {
+        match out.last_mut() {
+            Some(last) if last.0 == t => last.1 = last.1.max(r),
+            _ => out.push((t, r)),
+        }
+    }
+    out
 }
 
 fn minutes(points: Vec<(f64, f64)>, scale: f64) -> Vec<(f64, f64)> {
@@ -961,6 +986,7 @@ pub fn add_report(
         "time (min)",
         "depth (m)",
     );
+    prof.y_down = true;
     let mut press = LinePlot::new(
         "Ambient pressure at the gel",
         "time (min)",
@@ -1065,14 +1091,14 @@ pub fn add_report(
         "total surface area (mm²)",
     );
     let mut rate = LinePlot::new(
-        format!("Growth rate of the total surface area ({primary})"),
-        "time (min)",
-        "dA/dt (µm²/s)",
+        format!("Fastest single-bubble dA/dt after surfacing ({primary})"),
+        "time after surfacing (min)",
+        "largest dA/dt of one bubble (µm²/s)",
     );
     let mut ss = LinePlot::new(
-        format!("Gel supersaturation at the bubbles ({primary})"),
+        format!("Gel supersaturation, largest over all gel cells ({primary})"),
         "time (min)",
-        "max over bubbles of gel tension − ambient (kPa)",
+        "Σ tension + p_fixed − ambient (kPa)",
     );
     for (c, cand) in ev.candidates.iter().enumerate() {
         let Some(r) = ev.run(c, primary) else {
@@ -1083,18 +1109,23 @@ pub fn add_report(
             &cand.label,
             minutes(series::total_volume(f), 1e9),
         ));
-        let a = series::total_area(f);
+        let surfaced = cand.history.final_arrival_s();
         rate = rate.with(Series::new(
             &cand.label,
-            series::rate(&a)
+            area_rate_after_surfacing(f, surfaced)
                 .into_iter()
-                .map(|(t, v)| (t / 60.0, v * 1e12))
+                .map(|(t, v)| ((t - surfaced) / 60.0, v * 1e12))
                 .collect(),
         ));
-        area = area.with(Series::new(&cand.label, minutes(a, 1e6)));
+        area = area.with(Series::new(
+            &cand.label,
+            minutes(series::total_area(f), 1e6),
+        ));
         ss = ss.with(Series::new(
             &cand.label,
-            minutes(series::supersaturation_at_bubbles(f), 1e-3),
+            f.iter()
+                .map(|fr| (fr.time / 60.0, fr.max_supersaturation * 1e-3))
+                .collect(),
         ));
     }
     add_svg(
@@ -1136,14 +1167,14 @@ pub fn add_report(
         set,
         "area-rate.svg",
         rate.to_svg().map_err(plot_err)?,
-        "Growth rate of the total surface area between recorded frames (the peak-area-growth-rate criterion takes it per bubble).",
+        "From the moment each schedule surfaces (time 0 here): at each interval between recorded frames, the largest surface-area growth rate dA/dt of a single bubble. The `peak-area-growth-rate` criterion with `window = \"after-surfacing\"` scores the peak of this curve; the Boyle expansion of the ascent, before surfacing, is left out as it is by the criterion.",
     )?;
     add_svg(
         page,
         set,
         "supersaturation.svg",
         ss.to_svg().map_err(plot_err)?,
-        "Dissolved-gas tension of the gel around the bubbles minus ambient pressure: positive drives growth.",
+        "The largest supersaturation of any gel cell at each recorded frame: dissolved inert-gas tension plus the bubbles' fixed gases (water vapour, CO2, venous O2) minus ambient pressure. The `peak-supersaturation` criterion with `at = \"gel\"` (the default) scores the peak of this curve.",
     )?;
 
     if ev.laws.len() > 1 {
@@ -1155,6 +1186,8 @@ pub fn add_report(
                 "time (min)",
                 "total bubble volume (mm³)",
             );
+            // the laws' curves lie on top of each other: dashes and markers tell them apart
+            el.distinct = true;
             for law in &ev.laws {
                 if let Some(r) = ev.run(c, law) {
                     el = el.with(Series::new(
