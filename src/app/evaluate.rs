@@ -755,51 +755,134 @@ pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
     Ok(t)
 }
 
+/// Relative floor of the numerical uncertainty of a criterion's value, as a fraction of the
+/// larger of the largest |value| and the limit: the round-off and solver-tolerance noise of
+/// runs that should give the same number (nuclei that never grow give dA/dt of 10⁻¹⁰ µm²/s
+/// and volume·time of 10⁻¹² mm³·min, zero up to that noise). The discretisation error (grid
+/// step; the step tolerance, ≈ 0.3 % on a radius at the default `bubble_tolerance`) is not in
+/// it: it shifts the values of every schedule run on the same grid alike.
+pub const TIE_RELATIVE_UNCERTAINTY: f64 = 1e-6;
+
+/// The numerical uncertainty of one criterion across runs with `values` and `limit`
+/// ([`TIE_RELATIVE_UNCERTAINTY`]).
+pub fn criterion_uncertainty(values: &[f64], limit: f64) -> f64 {
+    let big = values.iter().fold(limit.abs(), |m, v| m.max(v.abs()));
+    TIE_RELATIVE_UNCERTAINTY * big
+}
+
+/// A criterion on which every schedule under one law scores the same within the numerical
+/// uncertainty: it does not rank them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tie {
+    /// Elasticity law.
+    pub law: &'static str,
+    /// Index of the criterion (criteria-file order).
+    pub criterion: usize,
+    /// Largest minus smallest value over the schedules, in the criterion's unit.
+    pub spread: f64,
+    /// The numerical uncertainty ([`criterion_uncertainty`]), in the criterion's unit.
+    pub uncertainty: f64,
+}
+
+/// The criteria on which the schedules are tied, per law (only with two or more schedules).
+pub fn ties(ev: &Evaluation) -> Vec<Tie> {
+    let mut out = Vec::new();
+    for law in &ev.laws {
+        let runs: Vec<&RunOutcome> = ev.runs.iter().filter(|r| r.law == *law).collect();
+        if runs.len() < 2 {
+            continue;
+        }
+        for (k, c) in ev.criteria.criteria.iter().enumerate() {
+            let v: Vec<f64> = runs.iter().map(|r| r.scores[k].value).collect();
+            let (lo, hi) = v
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                    (a.min(*x), b.max(*x))
+                });
+            let u = criterion_uncertainty(&v, c.limit);
+            if hi - lo <= u {
+                out.push(Tie {
+                    law,
+                    criterion: k,
+                    spread: hi - lo,
+                    uncertainty: u,
+                });
+            }
+        }
+    }
+    out
+}
+
 /// One ranked run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Ranked {
     /// Elasticity law.
     pub law: &'static str,
-    /// 1-based rank within the law.
+    /// 1-based rank within the law; tied schedules share a rank (1, 1, 3).
     pub rank: usize,
+    /// True when another schedule shares this rank.
+    pub tied: bool,
     /// Candidate index.
     pub candidate: usize,
     /// Failed criteria.
     pub failures: usize,
-    /// Largest value/limit and its criterion label.
+    /// Largest value/limit and its criterion label, over the criteria that separate the
+    /// schedules (all criteria when none does).
     pub worst: (f64, String),
-    /// Mean value/limit.
+    /// Mean value/limit over the same criteria.
     pub mean_ratio: f64,
 }
 
 /// Rank the schedules under each law: fewest failed criteria first, then the smallest
-/// worst value/limit, then the smallest mean value/limit.
+/// worst value/limit, then the smallest mean value/limit, both over the criteria that
+/// separate the schedules ([`ties`] leaves out the others). Two schedules share a rank when
+/// they fail as many criteria and their worst and mean value/limit differ by no more than the
+/// numerical uncertainty ([`criterion_uncertainty`] over the limit).
 pub fn ranking(ev: &Evaluation) -> Vec<Ranked> {
+    let ties = ties(ev);
     let mut out = Vec::new();
     for law in &ev.laws {
-        let mut rows: Vec<Ranked> = ev
-            .runs
+        let runs: Vec<&RunOutcome> = ev.runs.iter().filter(|r| r.law == *law).collect();
+        let nk = ev.criteria.criteria.len();
+        let mut used: Vec<usize> = (0..nk)
+            .filter(|k| !ties.iter().any(|t| t.law == *law && t.criterion == *k))
+            .collect();
+        if used.is_empty() {
+            used = (0..nk).collect();
+        }
+        // uncertainty of each used criterion's value/limit
+        let u_ratio: Vec<f64> = used
             .iter()
-            .filter(|r| r.law == *law)
+            .map(|&k| {
+                let v: Vec<f64> = runs.iter().map(|r| r.scores[k].value).collect();
+                let limit = ev.criteria.criteria[k].limit;
+                criterion_uncertainty(&v, limit) / limit
+            })
+            .collect();
+        let u_worst = u_ratio.iter().copied().fold(0.0, f64::max);
+        let u_mean = u_ratio.iter().sum::<f64>() / u_ratio.len().max(1) as f64;
+        let mut rows: Vec<Ranked> = runs
+            .iter()
             .map(|r| {
-                let worst = r.scores.iter().map(|s| (s.ratio(), s.label.clone())).fold(
-                    (f64::NEG_INFINITY, String::new()),
-                    |a, b| {
+                let worst = used
+                    .iter()
+                    .map(|&k| (r.scores[k].ratio(), r.scores[k].label.clone()))
+                    .fold((f64::NEG_INFINITY, String::new()), |a, b| {
                         if b.0 > a.0 {
                             b
                         } else {
                             a
                         }
-                    },
-                );
-                let n = r.scores.len().max(1) as f64;
+                    });
+                let n = used.len().max(1) as f64;
                 Ranked {
                     law,
                     rank: 0,
+                    tied: false,
                     candidate: r.candidate,
                     failures: r.scores.iter().filter(|s| !s.pass).count(),
                     worst,
-                    mean_ratio: r.scores.iter().map(|s| s.ratio()).sum::<f64>() / n,
+                    mean_ratio: used.iter().map(|&k| r.scores[k].ratio()).sum::<f64>() / n,
                 }
             })
             .collect();
@@ -809,8 +892,20 @@ pub fn ranking(ev: &Evaluation) -> Vec<Ranked> {
                 .then(a.worst.0.total_cmp(&b.worst.0))
                 .then(a.mean_ratio.total_cmp(&b.mean_ratio))
         });
-        for (i, r) in rows.iter_mut().enumerate() {
-            r.rank = i + 1;
+        for i in 0..rows.len() {
+            let same = i > 0 && {
+                let (p, q) = (&rows[i - 1], &rows[i]);
+                p.failures == q.failures
+                    && (p.worst.0 - q.worst.0).abs() <= u_worst
+                    && (p.mean_ratio - q.mean_ratio).abs() <= u_mean
+            };
+            if same {
+                rows[i].rank = rows[i - 1].rank;
+                rows[i].tied = true;
+                rows[i - 1].tied = true;
+            } else {
+                rows[i].rank = i + 1;
+            }
         }
         out.extend(rows);
     }
@@ -819,7 +914,7 @@ pub fn ranking(ev: &Evaluation) -> Vec<Ranked> {
 
 fn ranking_table(ev: &Evaluation) -> Result<Table, Error> {
     let mut t = Table::new(
-        "Ranking (per elasticity law: fewest failures, then smallest worst value/limit, then smallest mean)",
+        "Ranking (per elasticity law: fewest failures, then smallest worst value/limit, then smallest mean, over the criteria that separate the schedules; equal ranks are ties)",
         vec![
             Column::plain("elasticity"),
             Column::plain("rank"),
@@ -833,7 +928,11 @@ fn ranking_table(ev: &Evaluation) -> Result<Table, Error> {
     for r in ranking(ev) {
         t.push(vec![
             Cell::text(r.law),
-            Cell::text(r.rank.to_string()),
+            Cell::text(if r.tied {
+                format!("{} (tied)", r.rank)
+            } else {
+                r.rank.to_string()
+            }),
             Cell::text(&ev.candidates[r.candidate].label),
             Cell::text(r.failures.to_string()),
             Cell::text(&r.worst.1),
@@ -843,6 +942,65 @@ fn ranking_table(ev: &Evaluation) -> Result<Table, Error> {
         .map_err(Error::Solver)?;
     }
     Ok(t)
+}
+
+/// The ties ([`ties`]) as a table, or `None` without any.
+fn ties_table(ev: &Evaluation) -> Result<Option<Table>, Error> {
+    let ties = ties(ev);
+    if ties.is_empty() {
+        return Ok(None);
+    }
+    let mut t = Table::new(
+        "Ties: criteria on which the schedules score the same within the numerical uncertainty",
+        vec![
+            Column::plain("elasticity"),
+            Column::plain("criterion"),
+            Column::plain("unit"),
+            Column::plain("spread between schedules"),
+            Column::plain("numerical uncertainty"),
+        ],
+    );
+    for tie in &ties {
+        let s = &ev.runs.iter().find(|r| r.law == tie.law).map(|r| &r.scores[tie.criterion]);
+        let Some(s) = s else { continue };
+        t.push(vec![
+            Cell::text(tie.law),
+            Cell::text(&s.label),
+            Cell::text(s.unit),
+            Cell::sig(tie.spread, 2),
+            Cell::sig(tie.uncertainty, 2),
+        ])
+        .map_err(Error::Solver)?;
+    }
+    Ok(Some(t))
+}
+
+/// One sentence per law with ties: which criteria tie and that they are left out of the
+/// ranking; empty without ties.
+pub fn ties_text(ev: &Evaluation) -> String {
+    let ties = ties(ev);
+    let mut s = String::new();
+    for law in &ev.laws {
+        let names: Vec<String> = ties
+            .iter()
+            .filter(|t| t.law == *law)
+            .map(|t| ev.criteria.criteria[t.criterion].label.clone())
+            .collect();
+        if names.is_empty() {
+            continue;
+        }
+        let all = names.len() == ev.criteria.criteria.len();
+        s.push_str(&format!(
+            "Under {law} the schedules are tied on {}: their values differ by less than the numerical uncertainty, so {}.\n",
+            names.join(", "),
+            if all {
+                "no criterion ranks them and they share rank 1"
+            } else {
+                "these criteria do not rank them (left out of the worst and mean value/limit of the ranking)"
+            }
+        ));
+    }
+    s
 }
 
 fn runs_table(ev: &Evaluation) -> Result<Table, Error> {
@@ -1043,6 +1201,14 @@ pub fn add_report(
     }
     page.text(crit);
     page.table(&ranking_table(ev)?);
+    if let Some(t) = ties_table(ev)? {
+        page.text(format!(
+            "{}The numerical uncertainty of a criterion is {} × the larger of its largest |value| and its limit: the round-off and solver-tolerance noise of runs that should agree. The discretisation error (grid step; the step tolerance, about 0.3 % on a radius) is not in it, as it shifts every schedule on the same grid alike; differences between schedules smaller than that are nonetheless within the model's accuracy.",
+            ties_text(ev),
+            crate::report::table::sig_text(TIE_RELATIVE_UNCERTAINTY, 1, true)
+        ));
+        page.table(&t);
+    }
     page.table(&scores);
     // one group per schedule under the primary law (the phantom's own): a legend of every
     // schedule × law would bury the bars; the other laws are in the tables above
@@ -1252,10 +1418,17 @@ pub fn summary_text(ev: &Evaluation) -> String {
     }
     for r in ranking(ev) {
         s.push_str(&format!(
-            "{:<26} {:>2}. {:<28} failures {}  worst {} ({:.3} of limit)\n",
-            r.law, r.rank, ev.candidates[r.candidate].label, r.failures, r.worst.1, r.worst.0
+            "{:<26} {:>2}.{} {:<28} failures {}  worst {} ({:.3} of limit)\n",
+            r.law,
+            r.rank,
+            if r.tied { " (tied)" } else { "" },
+            ev.candidates[r.candidate].label,
+            r.failures,
+            r.worst.1,
+            r.worst.0
         ));
     }
+    s.push_str(&ties_text(ev));
     s
 }
 
