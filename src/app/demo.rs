@@ -60,16 +60,48 @@ fn plot_err(e: impl std::fmt::Display) -> Error {
     Error::Solver(format!("plot: {e}"))
 }
 
+/// The grids of the demo's two phantoms.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct DemoSize {
+    /// Grid step of the dive phantom, m (`None`: the file's, 125 µm).
+    pub dive_grid_step_m: Option<f64>,
+    /// Grid step of the oscillation phantom, m (`None`: the file's, 100 µm).
+    pub oscillation_grid_step_m: Option<f64>,
+}
+
+impl DemoSize {
+    /// The demo as `decophantom demo` runs it.
+    pub const FULL: DemoSize = DemoSize {
+        dive_grid_step_m: None,
+        oscillation_grid_step_m: None,
+    };
+    /// The same report on grids 2× coarser (8× fewer cells), for tests of the figures: the
+    /// numbers differ, every file and figure is there.
+    pub const REDUCED: DemoSize = DemoSize {
+        dive_grid_step_m: Some(250e-6),
+        oscillation_grid_step_m: Some(200e-6),
+    };
+}
+
 /// Run the demo and write `out`; returns a short text summary. `progress(done, total)` counts
 /// phantom runs (dive schedules × laws, then one oscillation run per law).
 pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<String, Error> {
+    run_sized(out, DemoSize::FULL, progress)
+}
+
+/// [`run`] on the grids of `size`.
+pub fn run_sized(
+    out: &Path,
+    size: DemoSize,
+    progress: &mut (dyn FnMut(f64, f64) + Send),
+) -> Result<String, Error> {
     // 1. the dive
     let criteria = parse_criteria(DEMO_CRITERIA, Path::new("algorithms/criteria/default.toml"))?;
     let spec = PhantomSpec::from_text(
         HYDROGEL_PHANTOM,
         Path::new(HYDROGEL_PHANTOM_PATH),
         HYDROGEL_PHANTOM_PATH,
-        None,
+        size.dive_grid_step_m,
     )?;
     let laws = spec.resolve_laws(&["all".to_string()])?;
     let algs = algorithms_from_text(&DEMO_ALGORITHMS)?;
@@ -118,7 +150,10 @@ pub fn run(out: &Path, progress: &mut (dyn FnMut(f64, f64) + Send)) -> Result<St
         OSCILLATION_PHANTOM,
         Path::new("profiles/phantoms/oscillation.toml"),
     )?;
-    let base = phantom.params.clone();
+    let mut base = phantom.params.clone();
+    if let Some(h) = size.oscillation_grid_step_m {
+        base.grid_step = h;
+    }
     let mu = 40.0;
     let laws = AllLawParams {
         shear_modulus: mu,

@@ -961,7 +961,11 @@ fn ties_table(ev: &Evaluation) -> Result<Option<Table>, Error> {
         ],
     );
     for tie in &ties {
-        let s = &ev.runs.iter().find(|r| r.law == tie.law).map(|r| &r.scores[tie.criterion]);
+        let s = &ev
+            .runs
+            .iter()
+            .find(|r| r.law == tie.law)
+            .map(|r| &r.scores[tie.criterion]);
         let Some(s) = s else { continue };
         t.push(vec![
             Cell::text(tie.law),
@@ -1098,7 +1102,7 @@ pub fn add_report(
         proto.venous_o2_pa
     );
     let mut inputs = format!(
-        "- Dive: **{}**{}\n- Phantom: **{}** from {} — grid step {:.1} µm, {} cells inside; {}\n- Criteria: `{}`{}\n- Linking: ambient pressure of the schedule at the gel; open faces in equilibrium with the inspired {} partial pressures, fraction × (ambient − water vapour), water vapour {}; saturated at the surface at t = 0; watched {} min at the surface on air after the schedule ends.\n- Elasticity laws: {} (μ = {} Pa; M = {:e} Pa/m³ and K = {:e} Pa where the phantom gives none: the paper's Fig. 2a values 5e-2 Pa/µm³ and 2.2 GPa).",
+        "- Dive: **{}**{}\n- Phantom: **{}** from {} — grid step {:.1} µm, {} cells inside; {}\n- Criteria: `{}`{}\n- Linking: ambient pressure of the schedule at the gel; open faces in equilibrium with the inspired {} partial pressures, fraction × (ambient − water vapour), water vapour {}; saturated at the surface at t = 0; watched {} min at the surface on air after the schedule ends.\n- Elasticity laws: {} (μ = {} Pa; M = {} Pa/µm³ and K = {} GPa where the phantom gives none: the paper's Fig. 2a values 5 × 10⁻² Pa/µm³ and 2.2 GPa).",
         ctx.dive,
         ctx.repeat_after_min
             .map(|s| format!(", repeated after a {s} min surface interval"))
@@ -1123,8 +1127,8 @@ pub fn add_report(
         fmt_min(proto.observe_after_surfacing_s / 60.0),
         ev.laws.join(", "),
         ph.laws.shear_modulus,
-        ph.laws.bulk_modulus_per_volume,
-        ph.laws.bulk_modulus,
+        crate::report::plot::fmt_tick(ph.laws.bulk_modulus_per_volume * 1e-18),
+        crate::report::plot::fmt_tick(ph.laws.bulk_modulus * 1e-9),
     );
     if let Some(cmd) = &ctx.command {
         inputs.push_str(&format!("\n- Produced by: `{cmd}`"));

@@ -384,10 +384,9 @@ pub fn describe_results(run: &SimRun) -> String {
         Some(_) => "no bubble grew above its starting radius R0".to_string(),
         None => "no bubbles".to_string(),
     };
-    let start = run
-        .frames
-        .first()
-        .map_or(f64::NAN, |f| f.bubbles.iter().map(|b| b.volume).sum::<f64>());
+    let start = run.frames.first().map_or(f64::NAN, |f| {
+        f.bubbles.iter().map(|b| b.volume).sum::<f64>()
+    });
     let volume = if s.peak_total_volume.0 > start * (1.0 + 1e-6) {
         format!(
             "peak total volume {} mm³ at t = {:.1} s (start {} mm³)",

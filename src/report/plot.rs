@@ -173,7 +173,13 @@ impl LinePlot {
             return Err(invalid("a downward y axis must be linear"));
         }
         // a downward axis is drawn as −y and labelled +y
-        let sign = |s: &Series| if self.y_down && !s.secondary { -1.0 } else { 1.0 };
+        let sign = |s: &Series| {
+            if self.y_down && !s.secondary {
+                -1.0
+            } else {
+                1.0
+            }
+        };
         let runs: Vec<Vec<Vec<(f64, f64)>>> = self
             .series
             .iter()
@@ -211,9 +217,7 @@ impl LinePlot {
             root.fill(&WHITE).map_err(|e| draw_err(e.to_string()))?;
             let (below, title_h) =
                 title_area(&root, &self.title).map_err(|e| draw_err(e.to_string()))?;
-            let styles: Vec<LineLook> = (0..n)
-                .map(|i| LineLook::of(i, n, self.distinct))
-                .collect();
+            let styles: Vec<LineLook> = (0..n).map(|i| LineLook::of(i, n, self.distinct)).collect();
             let y2r = has_secondary.then(|| pad_linear(y2.unwrap_or((0.0, 1.0)), true));
             let (lo, hi) = y.map(decades).unwrap_or((1.0, 10.0));
             let mut yr = pad_linear(y.unwrap_or((0.0, 1.0)), true);
@@ -338,8 +342,7 @@ fn text_px(chars: usize, size: f64) -> f64 {
 fn title_area<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
-) -> Result<(DrawingArea<DB, Shift>, u32), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>>
-{
+) -> Result<(DrawingArea<DB, Shift>, u32), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>> {
     let (w, _) = root.dim_in_pixel();
     let avail = w as f64 - 2.0 * 18.0;
     let chars = title.chars().count();
@@ -347,7 +350,10 @@ fn title_area<DB: DrawingBackend>(
     let (size, lines) = if chars as f64 <= fit {
         (TITLE_SIZE, vec![title.to_string()])
     } else if chars as f64 <= avail / text_px(1, 0.8 * TITLE_SIZE) {
-        ((avail / chars as f64 / text_px(1, 1.0)).floor(), vec![title.to_string()])
+        (
+            (avail / chars as f64 / text_px(1, 1.0)).floor(),
+            vec![title.to_string()],
+        )
     } else {
         let size = 0.8 * TITLE_SIZE;
         let per_line = (avail / text_px(1, size)).floor() as usize;
@@ -692,16 +698,11 @@ fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
 
 /// Split points into runs of drawable points (finite; y > 0 when `positive_y`, x > 0 when
 /// `positive_x`).
-fn finite_runs(
-    points: &[(f64, f64)],
-    positive_y: bool,
-    positive_x: bool,
-) -> Vec<Vec<(f64, f64)>> {
+fn finite_runs(points: &[(f64, f64)], positive_y: bool, positive_x: bool) -> Vec<Vec<(f64, f64)>> {
     let mut runs = Vec::new();
     let mut cur = Vec::new();
     for &(x, y) in points {
-        if x.is_finite() && y.is_finite() && (!positive_y || y > 0.0) && (!positive_x || x > 0.0)
-        {
+        if x.is_finite() && y.is_finite() && (!positive_y || y > 0.0) && (!positive_x || x > 0.0) {
             cur.push((x, y));
         } else if !cur.is_empty() {
             runs.push(std::mem::take(&mut cur));
@@ -738,7 +739,11 @@ fn pad_linear((lo, hi): (f64, f64), pad: bool) -> Range<f64> {
     } else {
         lo - p
     };
-    let u = if hi <= 0.0 && hi + p > 0.0 { 0.0 } else { hi + p };
+    let u = if hi <= 0.0 && hi + p > 0.0 {
+        0.0
+    } else {
+        hi + p
+    };
     l..u
 }
 
