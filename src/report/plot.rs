@@ -339,7 +339,7 @@ fn text_px(chars: usize, size: f64) -> f64 {
 /// Draw `title` centred at the top of `root`: at [`TITLE_SIZE`] if it fits the width, else
 /// smaller (down to 0.8 of it), else wrapped onto two lines (a third and more are cut with
 /// `…`). Returns the area below the title and the title's height in px.
-fn title_area<DB: DrawingBackend>(
+pub(crate) fn title_area<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
 ) -> Result<(DrawingArea<DB, Shift>, u32), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>> {
