@@ -1475,6 +1475,50 @@ mod tests {
     }
 
     #[test]
+    fn area_rate_plot_is_the_scored_window_per_bubble() {
+        use crate::risk::testing::{bubble, frame};
+        use std::f64::consts::PI;
+        // two bubbles, frames at 0, 10, 20, 30 s, surfacing at 10 s. Before it bubble 0 shrinks
+        // fast (the descent spike the plot must leave out); from it: b0 100 → 110 → 115 µm,
+        // b1 50 → 70 → 71 µm. Rates 4π(R₂² − R₁²)/Δt: at 15 s b0 4π·2100/10 = 2638.9, b1
+        // 4π·2400/10 = 3015.9 µm²/s (the larger); at 25 s b0 4π·1125/10 = 1413.7, b1
+        // 4π·141/10 = 177.2 µm²/s.
+        let f = vec![
+            frame(
+                0.0,
+                3e5,
+                0.0,
+                vec![bubble(0, 300e-6, 0.0), bubble(1, 50e-6, 0.0)],
+            ),
+            frame(
+                10.0,
+                1e5,
+                0.0,
+                vec![bubble(0, 100e-6, 0.0), bubble(1, 50e-6, 0.0)],
+            ),
+            frame(
+                20.0,
+                1e5,
+                0.0,
+                vec![bubble(0, 110e-6, 0.0), bubble(1, 70e-6, 0.0)],
+            ),
+            frame(
+                30.0,
+                1e5,
+                0.0,
+                vec![bubble(0, 115e-6, 0.0), bubble(1, 71e-6, 0.0)],
+            ),
+        ];
+        let got = area_rate_after_surfacing(&f, 10.0);
+        let want = [(15.0, 4.0 * PI * 240.0), (25.0, 4.0 * PI * 112.5)];
+        assert_eq!(got.len(), 2, "{got:?}");
+        for ((t, r), (wt, wr)) in got.iter().zip(want) {
+            assert_eq!(*t, wt);
+            assert!((r * 1e12 - wr).abs() < 1e-9 * wr, "{r} vs {wr}");
+        }
+    }
+
+    #[test]
     fn linking_subtracts_vapour_keeps_helium_and_drops_oxygen() {
         let p = Protocol {
             observe_after_surfacing_s: 600.0,
