@@ -329,6 +329,9 @@ enum LegendPlace {
     Right(i32),
 }
 
+/// A drawing error of backend `DB`.
+type AreaError<DB> = plotters::drawing::DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>;
+
 /// Width in px of `chars` characters of a sans-serif font drawn at plotters size `size`:
 /// 0.62 of the SVG font-size (`size / 1.24`) per character, a little wider than the average
 /// character of DejaVu Sans or Helvetica so that a title estimated to fit does fit.
@@ -342,7 +345,7 @@ fn text_px(chars: usize, size: f64) -> f64 {
 pub(crate) fn title_area<DB: DrawingBackend>(
     root: &DrawingArea<DB, Shift>,
     title: &str,
-) -> Result<(DrawingArea<DB, Shift>, u32), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>> {
+) -> Result<(DrawingArea<DB, Shift>, u32), AreaError<DB>> {
     let (w, _) = root.dim_in_pixel();
     let avail = w as f64 - 2.0 * 18.0;
     let chars = title.chars().count();
