@@ -98,6 +98,8 @@ fn every_svg_of_a_reduced_demo_renders_to_png() {
         inline, 18,
         "report.html inlines every figure but the oscillation volume"
     );
+    // numbers in HTML tables do not break across lines
+    assert!(html.contains("td.num{") && html.contains("white-space:nowrap"));
 
     // tables: numbers in their natural unit, no `9.038e1`-style exponents
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
