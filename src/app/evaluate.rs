@@ -1475,6 +1475,20 @@ mod tests {
     }
 
     #[test]
+    fn uncertainty_floor_ties_numerical_zeros_not_real_differences() {
+        // the demo under the Bulk-Modulus law: dA/dt of nuclei that never grow, 4.69e-10 and
+        // 8.88e-11 µm²/s against a limit of 80: u = 1e-6 · 80 = 8e-5 µm²/s ≫ the spread
+        let u = criterion_uncertainty(&[4.694e-10, 8.876e-11], 80.0);
+        assert!((u - 8e-5).abs() < 1e-18);
+        assert!(4.694e-10 - 8.876e-11 <= u);
+        // peak radii 107.8 and 102.9 µm (limit 118): u = 1e-6 · 118 µm, far below 4.9 µm
+        let u = criterion_uncertainty(&[107.8, 102.9], 118.0);
+        assert!((u - 1.18e-4).abs() < 1e-15 && 107.8 - 102.9 > u);
+        // a value above the limit sets the scale: 1e-6 · 131.6
+        assert!((criterion_uncertainty(&[131.6, 102.9], 118.0) - 1.316e-4).abs() < 1e-15);
+    }
+
+    #[test]
     fn area_rate_plot_is_the_scored_window_per_bubble() {
         use crate::risk::testing::{bubble, frame};
         use std::f64::consts::PI;
