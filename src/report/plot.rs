@@ -750,14 +750,16 @@ fn pad_linear((lo, hi): (f64, f64), pad: bool) -> Range<f64> {
     l..u
 }
 
-/// Whole decades enclosing positive (lo, hi).
+/// Whole decades enclosing positive (lo, hi), widened by 10⁻¹² so that plotters' log axis
+/// (which labels 10^ceil(log10(start)), and log10(0.1) = −0.99999999999999989) labels the
+/// first decade too.
 fn decades((lo, hi): (f64, f64)) -> (f64, f64) {
     let a = 10f64.powf(lo.log10().floor());
     let mut b = 10f64.powf(hi.log10().ceil());
     if b <= a {
         b = a * 10.0;
     }
-    (a, b)
+    (a * (1.0 - 1e-12), b * (1.0 + 1e-12))
 }
 
 /// A short tick label: up to four significant digits, exponent form outside 1e-3..1e5.

@@ -481,7 +481,7 @@ fn depth_axis_increases_downward_and_log_x_is_a_log_axis() {
     q.log_y = true;
     q = q.with(Series::new(
         "none",
-        (0..=30)
+        (-10..=30)
             .map(|i| {
                 let r = 10f64.powf(i as f64 / 10.0);
                 (r, 4.6 * r)
@@ -498,9 +498,18 @@ fn depth_axis_increases_downward_and_log_x_is_a_log_axis() {
             .next()
             .unwrap_or_else(|| panic!("no x tick {label}: {t:?}"))
     };
-    let (a, b, c, d) = (x_of("1"), x_of("10"), x_of("100"), x_of("1000"));
+    // the first decade (0.1, whose log10 is not exactly −1 in floating point) is labelled too
+    let (z, a, b, c, d) = (
+        x_of("0.1"),
+        x_of("1"),
+        x_of("10"),
+        x_of("100"),
+        x_of("1000"),
+    );
     assert!(b - a > 100.0, "{a} {b}");
-    assert!(((b - a) - (c - b)).abs() <= 2.0 && ((c - b) - (d - c)).abs() <= 2.0);
+    for (p, q, r) in [(z, a, b), (a, b, c), (b, c, d)] {
+        assert!(((q - p) - (r - q)).abs() <= 2.0, "{p} {q} {r}");
+    }
     // a log x axis with a secondary y axis is refused, not drawn wrong
     let mut r = q.clone();
     r.secondary_y_label = Some("ratio".into());
