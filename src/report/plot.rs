@@ -98,8 +98,9 @@ impl Series {
 /// secondary y axis.
 ///
 /// The legend goes in the corner of the plotting area that covers the fewest data points; if
-/// every corner covers some, a linear primary y axis is extended upward until the legend fits
-/// above the data, and otherwise the legend is drawn outside, right of the plot. A title too
+/// every corner covers some, a linear primary y axis is extended upward (downward on a depth
+/// axis) until the legend fits beside the data, and otherwise the legend is drawn outside,
+/// right of the plot. A title too
 /// long for the width is set smaller and, if need be, on two lines.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LinePlot {
@@ -264,9 +265,14 @@ impl LinePlot {
             let mut legend = LegendPlace::Inside(corner);
             if covered > 0 {
                 if !self.log_y && !has_secondary && fh < 0.45 {
-                    // room above the data: the data end at 1 − fh − 2 % of the height
+                    // room above the data (below it on a depth axis, not above the
+                    // surface): the data fill 1 − fh − 2 % of the height
                     let span = (yr.end - yr.start) / (1.0 - fh - 0.02);
-                    yr = yr.start..yr.start + span;
+                    yr = if self.y_down {
+                        yr.end - span..yr.end
+                    } else {
+                        yr.start..yr.start + span
+                    };
                     corner = Corner::emptiest(&fractions(&yr), fw, fh).0;
                     legend = LegendPlace::Inside(corner);
                 } else {

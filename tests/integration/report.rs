@@ -474,6 +474,20 @@ fn depth_axis_increases_downward_and_log_x_is_a_log_axis() {
         y_of("0")
     );
     assert!(!t.iter().any(|(s, _, _)| s.starts_with('-')), "{t:?}");
+    // yo-yo dives put data in every corner: the room for the legend is made below the deepest
+    // point, never above the surface (no negative depth on the axis)
+    let mut yo = LinePlot::new("Yo-yo", "time (min)", "depth (m)");
+    yo.y_down = true;
+    yo = yo.with(Series::new(
+        "yo-yo dives",
+        (0..=12)
+            .map(|i| (5.0 * i as f64, if i % 2 == 0 { 0.0 } else { 45.0 }))
+            .collect(),
+    ));
+    let svg = yo.to_svg().unwrap();
+    let t = placed_texts(&parse_xml(&svg));
+    assert!(!t.iter().any(|(s, _, _)| s.starts_with('-')), "{t:?}");
+    assert!(t.iter().any(|(s, x, _)| s == "50" && *x < 130.0), "{t:?}");
 
     // a log x axis: the decades 1, 10, 100, 1000 are equally spaced
     let mut q = LinePlot::new("Fig. 2a", "initial radius R0 (µm)", "final radius (µm)");
