@@ -21,6 +21,8 @@ mod displacement;
 mod evaluate;
 #[path = "integration/events.rs"]
 mod events;
+#[path = "integration/figures.rs"]
+mod figures;
 #[path = "integration/fixed_gases.rs"]
 mod fixed_gases;
 #[path = "integration/gas_convention.rs"]

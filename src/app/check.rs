@@ -16,6 +16,7 @@ use crate::error::Error;
 use crate::gas::GasMix;
 use crate::report::html::Page;
 use crate::report::output::OutputSet;
+use crate::report::table::sig_text;
 use crate::risk::load_criteria;
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -100,11 +101,11 @@ pub fn run(
     for s in &ev.runs[0].scores {
         let _ = writeln!(
             text,
-            "{:<32} {:>12.4e} {:>12.4e} {:>12.4e}  {:<10} {}",
+            "{:<32} {:>12} {:>12} {:>12}  {:<10} {}",
             s.label,
-            s.value,
-            s.limit,
-            s.margin,
+            sig_text(s.value, 4, true),
+            sig_text(s.limit, 4, true),
+            sig_text(s.margin, 4, true),
             s.unit,
             if s.pass { "pass" } else { "FAIL" }
         );

@@ -27,6 +27,7 @@ use crate::gas::GasMix;
 use crate::phantom::config::parse_phantom;
 use crate::phantom::elasticity::{law_names, AllLawParams, ElasticityLaw};
 use crate::phantom::params::PhantomParams;
+use crate::phantom::sim::Frame;
 use crate::profile::PressureHistory;
 use crate::report::html::Page;
 use crate::report::output::OutputSet;
@@ -742,9 +743,9 @@ pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
                 Cell::text(r.law),
                 Cell::text(&s.label),
                 Cell::text(s.unit),
-                Cell::sci(s.value, 4),
-                Cell::sci(s.limit, 4),
-                Cell::sci(s.margin, 4),
+                Cell::sig(s.value, 4),
+                Cell::sig(s.limit, 4),
+                Cell::sig(s.margin, 4),
                 Cell::fixed(s.ratio(), 3),
                 Cell::text(if s.pass { "pass" } else { "FAIL" }),
             ])
@@ -754,51 +755,134 @@ pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
     Ok(t)
 }
 
+/// Relative floor of the numerical uncertainty of a criterion's value, as a fraction of the
+/// larger of the largest |value| and the limit: the round-off and solver-tolerance noise of
+/// runs that should give the same number (nuclei that never grow give dA/dt of 10⁻¹⁰ µm²/s
+/// and volume·time of 10⁻¹² mm³·min, zero up to that noise). The discretisation error (grid
+/// step; the step tolerance, ≈ 0.3 % on a radius at the default `bubble_tolerance`) is not in
+/// it: it shifts the values of every schedule run on the same grid alike.
+pub const TIE_RELATIVE_UNCERTAINTY: f64 = 1e-6;
+
+/// The numerical uncertainty of one criterion across runs with `values` and `limit`
+/// ([`TIE_RELATIVE_UNCERTAINTY`]).
+pub fn criterion_uncertainty(values: &[f64], limit: f64) -> f64 {
+    let big = values.iter().fold(limit.abs(), |m, v| m.max(v.abs()));
+    TIE_RELATIVE_UNCERTAINTY * big
+}
+
+/// A criterion on which every schedule under one law scores the same within the numerical
+/// uncertainty: it does not rank them.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Tie {
+    /// Elasticity law.
+    pub law: &'static str,
+    /// Index of the criterion (criteria-file order).
+    pub criterion: usize,
+    /// Largest minus smallest value over the schedules, in the criterion's unit.
+    pub spread: f64,
+    /// The numerical uncertainty ([`criterion_uncertainty`]), in the criterion's unit.
+    pub uncertainty: f64,
+}
+
+/// The criteria on which the schedules are tied, per law (only with two or more schedules).
+pub fn ties(ev: &Evaluation) -> Vec<Tie> {
+    let mut out = Vec::new();
+    for law in &ev.laws {
+        let runs: Vec<&RunOutcome> = ev.runs.iter().filter(|r| r.law == *law).collect();
+        if runs.len() < 2 {
+            continue;
+        }
+        for (k, c) in ev.criteria.criteria.iter().enumerate() {
+            let v: Vec<f64> = runs.iter().map(|r| r.scores[k].value).collect();
+            let (lo, hi) = v
+                .iter()
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), x| {
+                    (a.min(*x), b.max(*x))
+                });
+            let u = criterion_uncertainty(&v, c.limit);
+            if hi - lo <= u {
+                out.push(Tie {
+                    law,
+                    criterion: k,
+                    spread: hi - lo,
+                    uncertainty: u,
+                });
+            }
+        }
+    }
+    out
+}
+
 /// One ranked run.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Ranked {
     /// Elasticity law.
     pub law: &'static str,
-    /// 1-based rank within the law.
+    /// 1-based rank within the law; tied schedules share a rank (1, 1, 3).
     pub rank: usize,
+    /// True when another schedule shares this rank.
+    pub tied: bool,
     /// Candidate index.
     pub candidate: usize,
     /// Failed criteria.
     pub failures: usize,
-    /// Largest value/limit and its criterion label.
+    /// Largest value/limit and its criterion label, over the criteria that separate the
+    /// schedules (all criteria when none does).
     pub worst: (f64, String),
-    /// Mean value/limit.
+    /// Mean value/limit over the same criteria.
     pub mean_ratio: f64,
 }
 
 /// Rank the schedules under each law: fewest failed criteria first, then the smallest
-/// worst value/limit, then the smallest mean value/limit.
+/// worst value/limit, then the smallest mean value/limit, both over the criteria that
+/// separate the schedules ([`ties`] leaves out the others). Two schedules share a rank when
+/// they fail as many criteria and their worst and mean value/limit differ by no more than the
+/// numerical uncertainty ([`criterion_uncertainty`] over the limit).
 pub fn ranking(ev: &Evaluation) -> Vec<Ranked> {
+    let ties = ties(ev);
     let mut out = Vec::new();
     for law in &ev.laws {
-        let mut rows: Vec<Ranked> = ev
-            .runs
+        let runs: Vec<&RunOutcome> = ev.runs.iter().filter(|r| r.law == *law).collect();
+        let nk = ev.criteria.criteria.len();
+        let mut used: Vec<usize> = (0..nk)
+            .filter(|k| !ties.iter().any(|t| t.law == *law && t.criterion == *k))
+            .collect();
+        if used.is_empty() {
+            used = (0..nk).collect();
+        }
+        // uncertainty of each used criterion's value/limit
+        let u_ratio: Vec<f64> = used
             .iter()
-            .filter(|r| r.law == *law)
+            .map(|&k| {
+                let v: Vec<f64> = runs.iter().map(|r| r.scores[k].value).collect();
+                let limit = ev.criteria.criteria[k].limit;
+                criterion_uncertainty(&v, limit) / limit
+            })
+            .collect();
+        let u_worst = u_ratio.iter().copied().fold(0.0, f64::max);
+        let u_mean = u_ratio.iter().sum::<f64>() / u_ratio.len().max(1) as f64;
+        let mut rows: Vec<Ranked> = runs
+            .iter()
             .map(|r| {
-                let worst = r.scores.iter().map(|s| (s.ratio(), s.label.clone())).fold(
-                    (f64::NEG_INFINITY, String::new()),
-                    |a, b| {
+                let worst = used
+                    .iter()
+                    .map(|&k| (r.scores[k].ratio(), r.scores[k].label.clone()))
+                    .fold((f64::NEG_INFINITY, String::new()), |a, b| {
                         if b.0 > a.0 {
                             b
                         } else {
                             a
                         }
-                    },
-                );
-                let n = r.scores.len().max(1) as f64;
+                    });
+                let n = used.len().max(1) as f64;
                 Ranked {
                     law,
                     rank: 0,
+                    tied: false,
                     candidate: r.candidate,
                     failures: r.scores.iter().filter(|s| !s.pass).count(),
                     worst,
-                    mean_ratio: r.scores.iter().map(|s| s.ratio()).sum::<f64>() / n,
+                    mean_ratio: used.iter().map(|&k| r.scores[k].ratio()).sum::<f64>() / n,
                 }
             })
             .collect();
@@ -808,8 +892,20 @@ pub fn ranking(ev: &Evaluation) -> Vec<Ranked> {
                 .then(a.worst.0.total_cmp(&b.worst.0))
                 .then(a.mean_ratio.total_cmp(&b.mean_ratio))
         });
-        for (i, r) in rows.iter_mut().enumerate() {
-            r.rank = i + 1;
+        for i in 0..rows.len() {
+            let same = i > 0 && {
+                let (p, q) = (&rows[i - 1], &rows[i]);
+                p.failures == q.failures
+                    && (p.worst.0 - q.worst.0).abs() <= u_worst
+                    && (p.mean_ratio - q.mean_ratio).abs() <= u_mean
+            };
+            if same {
+                rows[i].rank = rows[i - 1].rank;
+                rows[i].tied = true;
+                rows[i - 1].tied = true;
+            } else {
+                rows[i].rank = i + 1;
+            }
         }
         out.extend(rows);
     }
@@ -818,7 +914,7 @@ pub fn ranking(ev: &Evaluation) -> Vec<Ranked> {
 
 fn ranking_table(ev: &Evaluation) -> Result<Table, Error> {
     let mut t = Table::new(
-        "Ranking (per elasticity law: fewest failures, then smallest worst value/limit, then smallest mean)",
+        "Ranking (per elasticity law: fewest failures, then smallest worst value/limit, then smallest mean, over the criteria that separate the schedules; equal ranks are ties)",
         vec![
             Column::plain("elasticity"),
             Column::plain("rank"),
@@ -832,7 +928,11 @@ fn ranking_table(ev: &Evaluation) -> Result<Table, Error> {
     for r in ranking(ev) {
         t.push(vec![
             Cell::text(r.law),
-            Cell::text(r.rank.to_string()),
+            Cell::text(if r.tied {
+                format!("{} (tied)", r.rank)
+            } else {
+                r.rank.to_string()
+            }),
             Cell::text(&ev.candidates[r.candidate].label),
             Cell::text(r.failures.to_string()),
             Cell::text(&r.worst.1),
@@ -842,6 +942,69 @@ fn ranking_table(ev: &Evaluation) -> Result<Table, Error> {
         .map_err(Error::Solver)?;
     }
     Ok(t)
+}
+
+/// The ties ([`ties`]) as a table, or `None` without any.
+fn ties_table(ev: &Evaluation) -> Result<Option<Table>, Error> {
+    let ties = ties(ev);
+    if ties.is_empty() {
+        return Ok(None);
+    }
+    let mut t = Table::new(
+        "Ties: criteria on which the schedules score the same within the numerical uncertainty",
+        vec![
+            Column::plain("elasticity"),
+            Column::plain("criterion"),
+            Column::plain("unit"),
+            Column::plain("spread between schedules"),
+            Column::plain("numerical uncertainty"),
+        ],
+    );
+    for tie in &ties {
+        let s = &ev
+            .runs
+            .iter()
+            .find(|r| r.law == tie.law)
+            .map(|r| &r.scores[tie.criterion]);
+        let Some(s) = s else { continue };
+        t.push(vec![
+            Cell::text(tie.law),
+            Cell::text(&s.label),
+            Cell::text(s.unit),
+            Cell::sig(tie.spread, 2),
+            Cell::sig(tie.uncertainty, 2),
+        ])
+        .map_err(Error::Solver)?;
+    }
+    Ok(Some(t))
+}
+
+/// One sentence per law with ties: which criteria tie and that they are left out of the
+/// ranking; empty without ties.
+pub fn ties_text(ev: &Evaluation) -> String {
+    let ties = ties(ev);
+    let mut s = String::new();
+    for law in &ev.laws {
+        let names: Vec<String> = ties
+            .iter()
+            .filter(|t| t.law == *law)
+            .map(|t| ev.criteria.criteria[t.criterion].label.clone())
+            .collect();
+        if names.is_empty() {
+            continue;
+        }
+        let all = names.len() == ev.criteria.criteria.len();
+        s.push_str(&format!(
+            "Under {law} the schedules are tied on {}: their values differ by less than the numerical uncertainty, so {}.\n",
+            names.join(", "),
+            if all {
+                "no criterion ranks them and they share rank 1"
+            } else {
+                "these criteria do not rank them (left out of the worst and mean value/limit of the ranking)"
+            }
+        ));
+    }
+    s
 }
 
 fn runs_table(ev: &Evaluation) -> Result<Table, Error> {
@@ -864,11 +1027,35 @@ fn runs_table(ev: &Evaluation) -> Result<Table, Error> {
             Cell::text(ending_text(&s.ending)),
             Cell::fixed(s.end_time / 60.0, 1),
             Cell::text(format!("{} + {}", s.steps.0, s.steps.1)),
-            Cell::sci(s.gas_balance_error, 2),
+            Cell::sig(s.gas_balance_error, 2),
         ])
         .map_err(Error::Solver)?;
     }
     Ok(t)
+}
+
+/// What the `peak-area-growth-rate` criterion with `window = "after-surfacing"` takes the
+/// peak of: from `surfaced_s` on, at the midpoint of each pair of recorded frames, the largest
+/// dA/dt of a single bubble, (time s, m²/s).
+pub fn area_rate_after_surfacing(frames: &[Frame], surfaced_s: f64) -> Vec<(f64, f64)> {
+    let data = RunData {
+        frames,
+        surfaced_s: Some(surfaced_s),
+    };
+    let mut all: Vec<(f64, f64)> =
+        series::per_bubble(data.window(crate::risk::Window::AfterSurfacing), |b| b.area)
+            .values()
+            .flat_map(|pts| series::rate(pts))
+            .collect();
+    all.sort_by(|a, b| a.0.total_cmp(&b.0));
+    let mut out: Vec<(f64, f64)> = Vec::new();
+    for (t, r) in all {
+        match out.last_mut() {
+            Some(last) if last.0 == t => last.1 = last.1.max(r),
+            _ => out.push((t, r)),
+        }
+    }
+    out
 }
 
 fn minutes(points: Vec<(f64, f64)>, scale: f64) -> Vec<(f64, f64)> {
@@ -915,7 +1102,7 @@ pub fn add_report(
         proto.venous_o2_pa
     );
     let mut inputs = format!(
-        "- Dive: **{}**{}\n- Phantom: **{}** from {} — grid step {:.1} µm, {} cells inside; {}\n- Criteria: `{}`{}\n- Linking: ambient pressure of the schedule at the gel; open faces in equilibrium with the inspired {} partial pressures, fraction × (ambient − water vapour), water vapour {}; saturated at the surface at t = 0; watched {} min at the surface on air after the schedule ends.\n- Elasticity laws: {} (μ = {} Pa; M = {:e} Pa/m³ and K = {:e} Pa where the phantom gives none: the paper's Fig. 2a values 5e-2 Pa/µm³ and 2.2 GPa).",
+        "- Dive: **{}**{}\n- Phantom: **{}** from {} — grid step {:.1} µm, {} cells inside; {}\n- Criteria: `{}`{}\n- Linking: ambient pressure of the schedule at the gel; open faces in equilibrium with the inspired {} partial pressures, fraction × (ambient − water vapour), water vapour {}; saturated at the surface at t = 0; watched {} min at the surface on air after the schedule ends.\n- Elasticity laws: {} (μ = {} Pa; M = {} Pa/µm³ and K = {} GPa where the phantom gives none: the paper's Fig. 2a values 5 × 10⁻² Pa/µm³ and 2.2 GPa).",
         ctx.dive,
         ctx.repeat_after_min
             .map(|s| format!(", repeated after a {s} min surface interval"))
@@ -940,8 +1127,8 @@ pub fn add_report(
         fmt_min(proto.observe_after_surfacing_s / 60.0),
         ev.laws.join(", "),
         ph.laws.shear_modulus,
-        ph.laws.bulk_modulus_per_volume,
-        ph.laws.bulk_modulus,
+        crate::report::plot::fmt_tick(ph.laws.bulk_modulus_per_volume * 1e-18),
+        crate::report::plot::fmt_tick(ph.laws.bulk_modulus * 1e-9),
     );
     if let Some(cmd) = &ctx.command {
         inputs.push_str(&format!("\n- Produced by: `{cmd}`"));
@@ -961,6 +1148,7 @@ pub fn add_report(
         "time (min)",
         "depth (m)",
     );
+    prof.y_down = true;
     let mut press = LinePlot::new(
         "Ambient pressure at the gel",
         "time (min)",
@@ -1017,6 +1205,14 @@ pub fn add_report(
     }
     page.text(crit);
     page.table(&ranking_table(ev)?);
+    if let Some(t) = ties_table(ev)? {
+        page.text(format!(
+            "{}The numerical uncertainty of a criterion is {} × the larger of its largest |value| and its limit: the round-off and solver-tolerance noise of runs that should agree. The discretisation error (grid step; the step tolerance, about 0.3 % on a radius) is not in it, as it shifts every schedule on the same grid alike; differences between schedules smaller than that are nonetheless within the model's accuracy.",
+            ties_text(ev),
+            crate::report::table::sig_text(TIE_RELATIVE_UNCERTAINTY, 1, true)
+        ));
+        page.table(&t);
+    }
     page.table(&scores);
     // one group per schedule under the primary law (the phantom's own): a legend of every
     // schedule × law would bury the bars; the other laws are in the tables above
@@ -1065,14 +1261,14 @@ pub fn add_report(
         "total surface area (mm²)",
     );
     let mut rate = LinePlot::new(
-        format!("Growth rate of the total surface area ({primary})"),
-        "time (min)",
-        "dA/dt (µm²/s)",
+        format!("Fastest single-bubble dA/dt after surfacing ({primary})"),
+        "time after surfacing (min)",
+        "largest dA/dt of one bubble (µm²/s)",
     );
     let mut ss = LinePlot::new(
-        format!("Gel supersaturation at the bubbles ({primary})"),
+        format!("Gel supersaturation, largest over all gel cells ({primary})"),
         "time (min)",
-        "max over bubbles of gel tension − ambient (kPa)",
+        "Σ tension + p_fixed − ambient (kPa)",
     );
     for (c, cand) in ev.candidates.iter().enumerate() {
         let Some(r) = ev.run(c, primary) else {
@@ -1083,18 +1279,23 @@ pub fn add_report(
             &cand.label,
             minutes(series::total_volume(f), 1e9),
         ));
-        let a = series::total_area(f);
+        let surfaced = cand.history.final_arrival_s();
         rate = rate.with(Series::new(
             &cand.label,
-            series::rate(&a)
+            area_rate_after_surfacing(f, surfaced)
                 .into_iter()
-                .map(|(t, v)| (t / 60.0, v * 1e12))
+                .map(|(t, v)| ((t - surfaced) / 60.0, v * 1e12))
                 .collect(),
         ));
-        area = area.with(Series::new(&cand.label, minutes(a, 1e6)));
+        area = area.with(Series::new(
+            &cand.label,
+            minutes(series::total_area(f), 1e6),
+        ));
         ss = ss.with(Series::new(
             &cand.label,
-            minutes(series::supersaturation_at_bubbles(f), 1e-3),
+            f.iter()
+                .map(|fr| (fr.time / 60.0, fr.max_supersaturation * 1e-3))
+                .collect(),
         ));
     }
     add_svg(
@@ -1136,14 +1337,14 @@ pub fn add_report(
         set,
         "area-rate.svg",
         rate.to_svg().map_err(plot_err)?,
-        "Growth rate of the total surface area between recorded frames (the peak-area-growth-rate criterion takes it per bubble).",
+        "From the moment each schedule surfaces (time 0 here): at each interval between recorded frames, the largest surface-area growth rate dA/dt of a single bubble. The `peak-area-growth-rate` criterion with `window = \"after-surfacing\"` scores the peak of this curve; the Boyle expansion of the ascent, before surfacing, is left out as it is by the criterion.",
     )?;
     add_svg(
         page,
         set,
         "supersaturation.svg",
         ss.to_svg().map_err(plot_err)?,
-        "Dissolved-gas tension of the gel around the bubbles minus ambient pressure: positive drives growth.",
+        "The largest supersaturation of any gel cell at each recorded frame: dissolved inert-gas tension plus the bubbles' fixed gases (water vapour, CO2, venous O2) minus ambient pressure. The `peak-supersaturation` criterion with `at = \"gel\"` (the default) scores the peak of this curve.",
     )?;
 
     if ev.laws.len() > 1 {
@@ -1155,6 +1356,8 @@ pub fn add_report(
                 "time (min)",
                 "total bubble volume (mm³)",
             );
+            // the laws' curves lie on top of each other: dashes and markers tell them apart
+            el.distinct = true;
             for law in &ev.laws {
                 if let Some(r) = ev.run(c, law) {
                     el = el.with(Series::new(
@@ -1219,10 +1422,17 @@ pub fn summary_text(ev: &Evaluation) -> String {
     }
     for r in ranking(ev) {
         s.push_str(&format!(
-            "{:<26} {:>2}. {:<28} failures {}  worst {} ({:.3} of limit)\n",
-            r.law, r.rank, ev.candidates[r.candidate].label, r.failures, r.worst.1, r.worst.0
+            "{:<26} {:>2}.{} {:<28} failures {}  worst {} ({:.3} of limit)\n",
+            r.law,
+            r.rank,
+            if r.tied { " (tied)" } else { "" },
+            ev.candidates[r.candidate].label,
+            r.failures,
+            r.worst.1,
+            r.worst.0
         ));
     }
+    s.push_str(&ties_text(ev));
     s
 }
 
@@ -1261,6 +1471,64 @@ mod tests {
                 leg(LegKind::Ascent, 40.0, 0.0, 400.0, tx),
             ],
             stops: vec![],
+        }
+    }
+
+    #[test]
+    fn uncertainty_floor_ties_numerical_zeros_not_real_differences() {
+        // the demo under the Bulk-Modulus law: dA/dt of nuclei that never grow, 4.69e-10 and
+        // 8.88e-11 µm²/s against a limit of 80: u = 1e-6 · 80 = 8e-5 µm²/s ≫ the spread
+        let u = criterion_uncertainty(&[4.694e-10, 8.876e-11], 80.0);
+        assert!((u - 8e-5).abs() < 1e-18);
+        assert!(4.694e-10 - 8.876e-11 <= u);
+        // peak radii 107.8 and 102.9 µm (limit 118): u = 1e-6 · 118 µm, far below 4.9 µm
+        let u = criterion_uncertainty(&[107.8, 102.9], 118.0);
+        assert!((u - 1.18e-4).abs() < 1e-15 && 107.8 - 102.9 > u);
+        // a value above the limit sets the scale: 1e-6 · 131.6
+        assert!((criterion_uncertainty(&[131.6, 102.9], 118.0) - 1.316e-4).abs() < 1e-15);
+    }
+
+    #[test]
+    fn area_rate_plot_is_the_scored_window_per_bubble() {
+        use crate::risk::testing::{bubble, frame};
+        use std::f64::consts::PI;
+        // two bubbles, frames at 0, 10, 20, 30 s, surfacing at 10 s. Before it bubble 0 shrinks
+        // fast (the descent spike the plot must leave out); from it: b0 100 → 110 → 115 µm,
+        // b1 50 → 70 → 71 µm. Rates 4π(R₂² − R₁²)/Δt: at 15 s b0 4π·2100/10 = 2638.9, b1
+        // 4π·2400/10 = 3015.9 µm²/s (the larger); at 25 s b0 4π·1125/10 = 1413.7, b1
+        // 4π·141/10 = 177.2 µm²/s.
+        let f = vec![
+            frame(
+                0.0,
+                3e5,
+                0.0,
+                vec![bubble(0, 300e-6, 0.0), bubble(1, 50e-6, 0.0)],
+            ),
+            frame(
+                10.0,
+                1e5,
+                0.0,
+                vec![bubble(0, 100e-6, 0.0), bubble(1, 50e-6, 0.0)],
+            ),
+            frame(
+                20.0,
+                1e5,
+                0.0,
+                vec![bubble(0, 110e-6, 0.0), bubble(1, 70e-6, 0.0)],
+            ),
+            frame(
+                30.0,
+                1e5,
+                0.0,
+                vec![bubble(0, 115e-6, 0.0), bubble(1, 71e-6, 0.0)],
+            ),
+        ];
+        let got = area_rate_after_surfacing(&f, 10.0);
+        let want = [(15.0, 4.0 * PI * 240.0), (25.0, 4.0 * PI * 112.5)];
+        assert_eq!(got.len(), 2, "{got:?}");
+        for ((t, r), (wt, wr)) in got.iter().zip(want) {
+            assert_eq!(*t, wt);
+            assert!((r * 1e12 - wr).abs() < 1e-9 * wr, "{r} vs {wr}");
         }
     }
 

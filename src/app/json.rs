@@ -3,7 +3,7 @@
 //! the keys. The schema is documented in `docs/json.md`; each object carries
 //! `"schema": "decophantom.<command>/1"`, bumped on any incompatible change.
 
-use super::evaluate::{ranking, Evaluation};
+use super::evaluate::{ranking, ties, Evaluation};
 use super::plan::PlanOutcome;
 use crate::algorithm::schedule::gas_text;
 use crate::algorithm::Schedule;
@@ -178,6 +178,7 @@ struct RunJson {
 struct RankJson {
     elasticity: String,
     rank: usize,
+    tied: bool,
     schedule: String,
     failures: usize,
     worst_ratio: f64,
@@ -241,6 +242,16 @@ struct EvaluateJson {
     candidates: Vec<CandidateJson>,
     runs: Vec<RunJson>,
     ranking: Vec<RankJson>,
+    ties: Vec<TieJson>,
+}
+
+#[derive(Serialize)]
+struct TieJson {
+    elasticity: String,
+    kind: String,
+    label: String,
+    spread: f64,
+    uncertainty: f64,
 }
 
 /// `evaluate --json`.
@@ -256,11 +267,25 @@ pub fn evaluate(ev: &Evaluation) -> String {
             .map(|r| RankJson {
                 elasticity: r.law.to_string(),
                 rank: r.rank,
+                tied: r.tied,
                 schedule: ev.candidates[r.candidate].label.clone(),
                 failures: r.failures,
                 worst_ratio: r.worst.0,
                 worst_criterion: r.worst.1,
                 mean_ratio: r.mean_ratio,
+            })
+            .collect(),
+        ties: ties(ev)
+            .into_iter()
+            .map(|t| {
+                let c = &ev.criteria.criteria[t.criterion];
+                TieJson {
+                    elasticity: t.law.to_string(),
+                    kind: c.criterion.name().to_string(),
+                    label: c.label.clone(),
+                    spread: t.spread,
+                    uncertainty: t.uncertainty,
+                }
             })
             .collect(),
     })

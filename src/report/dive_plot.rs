@@ -9,7 +9,7 @@
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
 
-use super::plot::{fmt_tick, PlotError};
+use super::plot::{fmt_tick, title_area, PlotError};
 
 const FONT: &str = "sans-serif";
 
@@ -95,9 +95,8 @@ impl ProfileFigure {
         {
             let root = SVGBackend::with_string(&mut svg, (960, 760)).into_drawing_area();
             root.fill(&WHITE).map_err(|e| err(e.to_string()))?;
-            let root = root
-                .titled(&self.title, (FONT, 30.0))
-                .map_err(|e| err(e.to_string()))?;
+            // a long title (a dive log's name) is set smaller or on two lines, never clipped
+            let (root, _) = title_area(&root, &self.title).map_err(|e| err(e.to_string()))?;
             let (top, bottom) = root.split_vertically(420);
             let tick = |v: &f64| fmt_tick(*v);
             let depth_tick = |v: &f64| fmt_tick(-*v);

@@ -40,7 +40,7 @@ table{border-collapse:collapse;margin:1rem 0}
 caption{font-weight:bold;text-align:left;padding:.3rem 0}
 th,td{border:1px solid #bbb;padding:.25rem .6rem}
 th{background:#f0f0f0}
-td.num{text-align:right;font-variant-numeric:tabular-nums}
+td.num{text-align:right;font-variant-numeric:tabular-nums;white-space:nowrap}
 figure{margin:1.5rem 0}
 figure svg{max-width:100%;height:auto}
 figcaption{font-size:.9rem;color:#333}

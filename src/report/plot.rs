@@ -14,7 +14,6 @@
 use std::ops::Range;
 
 use plotters::coord::ranged1d::ValueFormatter;
-use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
@@ -95,7 +94,14 @@ impl Series {
 }
 
 /// A line plot: several series, a legend, labelled axes (put units in the labels, e.g.
-/// `"time (s)"`), optionally a log primary y axis and a linear secondary y axis.
+/// `"time (s)"`), optionally log axes, a depth axis increasing downward, and a linear
+/// secondary y axis.
+///
+/// The legend goes in the corner of the plotting area that covers the fewest data points; if
+/// every corner covers some, a linear primary y axis is extended upward (downward on a depth
+/// axis) until the legend fits beside the data, and otherwise the legend is drawn outside,
+/// right of the plot. A title too
+/// long for the width is set smaller and, if need be, on two lines.
 #[derive(Debug, Clone, PartialEq)]
 pub struct LinePlot {
     /// Title above the plot.
@@ -108,6 +114,13 @@ pub struct LinePlot {
     pub series: Vec<Series>,
     /// Logarithmic primary y axis (points with y ≤ 0 are skipped).
     pub log_y: bool,
+    /// Logarithmic x axis (points with x ≤ 0 are skipped; no secondary axis).
+    pub log_x: bool,
+    /// The primary y axis increases downward (depth); linear axes only.
+    pub y_down: bool,
+    /// Every series gets its own dash pattern and marker shape, for curves that lie on top of
+    /// each other (colour alone does not tell them apart).
+    pub distinct: bool,
     /// Secondary (right) y-axis label with unit; required if any series is secondary.
     pub secondary_y_label: Option<String>,
     /// Size in px (width, height).
@@ -127,6 +140,9 @@ impl LinePlot {
             y_label: y_label.into(),
             series: Vec::new(),
             log_y: false,
+            log_x: false,
+            y_down: false,
+            distinct: false,
             secondary_y_label: None,
             size: DEFAULT_SIZE,
         }
@@ -141,10 +157,38 @@ impl LinePlot {
     /// Render to an SVG document.
     pub fn to_svg(&self) -> Result<String, PlotError> {
         let n = self.series.len();
+        let invalid = |m: &str| PlotError::Invalid {
+            title: self.title.clone(),
+            message: m.into(),
+        };
+        let has_secondary = self.series.iter().any(|s| s.secondary);
+        if has_secondary && self.secondary_y_label.is_none() {
+            return Err(invalid(
+                "a series is on the secondary axis but `secondary_y_label` is not set",
+            ));
+        }
+        if self.log_x && has_secondary {
+            return Err(invalid("a log x axis takes no secondary y axis"));
+        }
+        if self.y_down && self.log_y {
+            return Err(invalid("a downward y axis must be linear"));
+        }
+        // a downward axis is drawn as −y and labelled +y
+        let sign = |s: &Series| {
+            if self.y_down && !s.secondary {
+                -1.0
+            } else {
+                1.0
+            }
+        };
         let runs: Vec<Vec<Vec<(f64, f64)>>> = self
             .series
             .iter()
-            .map(|s| finite_runs(&s.points, self.log_y && !s.secondary))
+            .map(|s| {
+                let k = sign(s);
+                let pts: Vec<(f64, f64)> = s.points.iter().map(|&(x, y)| (x, k * y)).collect();
+                finite_runs(&pts, self.log_y && !s.secondary, self.log_x)
+            })
             .collect();
         let all = |secondary: bool| {
             self.series
@@ -155,17 +199,14 @@ impl LinePlot {
         };
         let x = bounds(all(false).chain(all(true)).map(|p| p.0))
             .ok_or_else(|| PlotError::NoData(self.title.clone()))?;
-        let has_secondary = self.series.iter().any(|s| s.secondary);
-        if has_secondary && self.secondary_y_label.is_none() {
-            return Err(PlotError::Invalid {
-                title: self.title.clone(),
-                message: "a series is on the secondary axis but `secondary_y_label` is not set"
-                    .into(),
-            });
-        }
         let y = bounds(all(false).map(|p| p.1));
         let y2 = bounds(all(true).map(|p| p.1));
-        let xr = pad_linear(x, false);
+        let xr = if self.log_x {
+            let (a, b) = decades(x);
+            a..b
+        } else {
+            pad_linear(x, false)
+        };
         let (w, h) = self.size;
         let draw_err = |e: String| PlotError::Draw {
             title: self.title.clone(),
@@ -175,57 +216,110 @@ impl LinePlot {
         {
             let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
             root.fill(&WHITE).map_err(|e| draw_err(e.to_string()))?;
-            let mut b = ChartBuilder::on(&root);
-            b.caption(&self.title, (FONT, TITLE_SIZE))
-                .margin(18)
-                .x_label_area_size(70)
-                .y_label_area_size(110)
-                .right_y_label_area_size(if has_secondary { 110 } else { 0 });
-            let styles: Vec<LineLook> = (0..n).map(|i| LineLook::of(i, n)).collect();
+            let (below, title_h) =
+                title_area(&root, &self.title).map_err(|e| draw_err(e.to_string()))?;
+            let styles: Vec<LineLook> = (0..n).map(|i| LineLook::of(i, n, self.distinct)).collect();
             let y2r = has_secondary.then(|| pad_linear(y2.unwrap_or((0.0, 1.0)), true));
             let (lo, hi) = y.map(decades).unwrap_or((1.0, 10.0));
-            let yr = pad_linear(y.unwrap_or((0.0, 1.0)), true);
+            let mut yr = pad_linear(y.unwrap_or((0.0, 1.0)), true);
             // Data in fractions of the plotting area, to keep the legend off the lines.
-            let frac = |v: f64, r: &Range<f64>| (v - r.start) / (r.end - r.start);
-            let mut pts = Vec::new();
-            for (s, rs) in self.series.iter().zip(&runs) {
-                for run in rs {
-                    let f: Vec<(f64, f64)> = run
-                        .iter()
-                        .map(|&(x, yv)| {
-                            let fy = match (&y2r, s.secondary, self.log_y) {
-                                (Some(r2), true, _) => frac(yv, r2),
-                                (_, _, true) => {
-                                    (yv.log10() - lo.log10()) / (hi.log10() - lo.log10())
-                                }
-                                _ => frac(yv, &yr),
-                            };
-                            (frac(x, &xr), fy)
-                        })
-                        .collect();
-                    densify(&f, &mut pts);
+            let frac = |v: f64, r: &Range<f64>, log: bool| {
+                if log {
+                    (v.log10() - r.start.log10()) / (r.end.log10() - r.start.log10())
+                } else {
+                    (v - r.start) / (r.end - r.start)
+                }
+            };
+            let fractions = |yr: &Range<f64>| {
+                let mut pts = Vec::new();
+                for (s, rs) in self.series.iter().zip(&runs) {
+                    for run in rs {
+                        let f: Vec<(f64, f64)> = run
+                            .iter()
+                            .map(|&(xv, yv)| {
+                                let fy = match &y2r {
+                                    Some(r2) if s.secondary => frac(yv, r2, false),
+                                    _ if self.log_y => frac(yv, &(lo..hi), true),
+                                    _ => frac(yv, yr, false),
+                                };
+                                (frac(xv, &xr, self.log_x), fy)
+                            })
+                            .collect();
+                        densify(&f, &mut pts);
+                    }
+                }
+                pts
+            };
+            let right_labels = if has_secondary { 110.0 } else { 0.0 };
+            let plot_w = w as f64 - 36.0 - 110.0 - right_labels;
+            let plot_h = h as f64 - title_h as f64 - 36.0 - 70.0;
+            let (bw, bh) = legend_box_px(self.series.iter().map(|s| {
+                if s.secondary {
+                    s.name.chars().count() + " (right axis)".len()
+                } else {
+                    s.name.chars().count()
+                }
+            }));
+            let (fw, fh) = (bw / plot_w.max(1.0), bh / plot_h.max(1.0));
+            let (mut corner, covered) = Corner::emptiest(&fractions(&yr), fw, fh);
+            let mut legend = LegendPlace::Inside(corner);
+            if covered > 0 {
+                if !self.log_y && !has_secondary && fh < 0.45 {
+                    // room above the data (below it on a depth axis, not above the
+                    // surface): the data fill 1 − fh − 2 % of the height
+                    let span = (yr.end - yr.start) / (1.0 - fh - 0.02);
+                    yr = if self.y_down {
+                        yr.end - span..yr.end
+                    } else {
+                        yr.start..yr.start + span
+                    };
+                    corner = Corner::emptiest(&fractions(&yr), fw, fh).0;
+                    legend = LegendPlace::Inside(corner);
+                } else {
+                    legend = LegendPlace::Right((right_labels + 14.0) as i32);
                 }
             }
-            let plot_w = w as f64 - 36.0 - 110.0 - if has_secondary { 110.0 } else { 0.0 };
-            let plot_h = h as f64 - 36.0 - 70.0 - 45.0;
-            let (bw, bh) = legend_box_px(self.series.iter().map(|s| s.name.as_str()));
+            let mut b = ChartBuilder::on(&below);
+            b.margin(18)
+                .margin_top(6)
+                .x_label_area_size(70)
+                .y_label_area_size(110)
+                .right_y_label_area_size(right_labels as u32);
+            if let LegendPlace::Right(_) = legend {
+                b.margin_right(18 + bw as u32 + 14);
+            }
             let lines = LinesToDraw {
                 plot: self,
                 runs: &runs,
                 styles: &styles,
                 y2: y2r,
-                corner: Corner::emptiest(&pts, bw / plot_w.max(1.0), bh / plot_h.max(1.0)),
+                legend,
             };
-            if self.log_y {
-                let chart = b
-                    .build_cartesian_2d(xr.clone(), (lo..hi).log_scale())
-                    .map_err(|e| draw_err(e.to_string()))?;
-                lines.draw(chart, xr).map_err(draw_err)?;
-            } else {
-                let chart = b
-                    .build_cartesian_2d(xr.clone(), yr)
-                    .map_err(|e| draw_err(e.to_string()))?;
-                lines.draw(chart, xr).map_err(draw_err)?;
+            match (self.log_x, self.log_y) {
+                (false, false) => {
+                    let chart = b
+                        .build_cartesian_2d(xr.clone(), yr)
+                        .map_err(|e| draw_err(e.to_string()))?;
+                    lines.draw(chart, xr).map_err(draw_err)?;
+                }
+                (false, true) => {
+                    let chart = b
+                        .build_cartesian_2d(xr.clone(), (lo..hi).log_scale())
+                        .map_err(|e| draw_err(e.to_string()))?;
+                    lines.draw(chart, xr).map_err(draw_err)?;
+                }
+                (true, false) => {
+                    let chart = b
+                        .build_cartesian_2d(xr.clone().log_scale(), yr)
+                        .map_err(|e| draw_err(e.to_string()))?;
+                    lines.draw(chart, xr).map_err(draw_err)?;
+                }
+                (true, true) => {
+                    let chart = b
+                        .build_cartesian_2d(xr.clone().log_scale(), (lo..hi).log_scale())
+                        .map_err(|e| draw_err(e.to_string()))?;
+                    lines.draw(chart, xr).map_err(draw_err)?;
+                }
             }
             root.present().map_err(|e| draw_err(e.to_string()))?;
         }
@@ -233,18 +327,91 @@ impl LinePlot {
     }
 }
 
+/// Where the legend goes: a corner of the plotting area, or right of it (px beyond its
+/// right edge).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum LegendPlace {
+    Inside(Corner),
+    Right(i32),
+}
+
+/// A drawing error of backend `DB`.
+type AreaError<DB> = plotters::drawing::DrawingAreaErrorKind<<DB as DrawingBackend>::ErrorType>;
+
+/// Width in px of `chars` characters of a sans-serif font drawn at plotters size `size`:
+/// 0.62 of the SVG font-size (`size / 1.24`) per character, a little wider than the average
+/// character of DejaVu Sans or Helvetica so that a title estimated to fit does fit.
+fn text_px(chars: usize, size: f64) -> f64 {
+    0.62 * size / 1.24 * chars as f64
+}
+
+/// Draw `title` centred at the top of `root`: at [`TITLE_SIZE`] if it fits the width, else
+/// smaller (down to 0.8 of it), else wrapped onto two lines (a third and more are cut with
+/// `…`). Returns the area below the title and the title's height in px.
+pub(crate) fn title_area<DB: DrawingBackend>(
+    root: &DrawingArea<DB, Shift>,
+    title: &str,
+) -> Result<(DrawingArea<DB, Shift>, u32), AreaError<DB>> {
+    let (w, _) = root.dim_in_pixel();
+    let avail = w as f64 - 2.0 * 18.0;
+    let chars = title.chars().count();
+    let fit = avail / text_px(1, TITLE_SIZE);
+    let (size, lines) = if chars as f64 <= fit {
+        (TITLE_SIZE, vec![title.to_string()])
+    } else if chars as f64 <= avail / text_px(1, 0.8 * TITLE_SIZE) {
+        (
+            (avail / chars as f64 / text_px(1, 1.0)).floor(),
+            vec![title.to_string()],
+        )
+    } else {
+        let size = 0.8 * TITLE_SIZE;
+        let per_line = (avail / text_px(1, size)).floor() as usize;
+        let mut lines = wrap(title, per_line.max(8));
+        if lines.len() > 2 {
+            lines.truncate(2);
+            let mut last: Vec<char> = lines[1].chars().collect();
+            last.truncate(per_line.saturating_sub(1));
+            lines[1] = last.into_iter().collect::<String>() + "…";
+        }
+        (size, lines)
+    };
+    let line_h = (size / 1.24 * 1.25).ceil() as i32;
+    let style = TextStyle::from((FONT, size).into_font())
+        .pos(Pos::new(HPos::Center, VPos::Top))
+        .color(&BLACK);
+    for (k, line) in lines.iter().enumerate() {
+        root.draw(&Text::new(
+            line.clone(),
+            (w as i32 / 2, 12 + k as i32 * line_h),
+            style.clone(),
+        ))?;
+    }
+    let height = (12 + lines.len() as i32 * line_h + 6) as u32;
+    let (_, below) = root.split_vertically(height);
+    Ok((below, height))
+}
+
 /// How one series looks: colour, dash pattern, marker.
 #[derive(Debug, Clone, Copy)]
 struct LineLook {
     color: RGBColor,
-    /// 0 solid, 1 dashed, 2 dotted.
+    /// 0 solid, 1 dashed, 2 dotted, 3 long dashes.
     dash: usize,
     /// Marker shape index, if markers are used.
     marker: Option<usize>,
 }
 
 impl LineLook {
-    fn of(i: usize, n: usize) -> Self {
+    /// The look of series `i` of `n`; `distinct`: every series its own dash pattern and
+    /// marker shape (filled circle, triangle, square, diamond, then hollow ones).
+    fn of(i: usize, n: usize, distinct: bool) -> Self {
+        if distinct {
+            return LineLook {
+                color: PALETTE[i % 7],
+                dash: i % 4,
+                marker: Some((2 * i) % 8 + (i / 4) % 2),
+            };
+        }
         LineLook {
             color: PALETTE[i % 7],
             dash: (i / 7) % 3,
@@ -305,7 +472,8 @@ fn dash_pattern(dash: usize) -> (i32, i32) {
     match dash {
         0 => (1_000_000, 1),
         1 => (10, 6),
-        _ => (3, 4),
+        2 => (3, 4),
+        _ => (20, 6),
     }
 }
 
@@ -336,7 +504,7 @@ struct LinesToDraw<'p> {
     runs: &'p [Vec<Vec<(f64, f64)>>],
     styles: &'p [LineLook],
     y2: Option<Range<f64>>,
-    corner: Corner,
+    legend: LegendPlace,
 }
 
 /// A corner of the plotting area for the legend.
@@ -359,9 +527,9 @@ impl Corner {
     }
 
     /// The corner whose legend box (`bw` × `bh`, fractions of the plotting area) covers the
-    /// fewest data points; `pts` are in fractions of the plotting area (y up). Ties go to the
-    /// upper right, then upper left, lower right, lower left.
-    fn emptiest(pts: &[(f64, f64)], bw: f64, bh: f64) -> Corner {
+    /// fewest data points, and how many it covers; `pts` are in fractions of the plotting area
+    /// (y up). Ties go to the upper right, then upper left, lower right, lower left.
+    fn emptiest(pts: &[(f64, f64)], bw: f64, bh: f64) -> (Corner, usize) {
         let (bw, bh) = (bw.min(1.0), bh.min(1.0));
         [
             (Corner::UpperRight, 1.0 - bw, 1.0 - bh),
@@ -381,19 +549,19 @@ impl Corner {
             Some((bn, _)) if bn <= n => best,
             _ => Some((n, c)),
         })
-        .map(|b| b.1)
-        .unwrap_or(Corner::UpperRight)
+        .map(|(n, c)| (c, n))
+        .unwrap_or((Corner::UpperRight, 0))
     }
 }
 
-/// Legend box size in px for `labels`, by the same font-less estimate plotters uses
-/// (0.7 em per character, em = size / 1.24²), with the glyph and margins.
-fn legend_box_px<'s>(labels: impl Iterator<Item = &'s str>) -> (f64, f64) {
+/// Legend box size in px for labels of `lengths` characters, by the same font-less estimate
+/// plotters uses (0.7 em per character, em = size / 1.24²), with the glyph and margins.
+fn legend_box_px(lengths: impl Iterator<Item = usize>) -> (f64, f64) {
     let mut n = 0usize;
     let mut chars = 0usize;
-    for l in labels {
+    for l in lengths {
         n += 1;
-        chars = chars.max(l.chars().count());
+        chars = chars.max(l);
     }
     let em = LEGEND_SIZE / 1.24 / 1.24;
     (
@@ -419,13 +587,14 @@ fn densify(run: &[(f64, f64)], out: &mut Vec<(f64, f64)>) {
 }
 
 impl LinesToDraw<'_> {
-    fn draw<'a, DB, Y>(
+    fn draw<'a, DB, X, Y>(
         &self,
-        mut chart: ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+        mut chart: ChartContext<'a, DB, Cartesian2d<X, Y>>,
         xr: Range<f64>,
     ) -> Result<(), String>
     where
         DB: DrawingBackend + 'a,
+        X: Ranged<ValueType = f64> + ValueFormatter<f64>,
         Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
     {
         let e = |e: plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
@@ -447,7 +616,7 @@ impl LinesToDraw<'_> {
                     )
                     .map_err(e)?;
             }
-            return legend(&mut chart, self.corner).map_err(e);
+            return legend(&mut chart, self.legend).map_err(e);
         };
         // The secondary coordinates take over the right label area, so they must exist
         // before the primary mesh is drawn (or it would label the right axis too).
@@ -483,26 +652,30 @@ impl LinesToDraw<'_> {
             };
             anno.label(name).legend(move |c| legend_glyph!(c, look));
         }
-        legend(&mut dual, self.corner).map_err(e)
+        legend(&mut dual, self.legend).map_err(e)
     }
 }
 
 impl LinesToDraw<'_> {
-    fn mesh<'a, DB, Y>(
+    fn mesh<'a, DB, X, Y>(
         &self,
-        chart: &mut ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+        chart: &mut ChartContext<'a, DB, Cartesian2d<X, Y>>,
     ) -> Result<(), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>>
     where
         DB: DrawingBackend + 'a,
+        X: Ranged<ValueType = f64> + ValueFormatter<f64>,
         Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
     {
         let tick = |v: &f64| fmt_tick(*v);
+        // a downward axis holds −y: label it +y
+        let down = self.plot.y_down;
+        let ytick = move |v: &f64| fmt_tick(if down { -*v } else { *v });
         chart
             .configure_mesh()
             .x_desc(self.plot.x_label.as_str())
             .y_desc(self.plot.y_label.as_str())
             .x_label_formatter(&tick)
-            .y_label_formatter(&tick)
+            .y_label_formatter(&ytick)
             .axis_desc_style((FONT, DESC_SIZE))
             .label_style((FONT, TICK_SIZE))
             .light_line_style(RGBColor(235, 235, 235))
@@ -513,11 +686,18 @@ impl LinesToDraw<'_> {
 
 fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
     chart: &mut ChartContext<'a, DB, CT>,
-    corner: Corner,
+    place: LegendPlace,
 ) -> Result<(), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>> {
+    let position = match place {
+        LegendPlace::Inside(c) => c.position(),
+        LegendPlace::Right(dx) => {
+            let (w, _) = chart.plotting_area().dim_in_pixel();
+            SeriesLabelPosition::Coordinate(w as i32 + dx, 0)
+        }
+    };
     chart
         .configure_series_labels()
-        .position(corner.position())
+        .position(position)
         .label_font((FONT, LEGEND_SIZE))
         .background_style(WHITE.mix(0.85))
         .border_style(RGBColor(120, 120, 120))
@@ -525,12 +705,13 @@ fn legend<'a, DB: DrawingBackend + 'a, CT: CoordTranslate>(
         .draw()
 }
 
-/// Split points into runs of drawable points (finite; y > 0 when `positive_y`).
-fn finite_runs(points: &[(f64, f64)], positive_y: bool) -> Vec<Vec<(f64, f64)>> {
+/// Split points into runs of drawable points (finite; y > 0 when `positive_y`, x > 0 when
+/// `positive_x`).
+fn finite_runs(points: &[(f64, f64)], positive_y: bool, positive_x: bool) -> Vec<Vec<(f64, f64)>> {
     let mut runs = Vec::new();
     let mut cur = Vec::new();
     for &(x, y) in points {
-        if x.is_finite() && y.is_finite() && (!positive_y || y > 0.0) {
+        if x.is_finite() && y.is_finite() && (!positive_y || y > 0.0) && (!positive_x || x > 0.0) {
             cur.push((x, y));
         } else if !cur.is_empty() {
             runs.push(std::mem::take(&mut cur));
@@ -551,7 +732,7 @@ fn bounds(it: impl Iterator<Item = f64>) -> Option<(f64, f64)> {
 }
 
 /// A linear axis range: degenerate ranges widened; `pad` adds 5 % either side (not below 0
-/// when the data are all ≥ 0).
+/// when the data are all ≥ 0, not above 0 when they are all ≤ 0).
 fn pad_linear((lo, hi): (f64, f64), pad: bool) -> Range<f64> {
     let span = hi - lo;
     if span <= 0.0 || !span.is_finite() {
@@ -567,17 +748,24 @@ fn pad_linear((lo, hi): (f64, f64), pad: bool) -> Range<f64> {
     } else {
         lo - p
     };
-    l..(hi + p)
+    let u = if hi <= 0.0 && hi + p > 0.0 {
+        0.0
+    } else {
+        hi + p
+    };
+    l..u
 }
 
-/// Whole decades enclosing positive (lo, hi).
+/// Whole decades enclosing positive (lo, hi), widened by 10⁻¹² so that plotters' log axis
+/// (which labels 10^ceil(log10(start)), and log10(0.1) = −0.99999999999999989) labels the
+/// first decade too.
 fn decades((lo, hi): (f64, f64)) -> (f64, f64) {
     let a = 10f64.powf(lo.log10().floor());
     let mut b = 10f64.powf(hi.log10().ceil());
     if b <= a {
         b = a * 10.0;
     }
-    (a, b)
+    (a * (1.0 - 1e-12), b * (1.0 + 1e-12))
 }
 
 /// A short tick label: up to four significant digits, exponent form outside 1e-3..1e5.
@@ -693,9 +881,10 @@ impl BarChart {
         yr: Range<f64>,
     ) -> Result<(), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>> {
         let y0 = yr.start.max(0.0).min(yr.end);
-        let mut chart = ChartBuilder::on(root)
-            .caption(&self.title, (FONT, TITLE_SIZE))
+        let (below, _) = title_area(root, &self.title)?;
+        let mut chart = ChartBuilder::on(&below)
             .margin(18)
+            .margin_top(6)
             .x_label_area_size(90)
             .y_label_area_size(110)
             .build_cartesian_2d(0.0..nc as f64, yr)?;
@@ -791,8 +980,9 @@ impl BarChart {
             .iter()
             .map(String::as_str)
             .chain(self.reference.iter().map(|r| r.1.as_str()));
-        let (bw, bh) = legend_box_px(names);
-        let corner = Corner::emptiest(&pts, bw / area.0.max(1) as f64, bh / area.1.max(1) as f64);
+        let (bw, bh) = legend_box_px(names.map(|n| n.chars().count()));
+        let (corner, _) =
+            Corner::emptiest(&pts, bw / area.0.max(1) as f64, bh / area.1.max(1) as f64);
         chart
             .configure_series_labels()
             .position(corner.position())
@@ -859,6 +1049,7 @@ mod tests {
                 (4.0, 3.0),
             ],
             true,
+            false,
         );
         assert_eq!(
             r,

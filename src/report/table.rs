@@ -1,6 +1,8 @@
 //! One table model rendered to Markdown, CSV and HTML. A number is formatted once
-//! ([`Cell::text`]) and that same string goes into all three outputs, so a reader of the CSV
-//! and a reader of the report see identical digits.
+//! ([`Cell::to_text`]) and that same string goes into all three outputs, so a reader of the CSV
+//! and a reader of the report see identical digits; the one exception is the power of ten of a
+//! [`NumberFormat::Sig`] number outside 10⁻³…10⁶, written `1.95×10⁻¹²` for reading and
+//! `1.95e-12` in the CSV ([`Cell::to_csv_text`]), the same digits.
 
 use std::fmt::Write as _;
 
@@ -52,6 +54,11 @@ pub enum NumberFormat {
     Fixed(usize),
     /// Significant digits in scientific notation, e.g. `Sci(3)` → `1.23e-4`.
     Sci(usize),
+    /// Significant digits in plain decimal notation, for a number in its natural unit:
+    /// `Sig(4)` → `90.38`, `0.07397`, `150.2`, `0.01348`. Outside 10⁻³ ≤ |v| < 10⁶ (a
+    /// number that the unit does not suit, e.g. a numerical zero) with a power of ten,
+    /// `1.945×10⁻¹²`.
+    Sig(usize),
 }
 
 /// One table cell.
@@ -79,9 +86,17 @@ impl Cell {
         Cell::Number(v, NumberFormat::Sci(digits))
     }
 
-    /// The printed value, identical in every output format.
+    /// A number with `digits` significant digits (≥ 1) in plain decimal notation
+    /// ([`NumberFormat::Sig`]).
+    pub fn sig(v: f64, digits: usize) -> Self {
+        Cell::Number(v, NumberFormat::Sig(digits))
+    }
+
+    /// The printed value for Markdown and HTML (and the CSV, but for the power of ten of a
+    /// [`NumberFormat::Sig`] number, [`Cell::to_csv_text`]).
     pub fn to_text(&self) -> String {
         match self {
+            Cell::Number(v, NumberFormat::Sig(n)) if v.is_finite() => sig_text(*v, *n, true),
             Cell::Text(s) => s.clone(),
             Cell::Empty => String::new(),
             Cell::Number(v, _) if v.is_nan() => "NaN".into(),
@@ -105,8 +120,47 @@ impl Cell {
                 let d = n.saturating_sub(1);
                 format!("{v:.d$e}")
             }
+            Cell::Number(v, NumberFormat::Sig(n)) => sig_text(*v, *n, true),
         }
     }
+
+    /// The printed value for the CSV: [`Cell::to_text`] with a power of ten written `e-12`,
+    /// so that every CSV reader parses it.
+    pub fn to_csv_text(&self) -> String {
+        match self {
+            Cell::Number(v, NumberFormat::Sig(n)) if v.is_finite() => sig_text(*v, *n, false),
+            _ => self.to_text(),
+        }
+    }
+}
+
+/// `v` (finite) with `n` significant digits: plain decimals for 10⁻³ ≤ |v| < 10⁶, else a
+/// mantissa and a power of ten (`×10⁻¹²` when `pretty`, `e-12` otherwise). The exponent is
+/// taken after rounding, so 99.996 with four digits prints `100.0`, not `100.00`.
+pub fn sig_text(v: f64, n: usize, pretty: bool) -> String {
+    let n = n.max(1);
+    if v == 0.0 {
+        return "0".into();
+    }
+    let sci = format!("{v:.*e}", n - 1);
+    let (mant, exp) = sci.split_once('e').unwrap_or((&sci, "0"));
+    let e: i32 = exp.parse().unwrap_or(0);
+    if (-3..6).contains(&e) {
+        let d = (n as i32 - 1 - e).max(0) as usize;
+        return format!("{v:.d$}");
+    }
+    if !pretty {
+        return format!("{mant}e{e}");
+    }
+    const SUP: [char; 10] = ['⁰', '¹', '²', '³', '⁴', '⁵', '⁶', '⁷', '⁸', '⁹'];
+    let mut p = String::new();
+    if e < 0 {
+        p.push('⁻');
+    }
+    for c in e.unsigned_abs().to_string().chars() {
+        p.push(SUP[c.to_digit(10).unwrap_or(0) as usize]);
+    }
+    format!("{mant}×10{p}")
 }
 
 /// A table: title, columns, rows of cells (each row as long as `columns`).
@@ -194,7 +248,8 @@ impl Table {
         w.write_record(self.columns.iter().map(|c| c.csv_header()))
             .map_err(e)?;
         for r in &self.rows {
-            w.write_record(r.iter().map(|c| c.to_text())).map_err(e)?;
+            w.write_record(r.iter().map(|c| c.to_csv_text()))
+                .map_err(e)?;
         }
         let bytes = w
             .into_inner()
@@ -290,6 +345,26 @@ mod tests {
         assert_eq!(Cell::sci(f64::NAN, 3).to_text(), "NaN");
         assert_eq!(Cell::fixed(f64::NEG_INFINITY, 3).to_text(), "-inf");
         assert_eq!(Cell::Empty.to_text(), "");
+    }
+
+    #[test]
+    fn significant_figures_in_the_natural_unit() {
+        // the two examples: 9.038e1 µm and 7.397e-2 %
+        assert_eq!(Cell::sig(90.38, 4).to_text(), "90.38");
+        assert_eq!(Cell::sig(0.07397, 4).to_text(), "0.07397");
+        assert_eq!(Cell::sig(150.24, 4).to_text(), "150.2");
+        assert_eq!(Cell::sig(0.013476, 4).to_text(), "0.01348");
+        assert_eq!(Cell::sig(-0.0051843, 4).to_text(), "-0.005184");
+        assert_eq!(Cell::sig(123456.0, 4).to_text(), "123456");
+        // rounding that carries into the next decade keeps n digits
+        assert_eq!(Cell::sig(99.996, 4).to_text(), "100.0");
+        assert_eq!(Cell::sig(0.0, 4).to_text(), "0");
+        // a numerical zero keeps its power of ten, pretty for reading, e-notation in CSV
+        let tiny = Cell::sig(1.9449e-12, 4);
+        assert_eq!(tiny.to_text(), "1.945×10⁻¹²");
+        assert_eq!(tiny.to_csv_text(), "1.945e-12");
+        assert_eq!(Cell::sig(2.5e7, 2).to_text(), "2.5×10⁷");
+        assert_eq!(Cell::sig(f64::NAN, 4).to_text(), "NaN");
     }
 
     #[test]

@@ -109,26 +109,30 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     for (i, mu) in MUS.iter().enumerate() {
         let mut p = LinePlot::new(
             format!("Final vs initial radius, 1e6 → 1e4 Pa, μ = {} Pa", s3(*mu)),
-            "log10 of the initial radius R0 (µm)",
+            "initial radius R0 (µm)",
             "final radius R_B (µm)",
         );
+        p.log_x = true;
         p.log_y = true;
+        p.distinct = true;
         let mut q = LinePlot::new(
             format!("Growth ratio R_B/R0, 1e6 → 1e4 Pa, μ = {} Pa", s3(*mu)),
-            "log10 of the initial radius R0 (µm)",
+            "initial radius R0 (µm)",
             "R_B / R0",
         );
+        q.log_x = true;
         q.log_y = true;
+        q.distinct = true;
         for name in &names {
             let pts: Vec<(f64, f64)> = rows
                 .iter()
                 .filter(|r| r.mu == *mu && r.form == *name)
-                .map(|r| ((r.r0 * 1e6).log10(), r.rf.map_or(f64::NAN, |v| v * 1e6)))
+                .map(|r| (r.r0 * 1e6, r.rf.map_or(f64::NAN, |v| v * 1e6)))
                 .collect();
             let ratio: Vec<(f64, f64)> = rows
                 .iter()
                 .filter(|r| r.mu == *mu && r.form == *name)
-                .map(|r| ((r.r0 * 1e6).log10(), r.rf.map_or(f64::NAN, |v| v / r.r0)))
+                .map(|r| (r.r0 * 1e6, r.rf.map_or(f64::NAN, |v| v / r.r0)))
                 .collect();
             let label = if *name == "none" { "Ω = 0" } else { name };
             p = p.with(Series::new(label, pts));
@@ -270,7 +274,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
             if *ratio {
                 format!("R_B/R0 against R0 at μ = {} Pa (the differences between forms, magnified). A missing point: no physical root.", s3(*mu))
             } else {
-                format!("Final against initial radius at μ = {} Pa, as the paper's Fig. 2a (log axes; x is log10 of R0 in µm). A missing point: no physical root.", s3(*mu))
+                format!("Final against initial radius at μ = {} Pa, as the paper's Fig. 2a (log axes). A missing point: no physical root.", s3(*mu))
             },
         )
         .map_err(report_err)?;

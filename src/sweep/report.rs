@@ -129,9 +129,9 @@ pub fn add_indices_and_report(
         design
             .push(vec![
                 Cell::text(p.path.clone()),
-                Cell::sci(p.lo, 4),
-                Cell::sci(p.hi, 4),
-                Cell::sci(p.base, 4),
+                Cell::sig(p.lo, 4),
+                Cell::sig(p.hi, 4),
+                Cell::sig(p.base, 4),
                 Cell::text(if p.log { "log-uniform" } else { "uniform" }),
             ])
             .map_err(plot_err)?;

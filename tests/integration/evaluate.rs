@@ -664,3 +664,73 @@ fn json_output_quiet_completions_and_man() {
     );
     assert!(man.contains("decophantom"));
 }
+
+/// Part 6 of issue 9: a spread between schedules below the numerical uncertainty is a tie, not
+/// a ranking. Known ties by construction: the same schedule under two names gives the same
+/// run (the simulation is deterministic), so every criterion ties; with a third, different
+/// schedule (stops, which scores lower on every criterion — see
+/// `fast_ascent_scores_worse_than_stops_and_check_exit_codes`), no criterion ties across all
+/// three, the two copies share a rank and the stops rank first.
+#[test]
+fn identical_schedules_tie_instead_of_ranking_noise() {
+    let d = tempdir("evaluate-ties");
+    let ph = write(&d, "phantom.toml", PHANTOM);
+    let tight = write(&d, "tight.toml", &criteria(1.0));
+    let fast = write(&d, "fast.csv", FAST);
+    let copy = write(&d, "fast-copy.csv", FAST);
+    let stops = write(&d, "stops.csv", STOPS);
+    let eval = |scheds: &[&PathBuf], out: &str| {
+        let mut args = vec!["evaluate"];
+        for sc in scheds {
+            args.extend(["--schedule", s(sc)]);
+        }
+        let out = d.join(out);
+        args.extend([
+            "--criteria",
+            s(&tight),
+            "--phantom",
+            s(&ph),
+            "--json",
+            "--quiet",
+            "--out",
+            s(&out),
+        ]);
+        let (code, stdout, stderr) = run(&args);
+        assert_eq!(code, 0, "{stderr}");
+        let v: serde_json::Value = serde_json::from_str(&stdout).expect("JSON");
+        (v, std::fs::read_to_string(out.join("report.md")).unwrap())
+    };
+
+    // two copies: every criterion tied, both rank 1
+    let (v, md) = eval(&[&fast, &copy], "two");
+    let ties = v["ties"].as_array().unwrap();
+    assert_eq!(ties.len(), 6, "{ties:?}");
+    for t in ties {
+        assert_eq!(t["spread"].as_f64(), Some(0.0));
+        assert!(t["uncertainty"].as_f64().unwrap() > 0.0);
+    }
+    for r in v["ranking"].as_array().unwrap() {
+        assert_eq!(r["rank"].as_u64(), Some(1), "{r}");
+        assert_eq!(r["tied"].as_bool(), Some(true), "{r}");
+    }
+    assert!(md.contains("the schedules are tied on"), "{md}");
+    assert!(md.contains("share rank 1"), "{md}");
+    assert!(md.contains("| 1 (tied) |"), "{md}");
+
+    // with the stops schedule: no tie across all three; the copies share rank 2
+    let (v, md) = eval(&[&fast, &copy, &stops], "three");
+    assert_eq!(v["ties"].as_array().unwrap().len(), 0, "{}", v["ties"]);
+    let rank = |label: &str| {
+        let r = v["ranking"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|r| r["schedule"] == label)
+            .unwrap_or_else(|| panic!("{label} not ranked: {}", v["ranking"]));
+        (r["rank"].as_u64().unwrap(), r["tied"].as_bool().unwrap())
+    };
+    assert_eq!(rank("stops"), (1, false));
+    assert_eq!(rank("fast"), (2, true));
+    assert_eq!(rank("fast-copy"), (2, true));
+    assert!(!md.contains("tied on"), "{md}");
+}

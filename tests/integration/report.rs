@@ -421,3 +421,215 @@ fn html_page_is_selfcontained_wellformed_xml() {
     assert!(page.figure("<p>no</p>", None, "x").is_err());
     let _ = Path::new("");
 }
+
+/// `<text>` elements as (content, x, y) in px.
+fn placed_texts(doc: &roxmltree::Document) -> Vec<(String, f64, f64)> {
+    doc.descendants()
+        .filter(|n| n.has_tag_name("text"))
+        .map(|n| {
+            let num = |a: &str| {
+                n.attribute(a)
+                    .and_then(|v| v.parse().ok())
+                    .unwrap_or(f64::NAN)
+            };
+            (
+                n.text().unwrap_or("").trim().to_string(),
+                num("x"),
+                num("y"),
+            )
+        })
+        .collect()
+}
+
+#[test]
+fn depth_axis_increases_downward_and_log_x_is_a_log_axis() {
+    // a dive: 0 → 45 m → 0; with y_down the 40 m tick is drawn below the 0 m tick (SVG y grows
+    // downward) and no tick reads negative
+    let mut p = LinePlot::new("Dive", "time (min)", "depth (m)");
+    p.y_down = true;
+    p = p.with(Series::new(
+        "dive",
+        vec![
+            (0.0, 0.0),
+            (2.0, 45.0),
+            (25.0, 45.0),
+            (40.0, 0.0),
+            (60.0, 0.0),
+        ],
+    ));
+    let svg = p.to_svg().unwrap();
+    let doc = parse_xml(&svg);
+    let t = placed_texts(&doc);
+    let y_of = |label: &str| {
+        t.iter()
+            .filter(|(s, x, _)| s == label && *x < 130.0)
+            .map(|(_, _, y)| *y)
+            .next()
+            .unwrap_or_else(|| panic!("no y tick {label}: {t:?}"))
+    };
+    assert!(
+        y_of("40") > y_of("0") + 300.0,
+        "{} {}",
+        y_of("40"),
+        y_of("0")
+    );
+    assert!(!t.iter().any(|(s, _, _)| s.starts_with('-')), "{t:?}");
+    // yo-yo dives put data in every corner: the room for the legend is made below the deepest
+    // point, never above the surface (no negative depth on the axis)
+    let mut yo = LinePlot::new("Yo-yo", "time (min)", "depth (m)");
+    yo.y_down = true;
+    yo = yo.with(Series::new(
+        "yo-yo dives",
+        (0..=12)
+            .map(|i| (5.0 * i as f64, if i % 2 == 0 { 0.0 } else { 45.0 }))
+            .collect(),
+    ));
+    let svg = yo.to_svg().unwrap();
+    let t = placed_texts(&parse_xml(&svg));
+    assert!(!t.iter().any(|(s, _, _)| s.starts_with('-')), "{t:?}");
+    assert!(t.iter().any(|(s, x, _)| s == "50" && *x < 130.0), "{t:?}");
+
+    // a log x axis: the decades 1, 10, 100, 1000 are equally spaced
+    let mut q = LinePlot::new("Fig. 2a", "initial radius R0 (µm)", "final radius (µm)");
+    q.log_x = true;
+    q.log_y = true;
+    q = q.with(Series::new(
+        "none",
+        (-10..=30)
+            .map(|i| {
+                let r = 10f64.powf(i as f64 / 10.0);
+                (r, 4.6 * r)
+            })
+            .collect(),
+    ));
+    let svg = q.to_svg().unwrap();
+    let doc = parse_xml(&svg);
+    let t = placed_texts(&doc);
+    let x_of = |label: &str| {
+        t.iter()
+            .filter(|(s, x, y)| s == label && *x > 120.0 && *y > 515.0)
+            .map(|(_, x, _)| *x)
+            .next()
+            .unwrap_or_else(|| panic!("no x tick {label}: {t:?}"))
+    };
+    // the first decade (0.1, whose log10 is not exactly −1 in floating point) is labelled too
+    let (z, a, b, c, d) = (
+        x_of("0.1"),
+        x_of("1"),
+        x_of("10"),
+        x_of("100"),
+        x_of("1000"),
+    );
+    assert!(b - a > 100.0, "{a} {b}");
+    for (p, q, r) in [(z, a, b), (a, b, c), (b, c, d)] {
+        assert!(((q - p) - (r - q)).abs() <= 2.0, "{p} {q} {r}");
+    }
+    // a log x axis with a secondary y axis is refused, not drawn wrong
+    let mut r = q.clone();
+    r.secondary_y_label = Some("ratio".into());
+    r.series
+        .push(Series::new("ratio", vec![(1.0, 1.0), (10.0, 2.0)]).on_secondary());
+    assert!(matches!(r.to_svg(), Err(PlotError::Invalid { .. })));
+}
+
+#[test]
+fn legend_stays_off_the_data_and_long_titles_fit() {
+    // five triangle waves between 145 and 200 over the whole x range, as the oscillation
+    // overlay: every corner of the plotting area holds data
+    let mut p = LinePlot::new(
+        "Bubble 0 radius under each elasticity law",
+        "time (s)",
+        "radius (µm)",
+    );
+    p.distinct = true;
+    for k in 0..5 {
+        let pts = (0..=600)
+            .map(|i| {
+                let t = i as f64 * 0.5;
+                let phase = (t / 60.0).fract();
+                let tri = if phase < 0.5 {
+                    1.0 - 2.0 * phase
+                } else {
+                    2.0 * phase - 1.0
+                };
+                (t, 145.0 + 55.0 * tri + 0.1 * k as f64)
+            })
+            .collect();
+        p = p.with(Series::new(format!("continuity-of-displacement {k}"), pts));
+    }
+    let svg = p.to_svg().unwrap();
+    let doc = parse_xml(&svg);
+    // the legend box: the translucent white rectangle
+    let legend = doc
+        .descendants()
+        .find(|n| n.has_tag_name("rect") && n.attribute("opacity") == Some("0.85"))
+        .expect("legend box");
+    let num = |a: &str| legend.attribute(a).unwrap().parse::<f64>().unwrap();
+    let (x0, y0, w, h) = (num("x"), num("y"), num("width"), num("height"));
+    let mut inside = 0;
+    let mut points = 0;
+    for n in doc.descendants().filter(|n| n.has_tag_name("polyline")) {
+        // data lines are 2 px wide; axes and ticks 1 px
+        if n.attribute("stroke-width") != Some("2") {
+            continue;
+        }
+        let pts: Vec<(f64, f64)> = n
+            .attribute("points")
+            .unwrap()
+            .split_whitespace()
+            .map(|xy| {
+                let (x, y) = xy.split_once(',').unwrap();
+                (x.parse().unwrap(), y.parse().unwrap())
+            })
+            .collect();
+        // the legend's own glyphs: a horizontal stroke (or its dashes) 24 px long at the
+        // left of the box
+        let glyph = pts.len() == 2
+            && pts[0].1 == pts[1].1
+            && pts.iter().all(|p| p.0 >= x0 && p.0 <= x0 + 40.0);
+        if glyph {
+            continue;
+        }
+        for (x, y) in pts {
+            points += 1;
+            if x >= x0 && x <= x0 + w && y >= y0 && y <= y0 + h {
+                inside += 1;
+            }
+        }
+    }
+    assert!(points > 1000, "{points}");
+    assert_eq!(inside, 0, "{inside} data points under the legend");
+
+    // a dive log's long title: set smaller or on two lines, every character kept, each line
+    // narrower than the plot at 0.6 em per character (wider than DejaVu Sans' average)
+    let title = "Bubble radius: Subsurface dive 2 of repetitive-logged.xml, 2019-06-14 09:12:00, Shearwater Perdix AI — hydrogel-dive";
+    let mut q = radius_plot(2);
+    q.title = title.into();
+    let svg = q.to_svg().unwrap();
+    let doc = parse_xml(&svg);
+    let lines: Vec<(String, f64)> = doc
+        .descendants()
+        .filter(|n| {
+            n.has_tag_name("text")
+                && n.attribute("y")
+                    .is_some_and(|y| y.parse::<f64>().unwrap() < 70.0)
+        })
+        .map(|n| {
+            (
+                n.text().unwrap().trim().to_string(),
+                n.attribute("font-size").unwrap().parse().unwrap(),
+            )
+        })
+        .collect();
+    assert!(!lines.is_empty() && lines.len() <= 2, "{lines:?}");
+    let joined = lines
+        .iter()
+        .map(|l| l.0.as_str())
+        .collect::<Vec<_>>()
+        .join(" ");
+    assert_eq!(joined, title);
+    for (l, size) in &lines {
+        let est = 0.6 * size * l.chars().count() as f64;
+        assert!(est <= DEFAULT_SIZE.0 as f64 - 36.0, "{l}: {est} px");
+    }
+}
