@@ -270,14 +270,14 @@ fn displaced_reference_follows_scriven() {
 }
 
 /// The 3-D model against Scriven at the two supersaturations: a 150 µm bubble with γ = 0 in a
-/// sealed cube (6 mm, h = 100 µm at S = 9.9; 4 mm, h = 50 µm at S = 3, where it grows only to
-/// 270 µm); the slope of R² over 200–300 s against 4β²D with ε = 1. When written: −0.09 % at
-/// S = 9.9, where ε = 0 (no displacement) is 8.3 % higher, so the test tells the two apart;
-/// +1.0 % at S = 3, where the two differ by 1.6 % and the bubble spans 3–5 cells.
+/// sealed cube at h = 50 µm (6 mm at S = 9.9; 4 mm at S = 3, where it grows only to 270 µm);
+/// the slope of R² over 200–300 s against 4β²D with ε = 1. The sealed cube's depletion lowers
+/// the slope a little. Printed when run: at S = 9.9 ε = 0 (no displacement) is 8.3 % higher than
+/// ε = 1, so the test tells the two apart; at S = 3 they differ by 1.6 %.
 #[test]
 fn resolved_bubble_grows_as_scriven_with_convection() {
     // at S = 3 the bubble grows from 150 to 270 µm: h = 50 µm (4 mm cube) to resolve it
-    for (s, side, h, tol) in [(9.9, 6e-3, 100e-6, 0.01), (3.0, 4e-3, 50e-6, 0.015)] {
+    for (s, side, h, tol) in [(9.9, 6e-3, 50e-6, 0.01), (3.0, 4e-3, 50e-6, 0.01)] {
         let ja = L * (s - 1.0);
         let beta = scriven_beta(ja, 1.0);
         let beta0 = scriven_beta(ja, 0.0);
@@ -311,16 +311,19 @@ fn resolved_bubble_approaches_the_displaced_gel_solution() {
     assert!(err[1].1[2] > 0.03 && err[1].1[2] > err[0].1[2]);
 }
 
-/// The same on finer grids (about 5 CPU-minutes): h = 50 and 25 µm in a 4 mm cube.
+/// The same on finer grids in a 4 mm cube, h = 100, 50 and 25 µm (about 80 s on 2 cores). When
+/// written, at 100/200/300 s: h = 100 µm +2.11/+0.46/−0.04 % (the bubble displaces once
+/// R ≥ 4h = 400 µm), 50 µm −0.32/+0.35/−0.11 %, 25 µm +0.14/+0.16/+0.24 %; without the
+/// displacement +3.50 % and +4.77 % at 300 s for h = 100 and 50 µm, moving away.
 #[test]
-#[ignore = "fine grids, about 5 CPU-minutes: cargo test --release -- --ignored"]
+#[ignore = "fine grids, about 80 s on 2 cores: cargo test --release -- --ignored"]
 fn resolved_bubble_on_fine_grids() {
     let times = [100.0, 200.0, 300.0];
     let err = study(4e-3, &[100e-6, 50e-6, 25e-6], &times);
     for (h, (e, _)) in [100, 50, 25].iter().zip(&err).skip(1) {
         for (t, x) in times.iter().zip(e) {
             assert!(
-                x.abs() < 0.008,
+                x.abs() < 0.005,
                 "h = {h} µm, t = {t} s: {:+.2} %",
                 100.0 * x
             );
