@@ -5,6 +5,7 @@ pub mod config;
 pub mod diffusion;
 pub mod elasticity;
 pub mod grid;
+pub mod nucleation;
 pub mod params;
 pub mod sim;
 pub mod surface;

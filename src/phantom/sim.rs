@@ -23,6 +23,7 @@
 use super::bubble::{Balance, Bubble, BubbleFate};
 use super::diffusion;
 use super::grid::{Face, Grid};
+use super::nucleation::NucleusPool;
 use super::params::{BubblePlacement, PhantomParams};
 use crate::error::Error;
 use crate::gas::Gas;
@@ -220,6 +221,8 @@ pub struct Simulation<'a> {
     sphere: Vec<[f64; 3]>,
     kernel: Vec<(usize, f64)>,
     steps_state: Vec<StepExchange>,
+    /// Sub-grid nuclei of the nucleation model ([`Self::nucleate`]).
+    nuclei: NucleusPool,
 }
 
 fn fibonacci_sphere(n: usize) -> Vec<[f64; 3]> {
@@ -338,7 +341,9 @@ impl<'a> Simulation<'a> {
             sphere: Vec::new(),
             kernel: Vec::new(),
             steps_state: Vec::new(),
+            nuclei: NucleusPool::default(),
         };
+        sim.nuclei = sim.nucleus_pool()?;
         sim.initial_total = sim.total_moles();
         Ok(sim)
     }
@@ -528,6 +533,7 @@ impl<'a> Simulation<'a> {
                 f64::INFINITY
             };
             self.coalesce(t1, p1, &mut log.events)?;
+            self.nucleate(p1, &mut tensions, &mut fluxes)?;
             self.check_health()?;
             self.observe(profile, p1, &tensions, observer, &mut log, false)?;
             if log.ending != Ending::Completed || self.time >= end - 1e-9 {
@@ -1184,6 +1190,152 @@ impl<'a> Simulation<'a> {
         };
         observer.frame(&frame);
         Ok(min_c)
+    }
+}
+
+impl Simulation<'_> {
+    /// The nucleation model's nuclei in this grid, as a pool ([`Self::new`]).
+    fn nucleus_pool(&self) -> Result<NucleusPool, Error> {
+        let input =
+            |field: &str, m: String| Error::Input(crate::error::InputError::new(m).field(field));
+        let nuclei = self
+            .params
+            .nucleation
+            .nuclei(&self.grid)
+            .map_err(|e| input(&e.field, e.message))?;
+        NucleusPool::new(&nuclei, &self.grid, self.params.surface_tension)
+            .map_err(|m| input("nucleation", m))
+    }
+
+    /// The nuclei of the run and their state (empty under the `fixed` model).
+    pub fn nuclei(&self) -> &NucleusPool {
+        &self.nuclei
+    }
+
+    /// Phase 8: nucleation ([`super::nucleation`]). Nuclei whose bubble has dissolved or merged
+    /// return to the pool; every nucleus in the pool whose cell's supersaturation
+    /// Σ_g C_g·R_u·T/L_g + p_fixed − P_amb exceeds its 2γ/r (eq. 2.11) becomes a bubble of its
+    /// radius ([`Self::add_bubble`]), unless it lies inside an active bubble. `tensions` and
+    /// `fluxes` (the time loop's per-bubble buffers) grow with the bubbles.
+    fn nucleate(
+        &mut self,
+        p1: f64,
+        tensions: &mut Vec<f64>,
+        fluxes: &mut Vec<Vec<f64>>,
+    ) -> Result<(), Error> {
+        if self.nuclei.is_empty() {
+            return Ok(());
+        }
+        let mut pool = std::mem::take(&mut self.nuclei);
+        pool.release(|b| self.bubbles[b].active());
+        let k: Vec<f64> = self.ostwald.iter().map(|l| self.rt / l).collect();
+        let fixed = self.params.bubble_fixed_gases;
+        let ready = pool.ready(|cell| {
+            let mut tension = fixed;
+            for (f, kg) in self.fields.iter().zip(&k) {
+                tension += f[cell] * kg;
+            }
+            tension - p1
+        });
+        let mut result = Ok(());
+        for index in ready {
+            let n = pool.entries()[index].nucleus;
+            let engulfed = self.bubbles.iter().any(|b| {
+                b.active()
+                    && (0..3)
+                        .map(|a| (b.position[a] - n.position[a]).powi(2))
+                        .sum::<f64>()
+                        < b.radius * b.radius
+            });
+            if engulfed {
+                continue;
+            }
+            match self.add_bubble(n.position, n.radius, p1) {
+                Ok(Some(id)) => pool.activate(index, id),
+                Ok(None) => {}
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+            }
+        }
+        self.nuclei = pool;
+        tensions.resize(self.bubbles.len(), 0.0);
+        fluxes.resize(self.bubbles.len(), vec![0.0; self.gases.len()]);
+        result
+    }
+
+    /// Add a bubble of radius `r` (m) centred at `position` (m) at the current time: at Laplace
+    /// equilibrium (eq. 2.4) at ambient `ambient` (Pa), R0 = r and P0 = `ambient` for the
+    /// elasticity and surface laws, with the composition of the gel's gas tension in its cell.
+    /// Its gas is taken from the gel through its sink kernel, so the total is conserved.
+    /// Returns its id, or `None` when the gel there holds no gas to give (nothing is added).
+    pub fn add_bubble(
+        &mut self,
+        position: [f64; 3],
+        r: f64,
+        ambient: f64,
+    ) -> Result<Option<usize>, Error> {
+        let cell = super::nucleation::cell_of(&self.grid, position)
+            .filter(|c| self.grid.inside(*c))
+            .ok_or_else(|| {
+                Error::Solver(format!(
+                    "a bubble added at ({:.3e}, {:.3e}, {:.3e}) m is outside the phantom",
+                    position[0], position[1], position[2]
+                ))
+            })?;
+        let ng = self.gases.len();
+        let partial: Vec<f64> = (0..ng)
+            .map(|g| self.fields[g][cell].max(0.0) * self.rt / self.ostwald[g])
+            .collect();
+        let psum: f64 = partial.iter().sum();
+        if !(psum > 0.0) {
+            return Ok(None);
+        }
+        let id = self.bubbles.len();
+        let mut bubble = Bubble {
+            id,
+            position,
+            initial_radius: r,
+            initial_ambient: ambient,
+            moles: vec![0.0; ng],
+            radius: r,
+            fate: BubbleFate::Active,
+        };
+        let n_total = self.balance_for(&bubble, ambient).pv(r) / self.rt;
+        if !(n_total > 0.0 && n_total.is_finite()) {
+            return Err(Error::Input(
+                crate::error::InputError::new(format!(
+                    "a bubble of radius {r:.3e} m at P_amb = {ambient:.0} Pa holds no simulated gas at Laplace equilibrium (P_B ≤ material.bubble_fixed_gases_pa = {:.0} Pa)",
+                    self.params.bubble_fixed_gases
+                ))
+                .field("material.bubble_fixed_gases_pa"),
+            ));
+        }
+        self.bubbles.push(bubble.clone());
+        let want: Vec<f64> = partial.iter().map(|p| n_total * p / psum).collect();
+        let taken = self.take_from_grid(id, &want);
+        bubble.moles.copy_from_slice(&taken[..ng]);
+        let nrt = bubble.total_moles() * self.rt;
+        let radius = if nrt > 0.0 {
+            self.balance_for(&bubble, ambient).radius_for(nrt, r)
+        } else {
+            None
+        };
+        match radius {
+            Some(radius) => {
+                bubble.radius = radius;
+                self.bubbles[id] = bubble;
+                Ok(Some(id))
+            }
+            None => {
+                // nothing the Laplace balance can hold: give the gas back, add nothing
+                let back: Vec<f64> = taken[..ng].iter().map(|m| -m).collect();
+                self.take_from_grid(id, &back);
+                self.bubbles.pop();
+                Ok(None)
+            }
+        }
     }
 }
 
