@@ -1,0 +1,279 @@
+//! Nucleation (`[nucleation] model = "critical-radius"`, issue 12): activation exactly at the
+//! critical supersaturation of eq. (2.11), reproducibility, convergence of the activated
+//! fraction to the size distribution's analytic tail, and the paper's §4.2.4 finding on the
+//! number of bubbles.
+
+use decophantom::gas::GasMix;
+use decophantom::phantom::nucleation::critical_radius::{CriticalRadius, SizeDistribution};
+use decophantom::phantom::params::PhantomParams;
+use decophantom::phantom::sim::{Recorder, Simulation};
+use decophantom::profile::PressureHistory;
+use decophantom::units::{ATM_PA, PSI_PA};
+use std::sync::Arc;
+
+/// Surface tension used throughout, N/m (the paper's Table 1 upper value, the default).
+const GAMMA: f64 = 0.07;
+
+/// A sealed 1 mm cube, h = 100 µm, no impermeable skin, with the given nucleation model.
+fn sealed_cube(model: CriticalRadius) -> PhantomParams {
+    let mut p = PhantomParams::box_phantom([1e-3; 3], 100e-6);
+    p.open_faces = vec![];
+    p.min_radius = 0.0;
+    p.surface_tension = GAMMA;
+    p.nucleation = Arc::new(model);
+    p.numerics.record_interval = 0.0;
+    p
+}
+
+/// Constant 1 atm of air for `duration` s.
+fn constant(duration: f64) -> PressureHistory {
+    PressureHistory::with_gas(
+        "const",
+        vec![0.0, duration],
+        vec![ATM_PA, ATM_PA],
+        GasMix::AIR,
+        0.0,
+    )
+    .unwrap()
+}
+
+/// A simulation of `p` whose gel holds a uniform supersaturation `s` (Pa) above 1 atm, all as
+/// N2 (the gel tension Σ_g C_g·R_u·T/L_g is then L·p/(R_u·T)·R_u·T/L = P_amb + s exactly).
+fn uniform<'a>(p: &'a PhantomParams, prof: &PressureHistory, s: f64) -> Simulation<'a> {
+    let mut sim = Simulation::new(p, prof).unwrap();
+    let rt = decophantom::units::GAS_CONSTANT * p.temperature;
+    for g in 0..sim.gases().len() {
+        let gas = sim.gases()[g];
+        let l = p.gas(gas).unwrap().ostwald;
+        let c = if gas == decophantom::gas::Gas::N2 {
+            l * (ATM_PA + s) / rt
+        } else {
+            0.0
+        };
+        let cells: Vec<bool> = (0..sim.grid().len()).map(|i| sim.grid().inside(i)).collect();
+        for (x, inside) in sim.field_mut(g).iter_mut().zip(cells) {
+            if inside {
+                *x = c;
+            }
+        }
+    }
+    sim.rebase_balance();
+    sim
+}
+
+/// Run one step of a uniform sealed gel (the field stays uniform: no open face, no
+/// perfusion) and return the radii of the nuclei that became bubbles, and of all nuclei.
+fn activated_at(model: CriticalRadius, s: f64) -> (Vec<f64>, Vec<f64>) {
+    let p = sealed_cube(model);
+    let prof = constant(0.05);
+    let mut sim = uniform(&p, &prof, s);
+    sim.run(&prof, &mut Recorder::default()).unwrap();
+    let e = sim.nuclei().entries();
+    (
+        e.iter()
+            .filter(|x| x.bubble.is_some())
+            .map(|x| x.nucleus.radius)
+            .collect(),
+        e.iter().map(|x| x.nucleus.radius).collect(),
+    )
+}
+
+#[test]
+fn nuclei_activate_exactly_above_the_critical_supersaturation() {
+    // every nucleus 1 µm (log-normal, σ = 0): eq. (2.11) gives the critical supersaturation
+    // 2γ/r = 2·0.07/1e-6 = 140 000 Pa, computed here, not read from the code
+    let r = 1e-6;
+    let critical = 2.0 * GAMMA / r;
+    assert!((critical - 140_000.0).abs() < 1e-9);
+    let model = CriticalRadius {
+        number_density: 5e10, // 50 nuclei in the 1 mm³ gel
+        distribution: SizeDistribution::LogNormal {
+            median: r,
+            sigma: 0.0,
+        },
+        margin: None,
+        seed: 11,
+    };
+    let (below, all) = activated_at(model, critical * (1.0 - 1e-6));
+    assert_eq!(all.len(), 50);
+    assert!(below.is_empty(), "{} activated below", below.len());
+    let (above, _) = activated_at(model, critical * (1.0 + 1e-6));
+    assert_eq!(above.len(), 50, "all 50 must activate just above 2γ/r");
+
+    // a size distribution: exactly the nuclei with 2γ/r < s activate (the set computed here
+    // from the radii, independently of the pool's sorting)
+    let model = CriticalRadius {
+        number_density: 3e11,
+        distribution: SizeDistribution::Exponential { slope: 1e6 },
+        margin: None,
+        seed: 5,
+    };
+    let s = 150_000.0;
+    let (got, all) = activated_at(model, s);
+    let mut want: Vec<f64> = all.into_iter().filter(|r| 2.0 * GAMMA / r < s).collect();
+    let mut got = got;
+    want.sort_by(f64::total_cmp);
+    got.sort_by(f64::total_cmp);
+    assert!(!want.is_empty());
+    assert_eq!(got, want);
+}
+
+#[test]
+fn an_activated_bubble_starts_at_its_nucleus_radius_with_gas_taken_from_the_gel() {
+    let model = CriticalRadius {
+        number_density: 1e9, // one nucleus
+        distribution: SizeDistribution::LogNormal {
+            median: 2e-6,
+            sigma: 0.0,
+        },
+        margin: None,
+        seed: 2,
+    };
+    let p = sealed_cube(model);
+    let prof = constant(0.05);
+    // s = 100 kPa > 2γ/r = 70 kPa
+    let mut sim = uniform(&p, &prof, 100_000.0);
+    let before = sim.total_moles();
+    let mut rec = Recorder::default();
+    let sum = sim.run(&prof, &mut rec).unwrap();
+    assert_eq!(sim.bubbles.len(), 1);
+    let b = &sim.bubbles[0];
+    assert_eq!(b.initial_radius, 2e-6);
+    assert_eq!(b.position, sim.nuclei().entries()[0].nucleus.position);
+    // its content at creation: (P_amb + 2γ/r)·(4/3)πr³/(R_u·T), eq. (2.4) with Ω = 0
+    let rt = decophantom::units::GAS_CONSTANT * p.temperature;
+    let n0 = (ATM_PA + 2.0 * GAMMA / 2e-6) * 4.0 / 3.0 * std::f64::consts::PI * 8e-18 / rt;
+    assert!((b.initial_ambient - ATM_PA).abs() < 1e-6, "created at 1 atm");
+    // the first frame that shows it is recorded right after its creation (end of step 1)
+    let first = rec.frames.iter().find(|f| !f.bubbles.is_empty()).unwrap();
+    let n: f64 = first.bubbles[0].moles.iter().sum();
+    assert!((n - n0).abs() / n0 < 1e-9, "content {n} mol, Laplace {n0} mol");
+    assert!((first.bubbles[0].radius - 2e-6).abs() < 1e-15);
+    // gas conserved: the bubble's gas came from the gel
+    assert!((sim.total_moles() - before).abs() / before < 1e-12);
+    assert!(sum.gas_balance_error < 1e-12);
+}
+
+#[test]
+fn the_same_seed_gives_the_same_bubbles() {
+    let model = |seed| CriticalRadius {
+        number_density: 2e10,
+        distribution: SizeDistribution::Exponential { slope: 4e6 },
+        margin: None,
+        seed,
+    };
+    let run = |seed| {
+        let mut p = PhantomParams::box_phantom([1.5e-3; 3], 100e-6);
+        p.min_radius = 0.0;
+        p.nucleation = Arc::new(model(seed));
+        p.numerics.record_interval = 10.0;
+        let prof = dive(120.0, 6.9e4, 120.0);
+        let mut sim = Simulation::new(&p, &prof).unwrap();
+        let mut rec = Recorder::default();
+        sim.run(&prof, &mut rec).unwrap();
+        let bubbles: Vec<(usize, [f64; 3], f64, f64)> = sim
+            .bubbles
+            .iter()
+            .map(|b| (b.id, b.position, b.initial_radius, b.radius))
+            .collect();
+        (bubbles, rec.frames)
+    };
+    let (a, fa) = run(7);
+    let (b, fb) = run(7);
+    assert!(!a.is_empty(), "the dive must nucleate bubbles");
+    assert_eq!(a, b);
+    assert_eq!(fa, fb);
+    let (c, _) = run(8);
+    assert_ne!(a, c);
+}
+
+#[test]
+fn the_activated_fraction_converges_to_the_exponential_tail() {
+    // Yount's exponential: the fraction of nuclei above r_c is e^(−β·r_c); at a uniform
+    // supersaturation s, r_c = 2γ/s (eq. 2.11). β = 1e6 /m, s = 140 kPa: r_c = 1 µm, e^(−1).
+    let beta = 1e6;
+    let s = 140_000.0;
+    let exact = (-beta * 2.0 * GAMMA / s).exp();
+    assert!((exact - (-1.0f64).exp()).abs() < 1e-15);
+    let mut errors = Vec::new();
+    for n in [100.0, 1000.0, 10_000.0] {
+        let model = CriticalRadius {
+            number_density: n / 1e-9,
+            distribution: SizeDistribution::Exponential { slope: beta },
+            margin: Some(0.0),
+            seed: 2017,
+        };
+        let (act, all) = activated_at(model, s);
+        assert_eq!(all.len() as f64, n);
+        let f = act.len() as f64 / n;
+        // binomial standard error √(f(1 − f)/n)
+        let se = (exact * (1.0 - exact) / n).sqrt();
+        eprintln!("n = {n}: fraction {f:.4} (exact {exact:.4}, error {:.4}, se {se:.4})", f - exact);
+        assert!((f - exact).abs() < 4.0 * se, "n = {n}: {f} vs {exact}");
+        errors.push((f - exact).abs());
+    }
+    assert!(errors[2] < 0.02);
+}
+
+/// The paper's §4.2 dive (Fig. 6a: compression at 6.9e4 Pa/s to 130 psi gauge), a hold of
+/// `hold` s, decompression at `rate` Pa/s, `after` s at the surface; air.
+fn dive(hold: f64, rate: f64, after: f64) -> PressureHistory {
+    let top = ATM_PA + 130.0 * PSI_PA;
+    let down = (top - ATM_PA) / 6.9e4;
+    let up = (top - ATM_PA) / rate;
+    PressureHistory::with_gas(
+        "dive",
+        vec![0.0, down, down + hold, down + hold + up, down + hold + up + after],
+        vec![ATM_PA, top, top, ATM_PA, ATM_PA],
+        GasMix::AIR,
+        0.0,
+    )
+    .unwrap()
+}
+
+/// Number of bubbles nucleated (every activation) and the peak number active at once, in a
+/// 3 × 3 × 2 mm gel open at the top only (h = 100 µm), for the §4.2 dive with a hold of
+/// `hold` s and a decompression at `rate` Pa/s, watched 1 min after surfacing (the supersaturation of the gel peaks at surfacing).
+fn bubbles_after_dive(hold: f64, rate: f64) -> (usize, usize) {
+    use decophantom::phantom::grid::Face;
+    let mut p = PhantomParams::box_phantom([3e-3, 3e-3, 2e-3], 100e-6);
+    p.open_faces = vec![Face::Top];
+    p.min_radius = 0.0;
+    p.numerics.record_interval = 5.0;
+    p.nucleation = Arc::new(CriticalRadius {
+        number_density: 1e10, // 180 nuclei in 18 mm³
+        distribution: SizeDistribution::Exponential { slope: 5e6 },
+        margin: Some(0.5e-3),
+        seed: 426,
+    });
+    let prof = dive(hold, rate, 60.0);
+    let mut sim = Simulation::new(&p, &prof).unwrap();
+    let mut rec = Recorder::default();
+    let t0 = std::time::Instant::now();
+    let sum = sim.run(&prof, &mut rec).unwrap();
+    eprintln!("hold {hold} rate {rate}: steps {:?}, {:.1} s", sum.steps, t0.elapsed().as_secs_f64());
+    let peak = rec.frames.iter().map(|f| f.bubbles.len()).max().unwrap();
+    (sim.bubbles.len(), peak)
+}
+
+#[test]
+fn more_bubbles_with_time_at_depth_not_with_decompression_rate() {
+    // The paper's §4.2.4 (experiments of its ref. [19]): the number of bubbles that nucleate
+    // "showed a significant positive linear trend with time at depth, but no trend was found
+    // with decompression rate". Here: holds of 5, 10 and 20 min at 130 psi gauge, and the
+    // 20 min dive decompressed at the paper's 8.9e4 Pa/s (Fig. 6a) and 4× slower.
+    let t0 = std::time::Instant::now();
+    let by_hold: Vec<(usize, usize)> = [300.0, 600.0, 1200.0]
+        .iter()
+        .map(|h| bubbles_after_dive(*h, 8.9e4))
+        .collect();
+    let slow = bubbles_after_dive(1200.0, 8.9e4 / 4.0);
+    eprintln!(
+        "holds 5/10/20 min: nucleated {:?}; 20 min at 8.9e4 Pa/s: {:?}, at 2.2e4 Pa/s: {:?} ({:.1} s)",
+        by_hold,
+        by_hold[2],
+        slow,
+        t0.elapsed().as_secs_f64()
+    );
+    assert!(by_hold[0].0 < by_hold[1].0 && by_hold[1].0 < by_hold[2].0);
+}
