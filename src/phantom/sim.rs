@@ -1217,12 +1217,14 @@ impl Simulation<'_> {
     ///    its gas returns to the gel (the step limits of [`Self::choose_step`] are sized for
     ///    bubbles of many µm; a sub-µm bubble left to shrink further would leave the range of the
     ///    radius solve).
-    /// 2. Nuclei whose bubble has dissolved or merged return to the pool.
+    /// 2. Nuclei whose bubble has dissolved return to the pool (one whose bubble merged into
+    ///    another is consumed: its gas is in the survivor).
     /// 3. Every nucleus in the pool whose cell's supersaturation
     ///    Σ_g C_g·R_u·T/L_g + p_fixed − P_amb exceeds its 2γ/r (eq. 2.11), and for which the
     ///    gel tension that its bubble would see (the coupling sphere of a bubble of radius r,
     ///    as in [`Self::fluxes`]) exceeds P_amb + 2γ/r too, becomes a bubble of its radius
-    ///    ([`Self::add_bubble`]), unless it lies inside an active bubble. The cell value is the
+    ///    ([`Self::add_bubble`]), unless it touches an active bubble (it would merge into it at
+    ///    the next step, and its nucleus return to the pool, for ever). The cell value is the
     ///    cheap test of every nucleus; the coupling sphere is read only for those that pass it,
     ///    so that a new bubble starts growing (without it, a nucleus at a peak of the field
     ///    activates, sees a lower mean tension at its coupling sphere, dissolves, and activates
@@ -1250,7 +1252,7 @@ impl Simulation<'_> {
                 self.dissolve(id, self.time, events);
             }
         }
-        pool.release(|b| self.bubbles[b].active());
+        pool.release(|b| matches!(self.bubbles[b].fate, BubbleFate::Dissolved(_)));
         let k: Vec<f64> = self.ostwald.iter().map(|l| self.rt / l).collect();
         let fixed = self.params.bubble_fixed_gases;
         let ready = pool.ready(|cell| {
@@ -1260,25 +1262,30 @@ impl Simulation<'_> {
             }
             tension - p1
         });
-        let mut result = Ok(());
+        // the coupling-sphere test of every candidate first, on the gel of the end of the
+        // step (the gas each new bubble takes must not decide for its neighbours)
+        let mut confirmed = Vec::with_capacity(ready.len());
         for index in ready {
             let e = pool.entries()[index];
-            let n = e.nucleus;
-            let rho = self.coupling_radius(n.radius);
+            let rho = self.coupling_radius(e.nucleus.radius);
             let mut tension = fixed;
             for (g, kg) in k.iter().enumerate() {
                 let here = self.fields[g][e.cell];
-                tension += self.sphere_mean(g, n.position, rho, here) * kg;
+                tension += self.sphere_mean(g, e.nucleus.position, rho, here) * kg;
             }
-            if !(tension - p1 > e.threshold) {
-                continue;
+            if tension - p1 > e.threshold {
+                confirmed.push(index);
             }
+        }
+        let mut result = Ok(());
+        for index in confirmed {
+            let n = pool.entries()[index].nucleus;
             let engulfed = self.bubbles.iter().any(|b| {
                 b.active()
                     && (0..3)
                         .map(|a| (b.position[a] - n.position[a]).powi(2))
                         .sum::<f64>()
-                        < b.radius * b.radius
+                        < (b.radius + n.radius).powi(2)
             });
             if engulfed {
                 continue;

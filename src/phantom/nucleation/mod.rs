@@ -12,8 +12,8 @@
 //! with p_fixed = `material.bubble_fixed_gases_pa` (the same convention as the gel tension of
 //! the bubbles' coupling). The bubble starts at radius r with the Laplace content and the
 //! composition of the gel in its cell, its gas taken from the gel
-//! ([`Simulation::add_bubble`](super::sim::Simulation::add_bubble)). When that bubble dissolves (or
-//! merges into another) its nucleus returns to the pool. Nuclei cost nothing until they activate:
+//! ([`Simulation::add_bubble`](super::sim::Simulation::add_bubble)). When that bubble dissolves
+//! its nucleus returns to the pool (when it merges into another, the nucleus is consumed). Nuclei cost nothing until they activate:
 //! each one's cell and threshold are computed once, the pool is sorted by cell and threshold,
 //! and each step reads one tension per occupied cell.
 //!
@@ -121,7 +121,9 @@ pub struct PoolEntry {
     pub cell: usize,
     /// Activation threshold 2γ/r, Pa (eq. 2.11).
     pub threshold: f64,
-    /// The bubble it has become, while that bubble is active; `None` while in the pool.
+    /// The bubble it became; `None` while in the pool. A nucleus returns to the pool when its
+    /// bubble dissolves; one whose bubble merged into another is consumed (its gas is in the
+    /// survivor) and keeps the id of the merged bubble.
     pub bubble: Option<usize>,
 }
 
@@ -187,11 +189,11 @@ impl NucleusPool {
         self.entries.is_empty()
     }
 
-    /// Return to the pool every nucleus whose bubble is no longer active (`active(id)`).
-    pub fn release(&mut self, active: impl Fn(usize) -> bool) {
+    /// Return to the pool every nucleus whose bubble has dissolved (`dissolved(id)`).
+    pub fn release(&mut self, dissolved: impl Fn(usize) -> bool) {
         for e in &mut self.entries {
             if let Some(b) = e.bubble {
-                if !active(b) {
+                if dissolved(b) {
                     e.bubble = None;
                 }
             }
@@ -278,7 +280,7 @@ mod tests {
         let i = pool.ready(|_| 1e9)[0];
         pool.activate(i, 7);
         assert_eq!(pool.ready(|_| 1e9).len(), 2);
-        pool.release(|b| b != 7);
+        pool.release(|b| b == 7);
         assert_eq!(pool.ready(|_| 1e9).len(), 3);
     }
 
