@@ -175,7 +175,9 @@ fn the_same_seed_gives_the_same_bubbles() {
         p.min_radius = 0.0;
         p.nucleation = Arc::new(model(seed));
         p.numerics.record_interval = 10.0;
-        let prof = dive(120.0, 6.9e4, 120.0);
+        p.numerics.max_content_change = 0.1;
+        p.numerics.bubble_tolerance = 0.02;
+        let prof = dive(120.0, 8.9e4, 30.0);
         let mut sim = Simulation::new(&p, &prof).unwrap();
         let mut rec = Recorder::default();
         sim.run(&prof, &mut rec).unwrap();
