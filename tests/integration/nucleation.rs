@@ -317,3 +317,59 @@ fn more_bubbles_with_time_at_depth_not_with_decompression_rate() {
         "rate {rate_effect} vs hold {hold_effect}"
     );
 }
+
+#[test]
+fn the_phantom_toml_chooses_the_model_and_errors_name_the_field() {
+    use decophantom::phantom::config::{parse_phantom, require_bubbles};
+    use std::path::Path;
+    let base = "[geometry]\nshape = \"box\"\nsize_m = [1e-3, 1e-3, 1e-3]\ngrid_step_m = 1e-4\n\
+                [gases.n2]\ndiffusivity = 2.5e-9\nostwald = 0.014\n";
+    let with = |nucleation: &str| format!("{base}[nucleation]\n{nucleation}");
+    // default: fixed, R_min = h, and a phantom without bubbles is refused
+    let p = parse_phantom(base, Path::new("p.toml")).unwrap().params;
+    assert_eq!(p.nucleation.name(), "fixed");
+    assert_eq!(p.min_radius, 1e-4);
+    assert!(require_bubbles(&p, Path::new("p.toml")).is_err());
+    // critical-radius: R_min defaults to 0 and the phantom needs no t = 0 bubble
+    let text = with(
+        "model = \"critical-radius\"\nnumber_density_per_m3 = 1e10\nslope_per_m = 5e6\nseed = 1\n",
+    );
+    let p = parse_phantom(&text, Path::new("p.toml")).unwrap().params;
+    assert_eq!(p.nucleation.name(), "critical-radius");
+    assert_eq!(p.min_radius, 0.0);
+    assert!(require_bubbles(&p, Path::new("p.toml")).is_ok());
+    // bad input: an error naming the field, never a panic
+    for (body, field) in [
+        ("model = \"classical\"\n", "nucleation.model"),
+        ("model = 3\n", "nucleation.model"),
+        ("model = \"fixed\"\nseed = 1\n", "nucleation.seed"),
+        (
+            "model = \"critical-radius\"\nnumber_density_per_m3 = 1e10\nseed = 1\n",
+            "nucleation.slope_per_m",
+        ),
+        (
+            "model = \"critical-radius\"\nnumber_density_per_m3 = 1e10\nslope_per_m = 5e6\nseed = 1\nsigma = 0.5\n",
+            "nucleation.sigma",
+        ),
+        (
+            "model = \"critical-radius\"\nnumber_density_per_m3 = nan\nslope_per_m = 5e6\nseed = 1\n",
+            "nucleation.number_density_per_m3",
+        ),
+        (
+            // 1e18 /m³ in 1 mm³: 1e9 nuclei, over the limit
+            "model = \"critical-radius\"\nnumber_density_per_m3 = 1e18\nslope_per_m = 5e6\nseed = 1\n",
+            "nucleation.number_density_per_m3",
+        ),
+        (
+            "model = \"critical-radius\"\nnumber_density_per_m3 = 1e10\nslope_per_m = 5e6\nseed = 1\nmargin_m = 0.6e-3\n",
+            "nucleation.margin_m",
+        ),
+        (
+            "model = \"critical-radius\"\nnumber_density_per_m3 = 1e10\ndistribution = \"weibull\"\nseed = 1\n",
+            "nucleation.distribution",
+        ),
+    ] {
+        let e = parse_phantom(&with(body), Path::new("p.toml")).unwrap_err();
+        assert_eq!(e.field.as_deref(), Some(field), "{body}: {}", e.message);
+    }
+}
