@@ -373,3 +373,101 @@ fn the_phantom_toml_chooses_the_model_and_errors_name_the_field() {
         assert_eq!(e.field.as_deref(), Some(field), "{body}: {}", e.message);
     }
 }
+
+/// A 3 mm gel cube open at the top (h = 150 µm) holding micronuclei (mean radius 0.5 µm).
+const NUCLEATING_PHANTOM: &str = r#"name = "nucleating-gel"
+[geometry]
+shape = "box"
+size_m = [3e-3, 3e-3, 3e-3]
+grid_step_m = 150e-6
+open_faces = ["top"]
+[gases.n2]
+diffusivity = 2.5e-9
+ostwald = 0.014
+[gases.o2]
+diffusivity = 2.5e-9
+ostwald = 0.027
+[nucleation]
+model = "critical-radius"
+number_density_per_m3 = 1e10
+slope_per_m = 2e6
+margin_m = 0.5e-3
+seed = 1
+[numerics]
+max_step_s = 30.0
+record_interval_s = 10.0
+"#;
+
+#[test]
+fn evaluate_scores_the_bubbles_the_dive_nucleates() {
+    use crate::common::{bin, tempdir};
+    let d = tempdir("nucleation-evaluate");
+    let w = |name: &str, text: &str| {
+        let p = d.join(name);
+        std::fs::write(&p, text).unwrap();
+        p.to_str().unwrap().to_string()
+    };
+    // the evaluate test's gel with two fixed bubbles of 100 µm instead of nuclei
+    let fixed = NUCLEATING_PHANTOM
+        .replace(
+            "[nucleation]\nmodel = \"critical-radius\"\nnumber_density_per_m3 = 1e10\nslope_per_m = 2e6\nmargin_m = 0.5e-3\nseed = 1\n",
+            "[nuclei]\nmin_radius_m = 86.5e-6\n[[bubbles]]\nposition_m = [1.5e-3, 1.5e-3, 1.5e-3]\ninitial_radius_m = 100e-6\n",
+        );
+    assert_ne!(fixed, NUCLEATING_PHANTOM);
+    let criteria = w(
+        "criteria.toml",
+        "[protocol]\nobserve_after_surfacing_min = 30\n\
+         [[criterion]]\nkind = \"bubble-count\"\nlimit = 1000\n\
+         [[criterion]]\nkind = \"activation-time\"\nlimit = 1000\n",
+    );
+    // 30 m for 10 min on air, straight up at 30 m/min: surfacing at 12.5 min
+    let dive = w(
+        "fast.csv",
+        "time_min,depth_m\n0,0\n1.5,30\n11.5,30\n12.5,0\n",
+    );
+    let score = |phantom: &str, out: &str| -> (f64, f64) {
+        let ph = w(&format!("{out}.toml"), phantom);
+        let out = d.join(out);
+        let o = std::process::Command::new(bin())
+            .args([
+                "evaluate",
+                "--schedule",
+                &dive,
+                "--phantom",
+                &ph,
+                "--criteria",
+            ])
+            .arg(&criteria)
+            .arg("--out")
+            .arg(&out)
+            .arg("-q")
+            .output()
+            .unwrap();
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let text = std::fs::read_to_string(out.join("scores.csv")).unwrap();
+        let v = |kind: &str| -> f64 {
+            text.lines()
+                .find(|l| l.split(',').nth(2) == Some(kind))
+                .unwrap()
+                .split(',')
+                .nth(5)
+                .unwrap()
+                .parse()
+                .unwrap()
+        };
+        (v("bubble-count"), v("activation-time"))
+    };
+    // fixed nuclei: nothing forms, both criteria are 0 whatever the seed bubbles do
+    assert_eq!(score(&fixed, "fixed"), (0.0, 0.0));
+    // micronuclei: bubbles form, and only once the gel is supersaturated, i.e. during the
+    // 1 min ascent or after it: the first activation is 30 to 31 min before the end of the
+    // 30 min watch (frames every 10 s)
+    let (count, since) = score(NUCLEATING_PHANTOM, "nucleating");
+    assert!(count >= 1.0, "no bubble formed");
+    assert!((30.0 - 1e-9..=31.0 + 1e-9).contains(&since), "{since} min");
+}
