@@ -17,7 +17,11 @@ use std::time::Duration;
 
 fn nucleation(c: &mut Criterion) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    let history = load(&root.join("profiles/fig5-dive.toml"), &LoadOptions::default()).unwrap();
+    let history = load(
+        &root.join("profiles/fig5-dive.toml"),
+        &LoadOptions::default(),
+    )
+    .unwrap();
     let fixed = load_phantom(&root.join("profiles/phantoms/hydrogel.toml"))
         .unwrap()
         .params;

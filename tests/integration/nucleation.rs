@@ -472,6 +472,9 @@ fn evaluate_scores_the_bubbles_the_dive_nucleates() {
     assert!((30.0 - 1e-9..=31.0 + 1e-9).contains(&since), "{since} min");
 }
 
+/// Criterion kind and value.
+type Scores = Vec<(&'static str, f64)>;
+
 /// Scores of one dive's window of frames: the frames from `start` (s) for `length` s, the dive
 /// surfacing at `surfaced` s; the window's first frame is the state the dive starts from.
 fn window_scores(
@@ -479,7 +482,7 @@ fn window_scores(
     start: f64,
     length: f64,
     surfaced: f64,
-) -> Vec<(&'static str, f64)> {
+) -> Scores {
     use decophantom::risk::{build, RunData};
     let w: Vec<_> = frames
         .iter()
@@ -508,7 +511,7 @@ fn window_scores(
 
 /// The same dive made first and repeated after a surface interval, in the nucleating gel of
 /// [`NUCLEATING_PHANTOM`] (or its `fixed` twin): the criteria of each dive's own window.
-fn first_and_repeated(nucleating: bool) -> (Vec<(&'static str, f64)>, Vec<(&'static str, f64)>) {
+fn first_and_repeated(nucleating: bool) -> (Scores, Scores) {
     use decophantom::phantom::config::parse_phantom;
     let text = if nucleating {
         // half the nuclei of the evaluate test (a shorter test)
