@@ -31,6 +31,9 @@ struct RawPhantom {
     population: Option<RawPopulation>,
     #[serde(default)]
     perfusion: RawPerfusion,
+    /// `[nucleation]`: `model` (registry name) and that model's parameters, validated by the
+    /// model's own raw struct (`deny_unknown_fields`, [`super::nucleation`]).
+    nucleation: Option<toml::Table>,
     #[serde(default)]
     numerics: RawNumerics,
 }
@@ -161,16 +164,16 @@ fn check_law_ranges(t: &toml::Table, prefix: &str) -> Result<(), (String, String
     Ok(())
 }
 
-/// Refuse a phantom without bubbles (`bubbles` field): the commands report bubble radii,
-/// volumes and areas, and a bare gel has none of them.
+/// Refuse a phantom without bubbles (`bubbles` field) and without a nucleation model that can
+/// make some: the commands report bubble radii, volumes and areas, and a bare gel has none.
 pub fn require_bubbles(params: &PhantomParams, source: &Path) -> Result<(), InputError> {
     let none = match &params.bubbles {
         BubblePlacement::Explicit(list) => list.is_empty(),
         BubblePlacement::Random { count, .. } => *count == 0,
     };
-    if none {
+    if none && params.nucleation.name() == "fixed" {
         return Err(InputError::new(
-            "the phantom has no bubbles; add [[bubbles]] tables or a [population] with count ≥ 1",
+            "the phantom has no bubbles; add [[bubbles]] tables, a [population] with count ≥ 1, or a [nucleation] model other than \"fixed\"",
         )
         .in_file(source)
         .field("bubbles"));
@@ -423,6 +426,22 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
             ostwald: in_range(&lkey, positive(&lkey, gp.ostwald)?, 1e-6, 100.0, "")?,
         });
     }
+    let (nu_name, nu_params) = {
+        let mut t = raw.nucleation.clone().unwrap_or_default();
+        let name = match t.remove("model") {
+            None => "fixed".to_string(),
+            Some(toml::Value::String(s)) => s,
+            Some(v) => {
+                return Err(err(
+                    "nucleation.model",
+                    format!("must be a model name in quotes (got {v})"),
+                ))
+            }
+        };
+        (name, t)
+    };
+    let nucleation =
+        super::nucleation::build(&nu_name, nu_params).map_err(|e| err(&e.field, e.message))?;
     let min_radius = match raw.nuclei.min_radius_m {
         Some(r) if r >= 0.0 => in_range("nuclei.min_radius_m", r, 0.0, 1e-2, "m")?,
         Some(r) => {
@@ -431,6 +450,8 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
                 format!("must be ≥ 0 m (got {r})"),
             ))
         }
+        // activated micronuclei (µm) must exchange gas to grow: no impermeable skin by default
+        None if nucleation.name() != "fixed" => 0.0,
         None => h,
     };
     let bubbles = match (&raw.population, raw.bubbles.is_empty()) {
@@ -627,6 +648,7 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
         gases,
         min_radius,
         bubbles,
+        nucleation: Arc::from(nucleation),
         perfusion_rate,
         bubble_fixed_gases,
         numerics,
@@ -646,6 +668,12 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
         }
         other => err("bubbles", other.to_string()),
     })?;
+    // draw the nuclei once here too, so that a population that cannot be placed (or is too
+    // large) is an error pointing at the file
+    params
+        .nucleation
+        .nuclei(&grid)
+        .map_err(|e| err(&e.field, e.message))?;
     Ok(LoadedPhantom {
         params,
         description: raw.description.unwrap_or_default(),

@@ -6,6 +6,7 @@ pub mod diffusion;
 pub mod displacement;
 pub mod elasticity;
 pub mod grid;
+pub mod nucleation;
 pub mod params;
 pub mod sim;
 pub mod surface;

@@ -3,6 +3,7 @@
 
 use super::elasticity::{ElasticityLaw, NoElasticity};
 use super::grid::{Face, Shape};
+use super::nucleation::{fixed::Fixed, NucleationModel};
 use super::surface::{EqualToBulk, SurfacePermeability};
 use crate::gas::Gas;
 use std::sync::Arc;
@@ -145,10 +146,14 @@ pub struct PhantomParams {
     /// Gas properties (every gas the profile uses must be listed).
     pub gases: Vec<GasProperties>,
     /// Nucleus radius R_min, m: at or below it the skin is impermeable (section 2.1.4).
-    /// Default: h.
+    /// Default: h; 0 when the nucleation model is not `fixed` (activated micronuclei are far
+    /// below h and must exchange gas to grow).
     pub min_radius: f64,
     /// Bubbles at t = 0.
     pub bubbles: BubblePlacement,
+    /// Nucleation model (TOML `[nucleation]`): which sub-grid nuclei the gel holds and so where
+    /// and when new bubbles appear. Default `fixed`: none, only the bubbles at t = 0.
+    pub nucleation: Arc<dyn NucleationModel>,
     /// Perfusion rate k, 1/s (TOML `[perfusion] rate_per_s`). Default 0 (a gel has no blood
     /// flow). Every gel cell exchanges gas with blood in equilibrium with the inspired gas,
     /// the paper's §5 extension: ∂C/∂t = D∇²C − k·(C − L·p_insp(t)/(R_u·T)), with p_insp the
@@ -199,6 +204,7 @@ impl PhantomParams {
             ],
             min_radius: h,
             bubbles: BubblePlacement::Explicit(Vec::new()),
+            nucleation: Arc::new(Fixed),
             perfusion_rate: 0.0,
             bubble_fixed_gases: 0.0,
             numerics: Numerics::default(),

@@ -24,6 +24,7 @@ use super::bubble::{Balance, Bubble, BubbleFate};
 use super::diffusion;
 use super::displacement::{self, Displaced};
 use super::grid::{Face, Grid};
+use super::nucleation::NucleusPool;
 use super::params::{BubblePlacement, PhantomParams};
 use crate::error::Error;
 use crate::gas::Gas;
@@ -226,6 +227,8 @@ pub struct Simulation<'a> {
     /// Change of the grid's gas by displacement since the balance reference, mol: gel pushed
     /// beyond the reach of the displacement or swallowed by a bubble ([`Self::displace`]).
     displaced_gas: f64,
+    /// Sub-grid nuclei of the nucleation model ([`Self::nucleate`]).
+    nuclei: NucleusPool,
 }
 
 fn fibonacci_sphere(n: usize) -> Vec<[f64; 3]> {
@@ -346,10 +349,12 @@ impl<'a> Simulation<'a> {
             steps_state: Vec::new(),
             displaced: Vec::new(),
             displaced_gas: 0.0,
+            nuclei: NucleusPool::default(),
         };
         // bubbles placed large enough take their cells out of the gel before the balance
         // reference is taken (the gel was never there)
         sim.displace(p0);
+        sim.nuclei = sim.nucleus_pool()?;
         sim.rebase_balance();
         Ok(sim)
     }
@@ -414,21 +419,35 @@ impl<'a> Simulation<'a> {
         self.displaced_gas
     }
 
-    /// Radius of bubble `i`'s sink kernel: max(R, kernel_min_cells·h), or, once the bubble
-    /// holds cells out of the gel, the shell out to R + kernel_min_cells·h around them.
+    /// Radius of bubble `i`'s sink kernel ([`Self::kernel_radius_at`]).
     fn kernel_radius(&self, i: usize) -> f64 {
-        let r = self.bubbles[i].radius;
+        self.kernel_radius_at(self.bubbles[i].radius, self.displaces(i))
+    }
+
+    /// Radius of bubble `i`'s coupling sphere ρ ([`Self::coupling_radius_at`]).
+    fn coupling_radius(&self, i: usize) -> f64 {
+        self.coupling_radius_at(self.bubbles[i].radius, self.displaces(i))
+    }
+
+    /// Whether bubble `i` holds cells out of the gel ([`Self::displace`]).
+    fn displaces(&self, i: usize) -> bool {
+        self.displaced.get(i).is_some_and(|d| !d.cells.is_empty())
+    }
+
+    /// Sink-kernel radius of a bubble of radius `r`: max(R, kernel_min_cells·h), or, once it
+    /// holds cells out of the gel (`displacing`), the shell out to R + kernel_min_cells·h.
+    fn kernel_radius_at(&self, r: f64, displacing: bool) -> f64 {
         let k = self.params.numerics.kernel_min_cells * self.grid.h;
-        if self.displaced.get(i).is_some_and(|d| !d.cells.is_empty()) {
+        if displacing {
             r + k
         } else {
             r.max(k)
         }
     }
 
-    fn coupling_radius(&self, i: usize) -> f64 {
-        let r = self.bubbles[i].radius;
-        self.kernel_radius(i)
+    /// Coupling radius ρ = max(kernel, R + δ) + coupling_gap_cells·h.
+    fn coupling_radius_at(&self, r: f64, displacing: bool) -> f64 {
+        self.kernel_radius_at(r, displacing)
             .max(r + self.params.surface_layer_thickness)
             + self.params.numerics.coupling_gap_cells * self.grid.h
     }
@@ -562,6 +581,7 @@ impl<'a> Simulation<'a> {
                 f64::INFINITY
             };
             self.coalesce(t1, p1, &mut log.events)?;
+            self.nucleate(p1, &mut tensions, &mut fluxes, &mut log.events)?;
             self.displace(p1);
             self.check_health()?;
             self.observe(profile, p1, &tensions, observer, &mut log, false)?;
@@ -1351,6 +1371,192 @@ impl<'a> Simulation<'a> {
         };
         observer.frame(&frame);
         Ok(min_c)
+    }
+}
+
+impl Simulation<'_> {
+    /// The nucleation model's nuclei in this grid, as a pool ([`Self::new`]).
+    fn nucleus_pool(&self) -> Result<NucleusPool, Error> {
+        let input =
+            |field: &str, m: String| Error::Input(crate::error::InputError::new(m).field(field));
+        let nuclei = self
+            .params
+            .nucleation
+            .nuclei(&self.grid)
+            .map_err(|e| input(&e.field, e.message))?;
+        NucleusPool::new(&nuclei, &self.grid, self.params.surface_tension)
+            .map_err(|m| input("nucleation", m))
+    }
+
+    /// The nuclei of the run and their state (empty under the `fixed` model).
+    pub fn nuclei(&self) -> &NucleusPool {
+        &self.nuclei
+    }
+
+    /// Phase 8: nucleation ([`super::nucleation`]).
+    /// 1. A nucleated bubble that has shrunk below a tenth of its nucleus radius has dissolved:
+    ///    its gas returns to the gel (the step limits of [`Self::choose_step`] are sized for
+    ///    bubbles of many µm; a sub-µm bubble left to shrink further would leave the range of the
+    ///    radius solve).
+    /// 2. Nuclei whose bubble has dissolved return to the pool (one whose bubble merged into
+    ///    another is consumed: its gas is in the survivor).
+    /// 3. Every nucleus in the pool whose cell's supersaturation
+    ///    Σ_g C_g·R_u·T/L_g + p_fixed − P_amb exceeds its 2γ/r (eq. 2.11), and for which the
+    ///    gel tension that its bubble would see (the coupling sphere of a bubble of radius r,
+    ///    as in [`Self::fluxes`]) exceeds P_amb + 2γ/r too, becomes a bubble of its radius
+    ///    ([`Self::add_bubble`]), unless it touches an active bubble (it would merge into it at
+    ///    the next step, and its nucleus return to the pool, for ever). The cell value is the
+    ///    cheap test of every nucleus; the coupling sphere is read only for those that pass it,
+    ///    so that a new bubble starts growing (without it, a nucleus at a peak of the field
+    ///    activates, sees a lower mean tension at its coupling sphere, dissolves, and activates
+    ///    again at the next step). In a uniform gel both are the same number.
+    ///
+    /// `tensions` and `fluxes` (the time loop's per-bubble buffers) grow with the bubbles.
+    fn nucleate(
+        &mut self,
+        p1: f64,
+        tensions: &mut Vec<f64>,
+        fluxes: &mut Vec<Vec<f64>>,
+        events: &mut Vec<Event>,
+    ) -> Result<(), Error> {
+        if self.nuclei.is_empty() {
+            return Ok(());
+        }
+        let mut pool = std::mem::take(&mut self.nuclei);
+        let ng = self.gases.len();
+        for e in pool.entries() {
+            let Some(id) = e.bubble else { continue };
+            let b = &self.bubbles[id];
+            if b.active() && b.radius < 0.1 * e.nucleus.radius {
+                let back: Vec<f64> = b.moles[..ng].iter().map(|m| -m).collect();
+                self.take_from_grid(id, &back);
+                self.dissolve(id, self.time, events);
+            }
+        }
+        pool.release(|b| matches!(self.bubbles[b].fate, BubbleFate::Dissolved(_)));
+        let k: Vec<f64> = self.ostwald.iter().map(|l| self.rt / l).collect();
+        let fixed = self.params.bubble_fixed_gases;
+        let ready = pool.ready(|cell| {
+            let mut tension = fixed;
+            for (f, kg) in self.fields.iter().zip(&k) {
+                tension += f[cell] * kg;
+            }
+            tension - p1
+        });
+        // the coupling-sphere test of every candidate first, on the gel of the end of the
+        // step (the gas each new bubble takes must not decide for its neighbours)
+        let mut confirmed = Vec::with_capacity(ready.len());
+        for index in ready {
+            let e = pool.entries()[index];
+            let rho = self.coupling_radius_at(e.nucleus.radius, false);
+            let mut tension = fixed;
+            for (g, kg) in k.iter().enumerate() {
+                let here = self.fields[g][e.cell];
+                tension += self.sphere_mean(g, e.nucleus.position, rho, here) * kg;
+            }
+            if tension - p1 > e.threshold {
+                confirmed.push(index);
+            }
+        }
+        let mut result = Ok(());
+        for index in confirmed {
+            let n = pool.entries()[index].nucleus;
+            let engulfed = self.bubbles.iter().any(|b| {
+                b.active()
+                    && (0..3)
+                        .map(|a| (b.position[a] - n.position[a]).powi(2))
+                        .sum::<f64>()
+                        < (b.radius + n.radius).powi(2)
+            });
+            if engulfed {
+                continue;
+            }
+            match self.add_bubble(n.position, n.radius, p1) {
+                Ok(Some(id)) => pool.activate(index, id),
+                Ok(None) => {}
+                Err(e) => {
+                    result = Err(e);
+                    break;
+                }
+            }
+        }
+        self.nuclei = pool;
+        tensions.resize(self.bubbles.len(), 0.0);
+        fluxes.resize(self.bubbles.len(), vec![0.0; self.gases.len()]);
+        result
+    }
+
+    /// Add a bubble of radius `r` (m) centred at `position` (m) at the current time: at Laplace
+    /// equilibrium (eq. 2.4) at ambient `ambient` (Pa), R0 = r and P0 = `ambient` for the
+    /// elasticity and surface laws, with the composition of the gel's gas tension in its cell.
+    /// Its gas is taken from the gel through its sink kernel, so the total is conserved.
+    /// Returns its id, or `None` when the gel there holds no gas to give (nothing is added).
+    pub fn add_bubble(
+        &mut self,
+        position: [f64; 3],
+        r: f64,
+        ambient: f64,
+    ) -> Result<Option<usize>, Error> {
+        let cell = super::nucleation::cell_of(&self.grid, position)
+            .filter(|c| self.grid.inside(*c))
+            .ok_or_else(|| {
+                Error::Solver(format!(
+                    "a bubble added at ({:.3e}, {:.3e}, {:.3e}) m is outside the phantom",
+                    position[0], position[1], position[2]
+                ))
+            })?;
+        let ng = self.gases.len();
+        let partial: Vec<f64> = (0..ng)
+            .map(|g| self.fields[g][cell].max(0.0) * self.rt / self.ostwald[g])
+            .collect();
+        let psum: f64 = partial.iter().sum();
+        if !(psum > 0.0) {
+            return Ok(None);
+        }
+        let id = self.bubbles.len();
+        let mut bubble = Bubble {
+            id,
+            position,
+            initial_radius: r,
+            initial_ambient: ambient,
+            moles: vec![0.0; ng],
+            radius: r,
+            fate: BubbleFate::Active,
+        };
+        let n_total = self.balance_for(&bubble, ambient).pv(r) / self.rt;
+        if !(n_total > 0.0 && n_total.is_finite()) {
+            return Err(Error::Input(
+                crate::error::InputError::new(format!(
+                    "a bubble of radius {r:.3e} m at P_amb = {ambient:.0} Pa holds no simulated gas at Laplace equilibrium (P_B ≤ material.bubble_fixed_gases_pa = {:.0} Pa)",
+                    self.params.bubble_fixed_gases
+                ))
+                .field("material.bubble_fixed_gases_pa"),
+            ));
+        }
+        self.bubbles.push(bubble.clone());
+        let want: Vec<f64> = partial.iter().map(|p| n_total * p / psum).collect();
+        let taken = self.take_from_grid(id, &want);
+        bubble.moles.copy_from_slice(&taken[..ng]);
+        let nrt = bubble.total_moles() * self.rt;
+        let radius = if nrt > 0.0 {
+            self.balance_for(&bubble, ambient).radius_for(nrt, r)
+        } else {
+            None
+        };
+        match radius {
+            Some(radius) => {
+                bubble.radius = radius;
+                self.bubbles[id] = bubble;
+                Ok(Some(id))
+            }
+            None => {
+                // nothing the Laplace balance can hold: give the gas back, add nothing
+                let back: Vec<f64> = taken[..ng].iter().map(|m| -m).collect();
+                self.take_from_grid(id, &back);
+                self.bubbles.pop();
+                Ok(None)
+            }
+        }
     }
 }
 

@@ -14,7 +14,9 @@
 
 use crate::phantom::sim::Frame;
 
+pub mod activation_time;
 pub mod area_rate;
+pub mod bubble_count;
 pub mod config;
 pub mod hazard;
 pub mod peak_radius;
@@ -96,6 +98,8 @@ pub static REGISTRY: &[(&str, Builder)] = &[
     ("volume-time-above-threshold", volume_integral::build),
     ("peak-supersaturation", supersaturation::build),
     ("hazard", hazard::build),
+    ("bubble-count", bubble_count::build),
+    ("activation-time", activation_time::build),
 ];
 
 /// The registered kinds, in registry order.

@@ -323,7 +323,7 @@ fn bad_input_exits_2_and_writes_nothing() {
     let unknown = write(
         &d,
         "unknown.toml",
-        "[[criterion]]\nkind = \"peak-radius\"\nlimit = 100\n[[criterion]]\nkind = \"bubble-count\"\nlimit = 3\n",
+        "[[criterion]]\nkind = \"peak-radius\"\nlimit = 100\n[[criterion]]\nkind = \"bubble-grade\"\nlimit = 3\n",
     );
     let negative = write(
         &d,
