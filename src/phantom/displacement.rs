@@ -148,41 +148,15 @@ pub fn remap(
 /// R0 = 4h 1.6 % early). Corners outside the phantom are dropped and the weights renormalised;
 /// `fallback` if none is left.
 pub fn interpolate(grid: &Grid, field: &[f64], p: [f64; 3], wall: f64, fallback: f64) -> f64 {
-    let mut i0 = [0usize; 3];
-    let mut t = [0.0f64; 3];
-    for a in 0..3 {
-        let f = (p[a] / grid.h - 0.5).clamp(0.0, (grid.n[a] - 1) as f64);
-        let base = (f.floor() as usize).min(grid.n[a] - 2);
-        i0[a] = base;
-        t[a] = f - base as f64;
-    }
-    let (mut sum, mut wsum) = (0.0, 0.0);
-    for dk in 0..2 {
-        let wk = if dk == 0 { 1.0 - t[2] } else { t[2] };
-        for dj in 0..2 {
-            let wj = if dj == 0 { 1.0 - t[1] } else { t[1] };
-            for di in 0..2 {
-                let wi = if di == 0 { 1.0 - t[0] } else { t[0] };
-                let w = wi * wj * wk;
-                if w <= 0.0 {
-                    continue;
-                }
-                let idx = grid.index(i0[0] + di, i0[1] + dj, i0[2] + dk);
-                if grid.inside(idx) {
-                    sum += w * field[idx];
-                    wsum += w;
-                } else if grid.is_excluded(idx) {
-                    sum += w * wall;
-                    wsum += w;
-                }
-            }
+    grid.interpolate_by(p, fallback, |idx| {
+        if grid.inside(idx) {
+            Some(field[idx])
+        } else if grid.is_excluded(idx) {
+            Some(wall)
+        } else {
+            None
         }
-    }
-    if wsum > 1e-12 {
-        sum / wsum
-    } else {
-        fallback
-    }
+    })
 }
 
 /// Value for a cell given back to the gel without a remap (a bubble dissolved or merged): the

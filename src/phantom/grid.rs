@@ -432,6 +432,18 @@ impl Grid {
     /// (weights renormalised); points beyond the outermost cell centres take the edge value.
     /// Returns `fallback` if no inside cell is among the eight neighbours.
     pub fn interpolate(&self, field: &[f64], p: [f64; 3], fallback: f64) -> f64 {
+        self.interpolate_by(p, fallback, |idx| self.inside(idx).then(|| field[idx]))
+    }
+
+    /// Trilinear interpolation at `p` of the values `value` gives the eight surrounding cells;
+    /// corners it gives `None` are dropped and the weights renormalised; `fallback` if none is
+    /// left. Points beyond the outermost cell centres take the edge value.
+    pub fn interpolate_by(
+        &self,
+        p: [f64; 3],
+        fallback: f64,
+        value: impl Fn(usize) -> Option<f64>,
+    ) -> f64 {
         let mut i0 = [0usize; 3];
         let mut t = [0.0f64; 3];
         for a in 0..3 {
@@ -449,9 +461,11 @@ impl Grid {
                 for di in 0..2 {
                     let wi = if di == 0 { 1.0 - t[0] } else { t[0] };
                     let w = wi * wj * wk;
-                    let idx = self.index(i0[0] + di, i0[1] + dj, i0[2] + dk);
-                    if w > 0.0 && self.inside(idx) {
-                        sum += w * field[idx];
+                    if w <= 0.0 {
+                        continue;
+                    }
+                    if let Some(v) = value(self.index(i0[0] + di, i0[1] + dj, i0[2] + dk)) {
+                        sum += w * v;
                         wsum += w;
                     }
                 }
