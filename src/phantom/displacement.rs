@@ -225,7 +225,15 @@ mod tests {
             .map(|idx| 1.0 + 100.0 * ((idx % 40) as f64 + 0.5) * h)
             .collect();
         let (r0, r1) = (3e-4, 4e-4);
-        let out = remap(&grid, std::slice::from_ref(&field), &[0.0], c, r0, r1, 1.5e-3);
+        let out = remap(
+            &grid,
+            std::slice::from_ref(&field),
+            &[0.0],
+            c,
+            r0,
+            r1,
+            1.5e-3,
+        );
         assert!(out.len() > 1000);
         let mut checked = 0;
         for (idx, v) in &out {
@@ -263,7 +271,15 @@ mod tests {
             .map(|i| if grid.inside(i) { 3.7 } else { 0.0 })
             .collect();
         for (r0, r1) in [(3.2e-4, 3.6e-4), (3.2e-4, 2.5e-4)] {
-            let out = remap(&grid, std::slice::from_ref(&field), &[3.7], c, r0, r1, 1.2e-3);
+            let out = remap(
+                &grid,
+                std::slice::from_ref(&field),
+                &[3.7],
+                c,
+                r0,
+                r1,
+                1.2e-3,
+            );
             for (_, v) in out {
                 assert!((v[0] - 3.7).abs() < 1e-12);
             }
