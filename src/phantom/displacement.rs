@@ -19,6 +19,7 @@
 //! solvers to round-off.
 
 use super::grid::Grid;
+use crate::gas::Gas;
 use rayon::prelude::*;
 
 /// A bubble's displacement state.
@@ -93,7 +94,8 @@ fn bounds(grid: &Grid, centre: [f64; 3], r: f64) -> ([usize; 3], [usize; 3]) {
 /// at distance r ∈ [r_new, reach] from `centre`, the value of each field at the point the gel
 /// there came from, r_b = (r³ − (r_new³ − r_old³))^{1/3} on the same ray ([`interpolate`],
 /// with the bubble's cells at the wall value `wall[g]`, Henry's law at its surface). Returns
-/// (cell, value per field); the caller writes it after updating which cells the bubble holds.
+/// (cell, value per field in field order); the caller writes it after updating which cells
+/// the bubble holds.
 pub fn remap(
     grid: &Grid,
     fields: &[Vec<f64>],
@@ -102,7 +104,7 @@ pub fn remap(
     r_old: f64,
     r_new: f64,
     reach: f64,
-) -> Vec<(usize, Vec<f64>)> {
+) -> Vec<(usize, [f64; Gas::ALL.len()])> {
     let h = grid.h;
     let dv = r_new.powi(3) - r_old.powi(3);
     let (lo, hi) = bounds(grid, centre, reach);
@@ -128,11 +130,10 @@ pub fn remap(
                     let rb = (d2 * d - dv).max(0.0).cbrt();
                     let s = if d > 0.0 { rb / d } else { 1.0 };
                     let from = [centre[0] + x * s, centre[1] + y * s, centre[2] + z * s];
-                    let values = fields
-                        .iter()
-                        .zip(wall)
-                        .map(|(f, w)| interpolate(grid, f, from, *w, f[idx]))
-                        .collect();
+                    let mut values = [0.0; Gas::ALL.len()];
+                    for ((v, f), w) in values.iter_mut().zip(fields).zip(wall) {
+                        *v = interpolate(grid, f, from, *w, f[idx]);
+                    }
                     out.push((idx, values));
                 }
             }
