@@ -58,7 +58,7 @@ pub fn covered_cells(grid: &Grid, centre: [f64; 3], r: f64) -> Vec<usize> {
         return out;
     }
     let h = grid.h;
-    let (lo, hi) = bounds(grid, centre, r);
+    let (lo, hi) = grid.cell_range(centre, r);
     for k in lo[2]..=hi[2] {
         let z = (k as f64 + 0.5) * h - centre[2];
         for j in lo[1]..=hi[1] {
@@ -75,19 +75,6 @@ pub fn covered_cells(grid: &Grid, centre: [f64; 3], r: f64) -> Vec<usize> {
         }
     }
     out
-}
-
-/// Index bounds of the cells whose centres may lie within `r` of `centre`.
-fn bounds(grid: &Grid, centre: [f64; 3], r: f64) -> ([usize; 3], [usize; 3]) {
-    let mut lo = [0usize; 3];
-    let mut hi = [0usize; 3];
-    for a in 0..3 {
-        lo[a] = (((centre[a] - r) / grid.h - 0.5).floor().max(0.0)) as usize;
-        hi[a] = ((((centre[a] + r) / grid.h - 0.5).ceil()) as isize)
-            .clamp(0, grid.n[a] as isize - 1) as usize;
-        lo[a] = lo[a].min(hi[a]);
-    }
-    (lo, hi)
 }
 
 /// The displaced field: for every gel cell (not excluded once the bubble has radius `r_new`)
@@ -107,7 +94,7 @@ pub fn remap(
 ) -> Vec<(usize, [f64; Gas::ALL.len()])> {
     let h = grid.h;
     let dv = r_new.powi(3) - r_old.powi(3);
-    let (lo, hi) = bounds(grid, centre, reach);
+    let (lo, hi) = grid.cell_range(centre, reach);
     let planes: Vec<usize> = (lo[2]..=hi[2]).collect();
     planes
         .par_iter()

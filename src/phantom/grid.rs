@@ -492,19 +492,26 @@ impl Grid {
             * v
     }
 
+    /// Index bounds (inclusive) of the cells whose centres may lie within distance `a` of `p`
+    /// (empty along an axis when lo > hi).
+    pub fn cell_range(&self, p: [f64; 3], a: f64) -> ([usize; 3], [usize; 3]) {
+        let mut lo = [0usize; 3];
+        let mut hi = [0usize; 3];
+        for ax in 0..3 {
+            lo[ax] = (((p[ax] - a) / self.h - 0.5).floor().max(0.0)) as usize;
+            hi[ax] = ((((p[ax] + a) / self.h - 0.5).ceil()) as isize)
+                .clamp(0, self.n[ax] as isize - 1) as usize;
+        }
+        (lo, hi)
+    }
+
     /// Weights of a spherically symmetric kernel of radius `a` centred at `p`, over inside
     /// cells, summing to one: w ∝ (1 − (d/a)²)² for cell-centre distance d < a. Falls back to
     /// the nearest inside cell if the kernel catches none.
     pub fn kernel(&self, p: [f64; 3], a: f64, out: &mut Vec<(usize, f64)>) {
         out.clear();
         let h = self.h;
-        let mut lo = [0usize; 3];
-        let mut hi = [0usize; 3];
-        for ax in 0..3 {
-            lo[ax] = (((p[ax] - a) / h - 0.5).floor().max(0.0)) as usize;
-            hi[ax] = ((((p[ax] + a) / h - 0.5).ceil()) as isize).clamp(0, self.n[ax] as isize - 1)
-                as usize;
-        }
+        let (lo, hi) = self.cell_range(p, a);
         let mut total = 0.0;
         for k in lo[2]..=hi[2] {
             let z = (k as f64 + 0.5) * h - p[2];
