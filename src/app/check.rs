@@ -95,19 +95,20 @@ pub fn run(
     );
     let _ = writeln!(
         text,
-        "{:<32} {:>12} {:>12} {:>12}  {:<10} result",
-        "criterion", "value", "limit", "margin", "unit"
+        "{:<32} {:>12} {:>12} {:>12}  {:<10} {:<6} absolute",
+        "criterion", "value", "limit", "margin", "unit", "result"
     );
     for s in &ev.runs[0].scores {
         let _ = writeln!(
             text,
-            "{:<32} {:>12} {:>12} {:>12}  {:<10} {}",
+            "{:<32} {:>12} {:>12} {:>12}  {:<10} {:<6} {}",
             s.label,
             sig_text(s.value, 4, true),
             sig_text(s.limit, 4, true),
             sig_text(s.margin, 4, true),
             s.unit,
-            if s.pass { "pass" } else { "FAIL" }
+            if s.pass { "pass" } else { "FAIL" },
+            s.absolute.map(|a| sig_text(a, 4, true)).unwrap_or_default()
         );
     }
     let fails = ev.runs[0].scores.iter().filter(|s| !s.pass).count();

@@ -679,7 +679,8 @@ pub fn schedule_table(ev: &Evaluation) -> Result<Table, Error> {
 /// `scores.csv`: one row per run and criterion, keyed by the criterion's registry `kind`
 /// (stable) with the criteria file's `label` in its own column, numbers at full precision
 /// (the shortest text that reads back to the same f64): `schedule,elasticity,kind,label,unit,
-/// value,limit,margin,value_over_limit,result`.
+/// value,limit,margin,value_over_limit,result,absolute_value` (`absolute_value`: the absolute
+/// value behind a growth score, e.g. the peak volume with the nuclei; empty for the others).
 pub fn scores_csv(ev: &Evaluation) -> Result<String, Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let csv_err = |e: csv::Error| Error::Solver(format!("scores.csv: {e}"));
@@ -694,6 +695,7 @@ pub fn scores_csv(ev: &Evaluation) -> Result<String, Error> {
         "margin",
         "value_over_limit",
         "result",
+        "absolute_value",
     ])
     .map_err(csv_err)?;
     for r in &ev.runs {
@@ -709,6 +711,7 @@ pub fn scores_csv(ev: &Evaluation) -> Result<String, Error> {
                 &s.margin.to_string(),
                 &s.ratio().to_string(),
                 if s.pass { "pass" } else { "FAIL" },
+                &s.absolute.map(|a| a.to_string()).unwrap_or_default(),
             ])
             .map_err(csv_err)?;
         }
@@ -734,6 +737,7 @@ pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
             Column::plain("margin"),
             Column::plain("value/limit"),
             Column::plain("result"),
+            Column::plain("absolute"),
         ],
     );
     for r in &ev.runs {
@@ -748,6 +752,10 @@ pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
                 Cell::sig(s.margin, 4),
                 Cell::fixed(s.ratio(), 3),
                 Cell::text(if s.pass { "pass" } else { "FAIL" }),
+                match s.absolute {
+                    Some(a) => Cell::sig(a, 4),
+                    None => Cell::text(""),
+                },
             ])
             .map_err(Error::Solver)?;
         }
@@ -1188,7 +1196,12 @@ pub fn add_report(
     page.section("Scores");
     let scores = scores_table(ev)?;
     set.add(format!("{prefix}scores.csv"), scores_csv(ev)?);
-    let mut crit = String::from("Criteria (value ≤ limit passes; margin = limit − value):\n");
+    let mut crit = String::from(
+        "Criteria (value ≤ limit passes; margin = limit − value). Peak volume and peak radius \
+         score the growth the schedule causes, above each bubble's initial radius R0 (`measure = \
+         \"growth\"`, the default); the table's *absolute* column gives the absolute peak beside \
+         them, nuclei included:\n",
+    );
     for c in &ev.criteria.criteria {
         crit.push_str(&format!(
             "\n- **{}** (`{}`, {}): {}; limit {}",

@@ -95,6 +95,7 @@ fn nuclei_activate_exactly_above_the_critical_supersaturation() {
         },
         margin: None,
         seed: 11,
+        skin_compression: None,
     };
     let (below, all) = activated_at(model, critical * (1.0 - 1e-6));
     assert_eq!(all.len(), 50);
@@ -109,6 +110,7 @@ fn nuclei_activate_exactly_above_the_critical_supersaturation() {
         distribution: SizeDistribution::Exponential { slope: 1e6 },
         margin: None,
         seed: 5,
+        skin_compression: None,
     };
     let s = 150_000.0;
     let (got, all) = activated_at(model, s);
@@ -130,6 +132,7 @@ fn an_activated_bubble_starts_at_its_nucleus_radius_with_gas_taken_from_the_gel(
         },
         margin: None,
         seed: 2,
+        skin_compression: None,
     };
     let p = sealed_cube(model);
     let prof = constant(0.05);
@@ -162,6 +165,81 @@ fn an_activated_bubble_starts_at_its_nucleus_radius_with_gas_taken_from_the_gel(
     assert!(sum.gas_balance_error < 1e-12);
 }
 
+/// Which of 20 nuclei of 1 µm (skins of compression `skin`, N/m, or bare) activate in a sealed
+/// gel of uniform gel tension 1 atm + `s` (Pa), held at `hold` Pa above 1 atm for 20 s, then
+/// brought to 1 atm over 10 s and held 10 s more: the number of nuclei that activated and the
+/// radius the first bubble starts at.
+fn activated_after_crushing(skin: Option<f64>, hold: f64, s: f64) -> (usize, Option<f64>) {
+    let model = CriticalRadius {
+        number_density: 2e10, // 20 nuclei in the 1 mm³ gel
+        distribution: SizeDistribution::LogNormal {
+            median: 1e-6,
+            sigma: 0.0,
+        },
+        margin: None,
+        seed: 7,
+        skin_compression: skin,
+    };
+    let p = sealed_cube(model);
+    let prof = PressureHistory::with_gas(
+        "crush",
+        vec![0.0, 20.0, 30.0, 40.0],
+        vec![ATM_PA + hold, ATM_PA + hold, ATM_PA, ATM_PA],
+        GasMix::AIR,
+        0.0,
+    )
+    .unwrap();
+    let mut sim = uniform(&p, &prof, s);
+    sim.run(&prof, &mut Recorder::default()).unwrap();
+    // nuclei that became a bubble at least once (a bubble started at the knife edge may
+    // dissolve, return its nucleus to the pool and form again: count positions, not bubbles)
+    let mut at: Vec<[f64; 3]> = sim.bubbles.iter().map(|b| b.position).collect();
+    at.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    at.dedup();
+    (at.len(), sim.bubbles.first().map(|b| b.initial_radius))
+}
+
+#[test]
+fn vpm_skins_and_crushing_set_the_threshold_in_a_uniform_gel() {
+    // Yount's VPM (Yount 1979; Yount & Hoffman 1986), computed here from the crushed radius:
+    // a nucleus of radius r crushed by ΔP (permeable regime) shrinks to
+    // 1/r' = 1/r + ΔP/(2(γc − γ)); with its skin it grows above 2γ(γc − γ)/(γc·r').
+    // γc = 0.257 N/m (Yount 1979), γ = 0.07 N/m, r = 1 µm. The gel (sealed, no exchange)
+    // keeps the tension 1 atm + s, so a hold at 1 atm + 400 kPa crushes by ΔP = 400 kPa − s
+    // and at the end the supersaturation is s: the critical s solves
+    // s = 2γ(γc − γ)/(γc·r'(400 kPa − s)), found here by bisection.
+    let (gc, r, hold) = (0.257, 1e-6, 400e3);
+    let threshold = |dp: f64| {
+        let r_crushed = 1.0 / (1.0 / r + dp / (2.0 * (gc - GAMMA)));
+        2.0 * GAMMA * (gc - GAMMA) / (gc * r_crushed)
+    };
+    let (mut lo, mut hi) = (0.0, hold);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid > threshold(hold - mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let critical = 0.5 * (lo + hi);
+    // ≈ 165.7 kPa: above both the bare 2γ/r = 140 kPa and the uncrushed skin's 101.9 kPa
+    assert!((critical - 165.7e3).abs() < 0.1e3, "{critical}");
+    let (below, _) = activated_after_crushing(Some(gc), hold, critical * (1.0 - 1e-6));
+    assert_eq!(below, 0, "activated below the crushed threshold");
+    let (above, r0) = activated_after_crushing(Some(gc), hold, critical * (1.0 + 1e-6));
+    assert_eq!(above, 20, "all must activate above the crushed threshold");
+    // the bubble starts where its Laplace pressure is the threshold, 2γ/threshold
+    let r0 = r0.unwrap();
+    assert!((r0 - 2.0 * GAMMA / critical).abs() < 1e-5 * r0, "{r0}");
+    // the same gel without the hold (no crushing): the skin alone, 101.9 kPa, is exceeded at
+    // 150 kPa; bare nuclei ignore crushing (2γ/r = 140 kPa)
+    assert_eq!(activated_after_crushing(Some(gc), 0.0, 150e3).0, 20);
+    assert_eq!(activated_after_crushing(Some(gc), hold, 150e3).0, 0);
+    assert_eq!(activated_after_crushing(None, hold, 150e3).0, 20);
+    assert_eq!(activated_after_crushing(None, hold, 139e3).0, 0);
+}
+
 #[test]
 fn the_same_seed_gives_the_same_bubbles() {
     let model = |seed| CriticalRadius {
@@ -169,6 +247,7 @@ fn the_same_seed_gives_the_same_bubbles() {
         distribution: SizeDistribution::Exponential { slope: 4e6 },
         margin: None,
         seed,
+        skin_compression: None,
     };
     let run = |seed| {
         let mut p = PhantomParams::box_phantom([1.5e-3; 3], 100e-6);
@@ -212,6 +291,7 @@ fn the_activated_fraction_converges_to_the_exponential_tail() {
             distribution: SizeDistribution::Exponential { slope: beta },
             margin: Some(0.0),
             seed: 2017,
+            skin_compression: None,
         };
         let (act, all) = activated_at(model, s);
         assert_eq!(all.len() as f64, n);
@@ -270,6 +350,7 @@ fn bubbles_after_dive(hold: f64, rate: f64) -> (usize, usize) {
         distribution: SizeDistribution::Exponential { slope: 5e6 },
         margin: Some(0.5e-3),
         seed: 426,
+        skin_compression: None,
     });
     let prof = dive(hold, rate, 60.0);
     let mut sim = Simulation::new(&p, &prof).unwrap();
@@ -564,9 +645,10 @@ fn assert_no_lower(first: &[(&str, f64)], second: &[(&str, f64)]) {
 #[test]
 fn a_repeated_dive_scores_no_lower_than_the_same_dive_made_first() {
     // issue 12: residual gas in the gel and the bubbles still there make the repeated dive
-    // worse, never better. Measured (README, "Nucleation"): peak volume 0.293 → 0.476 mm³,
-    // peak radius 207 → 246 µm, peak supersaturation 193 → 221 kPa, bubbles formed 15 → 23,
-    // first activation 15.4 and 15.5 min before the end of each window.
+    // worse, never better. Measured (README, "Nucleation"; peak volume and radius as growth
+    // above R0, the default measure): peak volume 0.293 → 0.476 mm³, peak radius growth
+    // 204.6 → 244.5 µm, peak supersaturation 193 → 221 kPa, bubbles formed 15 → 23, first
+    // activation 15.4 and 15.5 min before the end of each window.
     let (first, second) = first_and_repeated(true);
     eprintln!("nucleation: first {first:?}\n            repeated {second:?}");
     assert_no_lower(&first, &second);
@@ -581,7 +663,8 @@ fn under_fixed_nuclei_the_repeated_dive_is_no_lower_here_too() {
     // the same gel with one fixed 100 µm bubble (R_min = 86.5 µm): the bubble stays open
     // through the 20 min interval (it never shrinks back to R_min), so it starts the second
     // dive larger and in a gel with residual gas; bubble-count and activation-time are 0
-    // (nothing forms). Measured: peak volume 0.088 → 0.150 mm³, peak radius 276 → 329 µm.
+    // (nothing forms). Measured, as growth above R0 = 100 µm: peak volume 0.0838 → 0.1456 mm³,
+    // peak radius 175.9 → 229.5 µm (absolute 276 → 329 µm).
     let (first, second) = first_and_repeated(false);
     eprintln!("fixed: first {first:?}\n       repeated {second:?}");
     assert_no_lower(&first, &second);
