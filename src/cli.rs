@@ -194,9 +194,11 @@ pub struct CheckArgs {
     /// .txt, or a Subsurface (.xml, .ssrf) / UDDF (.uddf) dive log.
     #[arg(long)]
     pub schedule: std::path::PathBuf,
-    /// Which dive of a dive log (1-based; required when the log holds more than one).
+    /// Which dive(s) of a dive log: N (1-based), a range N-M or `all`: consecutive dives
+    /// run as one, with the surface intervals of the logged start times, the gel, bubbles
+    /// and nuclei carried across. Required when the log holds more than one.
     #[arg(long)]
-    pub dive: Option<usize>,
+    pub dive: Option<decophantom::profile::sequence::DiveSelection>,
     /// Criteria TOML (algorithms/criteria/*.toml).
     #[arg(long)]
     pub criteria: std::path::PathBuf,
@@ -263,9 +265,11 @@ pub struct EvaluateArgs {
     /// two-column .txt, or a Subsurface (.xml, .ssrf) / UDDF (.uddf) dive log; repeatable.
     #[arg(long)]
     pub schedule: Vec<std::path::PathBuf>,
-    /// Which dive of a dive log given with --schedule (1-based).
+    /// Which dive(s) of a dive log: N (1-based), a range N-M or `all`: consecutive dives
+    /// run as one, with the surface intervals of the logged start times, the gel, bubbles
+    /// and nuclei carried across. Required when the log holds more than one.
     #[arg(long)]
-    pub dive: Option<usize>,
+    pub dive: Option<decophantom::profile::sequence::DiveSelection>,
     /// Elasticity laws: all, or names (comma-separated or repeated); default the phantom's own.
     #[arg(long)]
     pub elasticity: Vec<String>,
@@ -313,9 +317,11 @@ pub struct SimulateArgs {
     /// Water-vapour pressure subtracted at the open faces, Pa (legacy/dive-log profiles; default 0).
     #[arg(long = "vapour-pa")]
     pub vapour_pa: Option<f64>,
-    /// Which dive of a dive log (1-based).
+    /// Which dive(s) of a dive log: N (1-based), a range N-M or `all`: consecutive dives
+    /// run as one, with the surface intervals of the logged start times, the gel, bubbles
+    /// and nuclei carried across. Required when the log holds more than one.
     #[arg(long)]
-    pub dive: Option<usize>,
+    pub dive: Option<decophantom::profile::sequence::DiveSelection>,
     /// Run even when the run is estimated to take more than 6 hours.
     #[arg(long)]
     pub force: bool,

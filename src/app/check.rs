@@ -27,7 +27,7 @@ pub struct CheckRequest {
     /// Schedule file (`.toml`, `.csv`, legacy `.txt`, or a Subsurface/UDDF dive log).
     pub schedule: PathBuf,
     /// Which dive of a dive log (1-based; required when the log holds more than one).
-    pub dive: Option<usize>,
+    pub dive: Option<crate::profile::sequence::DiveSelection>,
     /// Criteria file.
     pub criteria: PathBuf,
     /// Phantom file (built-in hydrogel-dive if absent).

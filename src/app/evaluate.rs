@@ -425,7 +425,7 @@ pub struct EvaluateRequest {
     /// Schedule files compared as they are (TOML, CSV, legacy .txt, dive logs).
     pub schedules: Vec<PathBuf>,
     /// Which dive of a dive log given as a schedule (1-based).
-    pub dive: Option<usize>,
+    pub dive: Option<crate::profile::sequence::DiveSelection>,
     /// Elasticity laws (`all`, names; empty → the phantom's own).
     pub elasticity: Vec<String>,
     /// Phantom file (built-in hydrogel-dive if absent).
@@ -478,7 +478,7 @@ pub fn plan_candidates(
 /// stem.
 pub fn schedule_candidates(
     files: &[PathBuf],
-    dive: Option<usize>,
+    dive: Option<crate::profile::sequence::DiveSelection>,
     protocol: &Protocol,
     repeat_after_min: Option<f64>,
     taken: &[Candidate],

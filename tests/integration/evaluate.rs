@@ -433,8 +433,13 @@ fn dive_logs_are_checked_and_evaluated_as_schedules() {
     // the schedule and its history: the log's own surface and density, then the protocol's
     // watch time at the surface (30 min in these criteria), so the run goes on after the
     // last sample
-    let imp =
-        read_schedule_with_notes(&log, &DECOTENGU, decophantom::gas::GasMix::AIR, Some(2)).unwrap();
+    let imp = read_schedule_with_notes(
+        &log,
+        &DECOTENGU,
+        decophantom::gas::GasMix::AIR,
+        Some(decophantom::profile::sequence::DiveSelection::One(2)),
+    )
+    .unwrap();
     assert!((imp.schedule.runtime_min() - 38.0).abs() < 1e-9);
     assert!(imp.notes.iter().any(|n| n.contains("water density")));
     let protocol = decophantom::risk::Protocol {

@@ -338,7 +338,7 @@ fn numbers_that_would_be_written_wrong_are_refused() {
         margin: f64::NEG_INFINITY,
         absolute: None,
     };
-    assert!(decophantom::risk::check_finite(&[s.clone()]).is_err());
+    assert!(decophantom::risk::check_finite(std::slice::from_ref(&s)).is_err());
     // nor a finite score whose absolute value beside it is not
     let s = decophantom::risk::Score {
         value: 1.0,

@@ -670,3 +670,64 @@ fn under_fixed_nuclei_the_repeated_dive_is_no_lower_here_too() {
     assert_no_lower(&first, &second);
     assert_eq!((second[4].1, second[5].1), (0.0, 0.0));
 }
+
+#[test]
+fn consecutive_logged_dives_run_as_one_history_with_the_logged_surface_interval() {
+    // tests/data/divelogs/repetitive-logged.xml (read off the file): dive 1 starts
+    // 2019-06-14 09:12:00 and its last sample is 45:00 min; dive 2 starts 12:40:00, i.e.
+    // 3 h 28 min = 12 480 s after dive 1, a surface interval of 12 480 − 2 700 s = 163 min.
+    use decophantom::gas::GasMix;
+    use decophantom::profile::sequence::DiveSelection;
+    use decophantom::profile::{divelog, select_dive};
+    let path = super::common::data("divelogs/repetitive-logged.xml");
+    let pick = |s| select_dive(&path, divelog::read(&path).unwrap(), Some(s));
+    let d1 = pick(DiveSelection::One(1)).unwrap();
+    let d2 = pick(DiveSelection::One(2)).unwrap();
+    let both = pick(DiveSelection::Range(1, 2)).unwrap();
+    assert_eq!(pick(DiveSelection::All).unwrap(), both);
+    let offset = 12_480.0;
+    assert_eq!(d1.duration_s(), 2_700.0);
+    // dive 1 unchanged, then every sample of dive 2 shifted by its start time
+    assert_eq!(both.samples[..d1.samples.len()], d1.samples[..]);
+    for &(t, z) in &d2.samples {
+        assert!(
+            both.samples.contains(&(t + offset, z)),
+            "dive 2 sample ({t} s, {z} m) not at {} s",
+            t + offset
+        );
+    }
+    let h = both.history(0.0).unwrap();
+    let h2 = d2.history(0.0).unwrap();
+    // in the surface interval: the surface, on air
+    for t in [2_800.0, 6_000.0, offset - 60.0] {
+        assert!((h.ambient(t) - both.surface_pa).abs() < 1e-6, "{t}");
+        assert_eq!(both.gas_at(t), GasMix::AIR, "{t}");
+    }
+    // in dive 2: its own depths and gases (the surface pressure is dive 1's: 1.012 bar, dive
+    // 2 states 1.011 bar, which is noted)
+    for t in [120.0, 180.0, 600.0, 1_800.0] {
+        let dp = h.ambient(t + offset) - both.surface_pa;
+        let dp2 = h2.ambient(t) - d2.surface_pa;
+        assert!((dp - dp2).abs() < 1e-6 * dp2, "{t}: {dp} vs {dp2}");
+        assert_eq!(both.gas_at(t + offset), d2.gas_at(t), "{t}");
+    }
+    assert!((both.surface_pa - 101_200.0).abs() < 1e-6);
+    assert!(
+        both.notes.iter().any(|n| n.contains("163 min")),
+        "{:?}",
+        both.notes
+    );
+    assert!(both.notes.iter().any(|n| n.contains("101100")));
+    // a dive the log does not hold, and a range that runs backwards on the command line
+    let e = pick(DiveSelection::Range(1, 3)).unwrap_err().to_string();
+    assert!(e.contains("dive 3 does not exist"), "{e}");
+    let out = std::process::Command::new(super::common::bin())
+        .args(["simulate", "--profile"])
+        .arg(&path)
+        .args(["--dive", "2-1", "--out"])
+        .arg(super::common::tempdir("dive-range").join("x"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("runs backwards"));
+}
