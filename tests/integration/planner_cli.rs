@@ -502,7 +502,7 @@ fn dive_profile_plot_and_the_tissue_loading_it_draws() {
             20.0,
             Some("18/45"),
             &["50".to_string(), "100".to_string()],
-            None,
+            &[],
         )
         .unwrap();
         let l = loading(&sched, &alg.conventions, 1.0, 0.25);

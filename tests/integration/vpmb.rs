@@ -56,7 +56,7 @@ fn dive(depth: f64, time: f64, gas: &str, deco: &[(&str, f64)]) -> DivePlan {
                 switch_depth_m: *d,
             })
             .collect(),
-        travel_gas: None,
+        travel_gases: vec![],
     }
 }
 

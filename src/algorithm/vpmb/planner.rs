@@ -234,15 +234,8 @@ impl<'a> Planner<'a> {
         let mut onset = [Onset::default(); N];
         let t_surface = self.surface_tissues();
         let mut t = t_surface;
-        // descent: on the travel gas to its switch depth, then on the bottom gas
-        let mut segments = Vec::new();
-        match self.plan.travel_gas {
-            Some(tg) => {
-                segments.push((0.0, tg.switch_depth_m, tg.mix));
-                segments.push((tg.switch_depth_m, depth, gas));
-            }
-            None => segments.push((0.0, depth, gas)),
-        }
+        // descent: on each travel gas over its range, then on the bottom gas
+        let segments = self.plan.descent_segments();
         let mut descent = 0.0;
         let mut legs = Vec::new();
         for &(d0, d1, mix) in &segments {
