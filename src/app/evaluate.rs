@@ -443,6 +443,7 @@ pub struct EvaluateRequest {
 }
 
 /// Plan with each algorithm: the candidates (labels made unique with the file stem).
+#[allow(clippy::too_many_arguments)] // the dive's fields, as on the command line
 pub fn plan_candidates(
     algorithms: &[(LoadedAlgorithm, String)],
     depth_m: f64,
