@@ -235,7 +235,7 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
     } else {
         None
     };
-    let settings = settings(&alg, req);
+    let settings = settings(&alg, req, &plan);
     let mut warnings = Vec::new();
     if oxygen.cns_percent > CNS_WARN_PERCENT {
         warnings.push(format!(
@@ -340,7 +340,7 @@ pub fn no_deco_limit(alg: &LoadedAlgorithm, plan: &DivePlan) -> Option<f64> {
 }
 
 /// The settings the plan used, as `(name, value)` rows: what `dt-lint` echoes.
-fn settings(alg: &LoadedAlgorithm, req: &PlanRequest) -> Vec<(String, String)> {
+fn settings(alg: &LoadedAlgorithm, req: &PlanRequest, plan: &DivePlan) -> Vec<(String, String)> {
     let c = &alg.conventions;
     let o = &req.overrides;
     let mark = |set: bool| if set { " (command line)" } else { "" };
@@ -398,6 +398,34 @@ fn settings(alg: &LoadedAlgorithm, req: &PlanRequest) -> Vec<(String, String)> {
             ),
         ),
     ];
+    if !plan.travel_gases.is_empty() {
+        let from = if req.travel_gases.is_empty() {
+            " (algorithm file)"
+        } else {
+            ""
+        };
+        let list: Vec<String> = plan
+            .travel_gases
+            .iter()
+            .map(|t| format!("{} {}–{} m", gas_text(t.mix), t.from_m, t.to_m))
+            .collect();
+        rows.push((
+            "travel gases".to_string(),
+            format!("{}{from}", list.join(", ")),
+        ));
+    }
+    if req.deco_gases.is_empty() && !alg.gases.deco.is_empty() {
+        let list: Vec<String> = alg
+            .gases
+            .deco
+            .iter()
+            .map(|d| format!("{} from {} m", gas_text(d.mix), d.switch_depth_m))
+            .collect();
+        rows.push((
+            "deco gases".to_string(),
+            format!("{} (algorithm file)", list.join(", ")),
+        ));
+    }
     if o.gf_low.is_some() || o.gf_high.is_some() {
         rows.insert(
             1,
