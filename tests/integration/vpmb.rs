@@ -9,7 +9,7 @@
 
 use decophantom::algorithm::conventions::{GfLowAnchor, StopRounding};
 use decophantom::algorithm::vpmb::{self, CvaConvergence, RawVpmbParams, VpmB};
-use decophantom::algorithm::{Conventions, DecoAlgorithm, DecoGas, DivePlan, Schedule};
+use decophantom::algorithm::{Conventions, DecoAlgorithm, DecoGas, DivePlan, Schedule, TravelGas};
 use decophantom::gas::GasMix;
 use decophantom::units::ATM_PA;
 
@@ -820,4 +820,92 @@ fn subsurface_convergence_removes_the_extra_stop() {
         e.contains("critical_volume_convergence") || e.contains("often"),
         "{e}"
     );
+}
+
+/// VPM-B's tissues after a travel-gas descent, against an independent computation in this
+/// test: Schreiner's equation for N2 and He on 21/35 from 0 to 60 m and 10/70 from 60 to
+/// 110 m (20 m/min), Haldane at 110 m until 20 min of runtime, then the start of the
+/// decompression zone (the deepest depth on a straight 10 m/min ascent where a compartment's
+/// tension plus Baker's 102 mmHg of other gases reaches ambient), found here by bisection.
+/// Half-times as Baker's VPMDECO (ZH-L16 with compartment 1b), Baker's msw conventions.
+#[test]
+fn travel_gas_descent_loading_matches_an_independent_schreiner_computation() {
+    const HT_N2: [f64; 16] = [
+        5.0, 8.0, 12.5, 18.5, 27.0, 38.3, 54.3, 77.0, 109.0, 146.0, 187.0, 239.0, 305.0, 390.0,
+        498.0, 635.0,
+    ];
+    const HT_HE: [f64; 16] = [
+        1.88, 3.02, 4.72, 6.99, 10.21, 14.48, 20.53, 29.11, 41.2, 55.19, 70.69, 90.34, 115.29,
+        147.42, 188.24, 240.03,
+    ];
+    let (ps, bpm, wv) = (1.01325, 0.1, 0.0493);
+    let other = 102.0 / 760.0 * ps;
+    let mut plan = dive(110.0, 20.0, "10/70", &[("50", 21.0), ("o2", 6.0)]);
+    plan.travel_gases = vec![TravelGas {
+        mix: GasMix::parse("21/35").unwrap(),
+        from_m: 0.0,
+        to_m: 60.0,
+    }];
+    let alg = vpm(raw(2), baker_msw(20.0, 10.0));
+    let s = alg.plan(&plan).unwrap();
+    assert!((s.legs[0].gas.he - 0.35).abs() < 1e-12 && s.legs[0].end_depth_m == 60.0);
+    assert!((s.legs[1].gas.he - 0.70).abs() < 1e-12 && s.legs[1].end_depth_m == 110.0);
+    // Schreiner per gas: p(t) = pi0 + R(t − 1/k) − (pi0 − p0 − R/k)·e^{−kt}
+    let sch = |p0: f64, f: f64, amb0: f64, rate: f64, t: f64, ht: f64| {
+        let k = std::f64::consts::LN_2 / ht;
+        let (pi0, r) = (f * (amb0 - wv), f * rate);
+        pi0 + r * (t - 1.0 / k) - (pi0 - p0 - r / k) * (-k * t).exp()
+    };
+    let (travel, bottom) = (
+        GasMix::parse("21/35").unwrap(),
+        GasMix::parse("10/70").unwrap(),
+    );
+    let mut n2 = [0.79 * (ps - wv); 16];
+    let mut he = [0.0; 16];
+    let legs = [
+        (0.0, 60.0, 3.0, travel),
+        (60.0, 110.0, 2.5, bottom),
+        (110.0, 110.0, 14.5, bottom),
+    ];
+    for (d0, d1, t, g) in legs {
+        let rate = (d1 - d0) * bpm / t;
+        for i in 0..16 {
+            n2[i] = sch(n2[i], g.n2(), ps + d0 * bpm, rate, t, HT_N2[i]);
+            he[i] = sch(he[i], g.he, ps + d0 * bpm, rate, t, HT_HE[i]);
+        }
+    }
+    let pb = ps + 110.0 * bpm;
+    let excess = |i: usize, t: f64| {
+        sch(n2[i], bottom.n2(), pb, -bpm * 10.0, t, HT_N2[i])
+            + sch(he[i], bottom.he, pb, -bpm * 10.0, t, HT_HE[i])
+            + other
+            - (pb - bpm * 10.0 * t)
+    };
+    let mut zone: f64 = 0.0;
+    for i in 0..16 {
+        let (mut lo, mut hi) = (0.0, 11.0);
+        if excess(i, lo) >= 0.0 {
+            zone = 110.0;
+            continue;
+        }
+        if excess(i, hi) < 0.0 {
+            continue;
+        }
+        for _ in 0..100 {
+            let mid = 0.5 * (lo + hi);
+            if excess(i, mid) < 0.0 {
+                lo = mid
+            } else {
+                hi = mid
+            }
+        }
+        zone = zone.max(110.0 - 10.0 * hi);
+    }
+    let got = alg.start_of_deco_zone_m(&plan).unwrap();
+    println!(
+        "start of the deco zone: {got:.4} m (independent {zone:.4} m); {}",
+        table(&s)
+    );
+    assert!((got - zone).abs() < 1e-3, "{got} vs {zone}");
+    assert!(s.stops[0].depth_m < zone);
 }
