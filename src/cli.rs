@@ -237,10 +237,11 @@ pub struct DiveArgs {
     /// Deco gas, MIX@SWITCH_DEPTH_M or MIX (switch at its MOD at 1.6 bar); repeatable.
     #[arg(long = "deco-gas")]
     pub deco_gas: Vec<String>,
-    /// Travel gas MIX@0..DEPTH_M, e.g. 21/35@0..60: breathed from the surface to DEPTH, then
-    /// the bottom gas (for hypoxic bottom mixes); available again on the ascent from DEPTH.
+    /// Travel gas MIX@FROM..TO (m), e.g. 21/35@0..60: breathed on the descent over that range,
+    /// then the next travel gas or the bottom gas (for hypoxic bottom mixes); available again
+    /// on the ascent from TO. Repeatable (ranges follow each other from the surface).
     #[arg(long = "travel-gas")]
-    pub travel_gas: Option<String>,
+    pub travel_gas: Vec<String>,
 }
 
 /// Arguments of `evaluate`.
@@ -258,6 +259,10 @@ pub struct EvaluateArgs {
     /// Deco gas, MIX@SWITCH_DEPTH_M or MIX (switch at its MOD at 1.6 bar); repeatable.
     #[arg(long = "deco-gas")]
     pub deco_gas: Vec<String>,
+    /// Travel gas MIX@FROM..TO (m), e.g. 21/35@0..60, for planned hypoxic bottom mixes;
+    /// repeatable.
+    #[arg(long = "travel-gas")]
+    pub travel_gas: Vec<String>,
     /// Algorithm TOML; repeat for each algorithm to compare.
     #[arg(long, required_unless_present = "schedule")]
     pub algorithm: Vec<std::path::PathBuf>,
@@ -487,7 +492,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 time_min: a.dive.time,
                 gas: a.dive.gas,
                 deco_gases: a.dive.deco_gas,
-                travel_gas: a.dive.travel_gas,
+                travel_gases: a.dive.travel_gas,
                 format: a
                     .format
                     .as_deref()
@@ -613,6 +618,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 time_min: a.time,
                 gas: a.gas,
                 deco_gases: a.deco_gas,
+                travel_gases: a.travel_gas,
                 algorithms: a.algorithm,
                 schedules: a.schedule,
                 dive: a.dive,

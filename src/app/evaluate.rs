@@ -420,6 +420,8 @@ pub struct EvaluateRequest {
     pub gas: Option<String>,
     /// Deco gases (`50@21`, `O2`).
     pub deco_gases: Vec<String>,
+    /// Travel gases (`21/35@0..60`), repeatable.
+    pub travel_gases: Vec<String>,
     /// Algorithm files (at least one algorithm or schedule).
     pub algorithms: Vec<PathBuf>,
     /// Schedule files compared as they are (TOML, CSV, legacy .txt, dive logs).
@@ -441,18 +443,20 @@ pub struct EvaluateRequest {
 }
 
 /// Plan with each algorithm: the candidates (labels made unique with the file stem).
+#[allow(clippy::too_many_arguments)] // the dive's fields, as on the command line
 pub fn plan_candidates(
     algorithms: &[(LoadedAlgorithm, String)],
     depth_m: f64,
     time_min: f64,
     gas: Option<&str>,
     deco_gases: &[String],
+    travel_gases: &[String],
     protocol: &Protocol,
     repeat_after_min: Option<f64>,
 ) -> Result<Vec<Candidate>, InputError> {
     let mut out: Vec<Candidate> = Vec::new();
     for (alg, source) in algorithms {
-        let (_, schedule) = plan_dive(alg, depth_m, time_min, gas, deco_gases, None)?;
+        let (_, schedule) = plan_dive(alg, depth_m, time_min, gas, deco_gases, travel_gases)?;
         let mut label = alg.label.clone();
         if out.iter().any(|c| c.label == label) {
             let stem = Path::new(source)
@@ -561,6 +565,7 @@ pub fn run(
             time_min,
             req.gas.as_deref(),
             &req.deco_gases,
+            &req.travel_gases,
             &criteria.protocol,
             req.repeat_after_min,
         )?,
@@ -578,7 +583,7 @@ pub fn run(
     let mut parts: Vec<String> = Vec::new();
     if let Some((depth_m, time_min)) = planned {
         parts.push(format!(
-            "{} m for {} min on {}{}",
+            "{} m for {} min on {}{}{}",
             depth_m,
             time_min,
             req.gas.as_deref().unwrap_or("air"),
@@ -586,6 +591,11 @@ pub fn run(
                 String::new()
             } else {
                 format!(", deco gases {}", req.deco_gases.join(", "))
+            },
+            if req.travel_gases.is_empty() {
+                String::new()
+            } else {
+                format!(", travel gases {}", req.travel_gases.join(", "))
             }
         ));
     }
