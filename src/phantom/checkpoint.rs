@@ -193,16 +193,23 @@ fn profile_text(profile: &PressureHistory) -> String {
 /// checkpoint".
 fn first_difference(here: &str, there: &str) -> Option<String> {
     let (a, b): (Vec<&str>, Vec<&str>) = (here.lines().collect(), there.lines().collect());
-    let mut stack: Vec<String> = Vec::new();
+    // the open blocks above the current line: (indentation, key)
+    let mut stack: Vec<(usize, String)> = Vec::new();
     for i in 0..a.len().max(b.len()) {
         let (x, y) = (a.get(i).copied(), b.get(i).copied());
         let line = x.or(y).unwrap_or("");
-        let indent = (line.len() - line.trim_start().len()) / 4;
+        let indent = line.len() - line.trim_start().len();
         let t = line.trim();
         let key = t.split_once(": ").map(|(k, _)| k.to_string());
-        stack.truncate(indent.saturating_sub(1));
+        while stack.last().is_some_and(|(d, _)| *d >= indent) {
+            stack.pop();
+        }
         if x != y {
-            let mut path: Vec<String> = stack.iter().filter(|k| !k.is_empty()).cloned().collect();
+            let mut path: Vec<String> = stack
+                .iter()
+                .map(|(_, k)| k.clone())
+                .filter(|k| !k.is_empty())
+                .collect();
             if let Some(k) = &key {
                 path.push(k.clone());
             }
@@ -222,9 +229,7 @@ fn first_difference(here: &str, there: &str) -> Option<String> {
             ));
         }
         if t.ends_with('{') || t.ends_with('[') || t.ends_with('(') {
-            if indent > 0 {
-                stack.push(key.unwrap_or_default());
-            }
+            stack.push((indent, key.unwrap_or_default()));
         }
     }
     None
@@ -301,7 +306,12 @@ impl RunState {
                 BubbleFate::Merged { into, .. } => into < nb,
                 _ => true,
             };
-            if b.id != i || b.moles.len() != ng || !fate_ok {
+            let finite = b.position.iter().all(|x| x.is_finite())
+                && sim.grid.contains(b.position)
+                && b.radius.is_finite()
+                && b.radius >= 0.0
+                && b.moles.iter().all(|m| m.is_finite());
+            if b.id != i || b.moles.len() != ng || !fate_ok || !finite {
                 return Err(format!("bubble {i} is inconsistent"));
             }
         }
@@ -997,6 +1007,8 @@ pub fn prepare(file: &Path) -> Result<(), Error> {
 /// then empty; best effort (a completed run no longer needs it).
 pub fn remove(file: &Path) {
     use std::io::Read as _;
+    // temporary files of killed writers first (`.checkpoint.dcp.tmp-PID-N`)
+    let _ = crate::report::output::check_file_target(file, &[]);
     let mut head = [0u8; 8];
     let ours = std::fs::File::open(file)
         .and_then(|mut f| f.read_exact(&mut head))
