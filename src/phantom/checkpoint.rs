@@ -46,6 +46,7 @@
 
 use super::bubble::{Bubble, BubbleFate};
 use super::displacement::Displaced;
+use super::grid::Face;
 use super::params::PhantomParams;
 use super::sim::{
     BubbleFrame, Ending, Event, Frame, LoopState, Observer, RunLog, RunSummary, Simulation,
@@ -562,16 +563,31 @@ impl Enc {
     }
 }
 
+/// A new buffer with the header of a file of kind `magic` (payload length set by [`seal`]).
+fn open_frame(magic: &[u8; 8], capacity: usize) -> Enc {
+    let mut e = Enc {
+        buf: Vec::with_capacity(capacity + 64),
+    };
+    e.buf.extend_from_slice(magic);
+    e.buf.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
+    e.u64(0); // payload length, set by `seal`
+    e.str(env!("CARGO_PKG_VERSION"));
+    e
+}
+
+/// Set the payload length and append the checksum.
+fn seal(mut e: Enc) -> Vec<u8> {
+    let payload = (e.buf.len() - 20) as u64;
+    e.buf[12..20].copy_from_slice(&payload.to_le_bytes());
+    let sum = fnv1a(&e.buf);
+    e.u64(sum);
+    e.buf
+}
+
 /// The bytes of a checkpoint of `state` (with the `frames` recorded up to it) for `inputs`.
 pub fn encode(inputs: &Inputs, state: &RunState, frames: &[Frame]) -> Vec<u8> {
     let cells: usize = state.fields.iter().map(|f| f.len()).sum();
-    let mut e = Enc {
-        buf: Vec::with_capacity(cells * 8 + frames.len() * 128 + 4096),
-    };
-    e.buf.extend_from_slice(MAGIC);
-    e.buf.extend_from_slice(&FORMAT_VERSION.to_le_bytes());
-    e.u64(0); // payload length, set below
-    e.str(env!("CARGO_PKG_VERSION"));
+    let mut e = open_frame(MAGIC, cells * 8 + frames.len() * 128 + 4096);
     e.usize(inputs.sections.len());
     for s in &inputs.sections {
         e.str(&s.name);
@@ -583,11 +599,54 @@ pub fn encode(inputs: &Inputs, state: &RunState, frames: &[Frame]) -> Vec<u8> {
     for f in frames {
         e.frame(f);
     }
-    let payload = (e.buf.len() - 20) as u64;
-    e.buf[12..20].copy_from_slice(&payload.to_le_bytes());
-    let sum = fnv1a(&e.buf);
-    e.u64(sum);
-    e.buf
+    seal(e)
+}
+
+/// The first eight bytes of a finished run's result file ([`encode_result`]).
+pub const RESULT_MAGIC: &[u8; 8] = b"DCPHRSLT";
+
+/// The bytes of a finished run's result: its summary and frames (the same framing and
+/// encodings as a checkpoint; a journal keeps finished runs this way, [`decode_result`]).
+pub fn encode_result(summary: &RunSummary, frames: &[Frame]) -> Vec<u8> {
+    let mut e = open_frame(RESULT_MAGIC, frames.len() * 128 + 4096);
+    e.usize(summary.gases.len());
+    for g in &summary.gases {
+        e.str(g.name());
+    }
+    e.f64(summary.max_radius.0);
+    e.f64(summary.max_radius.1);
+    e.usize(summary.max_radius.2);
+    e.f64s(&summary.final_radii);
+    e.f64(summary.peak_total_volume.0);
+    e.f64(summary.peak_total_volume.1);
+    e.f64(summary.gas_balance_error);
+    e.f64(summary.min_concentration);
+    e.usize(summary.steps.0);
+    e.usize(summary.steps.1);
+    e.f64(summary.end_time);
+    match &summary.ending {
+        Ending::Completed => e.u8(0),
+        Ending::Interrupted { time } => {
+            e.u8(1);
+            e.f64(*time);
+        }
+        Ending::BubbleReachedFace { bubble, face, time } => {
+            e.u8(2);
+            e.usize(*bubble);
+            e.str(face.name());
+            e.f64(*time);
+        }
+    }
+    e.usize(summary.events.len());
+    for ev in &summary.events {
+        e.event(ev);
+    }
+    e.usize(summary.cells);
+    e.usize(frames.len());
+    for f in frames {
+        e.frame(f);
+    }
+    seal(e)
 }
 
 struct Dec<'a> {
@@ -821,10 +880,10 @@ pub enum DecodeError {
     Corrupt(String),
 }
 
-/// Read the bytes of a checkpoint (the inverse of [`encode`]). Never panics: every length and
-/// tag is checked.
-pub fn decode(bytes: &[u8]) -> Result<Checkpoint, DecodeError> {
-    if bytes.len() < 8 || &bytes[..8] != MAGIC {
+/// Check the framing of a file of kind `magic` (magic, format version, length, checksum) and
+/// return its body (everything before the checksum).
+fn unframe<'a>(magic: &[u8; 8], bytes: &'a [u8]) -> Result<&'a [u8], DecodeError> {
+    if bytes.len() < 8 || &bytes[..8] != magic {
         return Err(DecodeError::NotACheckpoint);
     }
     if bytes.len() < 12 {
@@ -857,6 +916,93 @@ pub fn decode(bytes: &[u8]) -> Result<Checkpoint, DecodeError> {
             "its checksum does not match its contents (a byte was changed)".into(),
         ));
     }
+    Ok(body)
+}
+
+/// Read a finished run's result (the inverse of [`encode_result`]); `None` unless it is whole,
+/// of this format and of this decophantom version.
+pub fn decode_result(bytes: &[u8]) -> Option<(RunSummary, Vec<Frame>)> {
+    let body = unframe(RESULT_MAGIC, bytes).ok()?;
+    let mut d = Dec { buf: body, pos: 20 };
+    let read = |d: &mut Dec| -> Res<(RunSummary, Vec<Frame>)> {
+        if d.str()? != env!("CARGO_PKG_VERSION") {
+            return Err("another version".into());
+        }
+        let n = d.len(8)?;
+        let mut gases = Vec::with_capacity(n);
+        for _ in 0..n {
+            let name = d.str()?;
+            let g = Gas::ALL
+                .iter()
+                .find(|g| g.name() == name)
+                .ok_or("an unknown gas")?;
+            gases.push(*g);
+        }
+        let max_radius = (d.f64()?, d.f64()?, d.usize()?);
+        let final_radii = d.f64s()?;
+        let peak_total_volume = (d.f64()?, d.f64()?);
+        let gas_balance_error = d.f64()?;
+        let min_concentration = d.f64()?;
+        let steps = (d.usize()?, d.usize()?);
+        let end_time = d.f64()?;
+        let ending = match d.u8()? {
+            0 => Ending::Completed,
+            1 => Ending::Interrupted { time: d.f64()? },
+            2 => {
+                let bubble = d.usize()?;
+                let name = d.str()?;
+                let face = [
+                    Face::XMinus,
+                    Face::XPlus,
+                    Face::YMinus,
+                    Face::YPlus,
+                    Face::Bottom,
+                    Face::Top,
+                    Face::Side,
+                ]
+                .into_iter()
+                .find(|f| f.name() == name)
+                .ok_or("an unknown face")?;
+                Ending::BubbleReachedFace {
+                    bubble,
+                    face,
+                    time: d.f64()?,
+                }
+            }
+            _ => return Err("an unknown ending".into()),
+        };
+        let n = d.len(1 + 8 + 8)?;
+        let events = (0..n).map(|_| d.event()).collect::<Res<Vec<_>>>()?;
+        let cells = d.usize()?;
+        let n = d.len(8 * 6)?;
+        let frames = (0..n).map(|_| d.frame()).collect::<Res<Vec<_>>>()?;
+        if d.pos != d.buf.len() {
+            return Err("bytes left over".into());
+        }
+        Ok((
+            RunSummary {
+                gases,
+                max_radius,
+                final_radii,
+                peak_total_volume,
+                gas_balance_error,
+                min_concentration,
+                steps,
+                end_time,
+                ending,
+                events,
+                cells,
+            },
+            frames,
+        ))
+    };
+    read(&mut d).ok()
+}
+
+/// Read the bytes of a checkpoint (the inverse of [`encode`]). Never panics: every length and
+/// tag is checked.
+pub fn decode(bytes: &[u8]) -> Result<Checkpoint, DecodeError> {
+    let body = unframe(MAGIC, bytes)?;
     let mut d = Dec { buf: body, pos: 20 };
     let read = |d: &mut Dec| -> Res<Checkpoint> {
         let crate_version = d.str()?;
