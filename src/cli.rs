@@ -654,6 +654,13 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 print!("{}", decophantom::app::json::evaluate(&ev));
             } else {
                 print!("{}", decophantom::app::evaluate::summary_text(&ev));
+                if ev.resumed > 0 {
+                    println!(
+                        "{} of {} runs read back from the journal of an unfinished evaluation",
+                        ev.resumed,
+                        ev.runs.len()
+                    );
+                }
                 wrote(&a.out);
             }
             Ok(0)

@@ -445,3 +445,154 @@ fn decoding_mutated_checkpoints_never_panics() {
     assert!(refused > 200, "{refused} refused, {read} read");
     assert!(read > 0);
 }
+
+/// The evaluation of the `evaluate` tests' kind: two schedules × two laws in a 3 mm cube.
+const EVAL_PHANTOM: &str = r#"name = "journal-gel"
+[geometry]
+shape = "box"
+size_m = [3e-3, 3e-3, 3e-3]
+grid_step_m = 150e-6
+open_faces = ["top"]
+[material.elasticity]
+law = "hyperelastic"
+shear_modulus = 40.0
+[gases.n2]
+diffusivity = 2.5e-9
+ostwald = 0.014
+[gases.o2]
+diffusivity = 2.5e-9
+ostwald = 0.027
+[nuclei]
+min_radius_m = 86.5e-6
+[[bubbles]]
+position_m = [1.5e-3, 1.5e-3, 1.5e-3]
+initial_radius_m = 100e-6
+[numerics]
+max_step_s = 30.0
+record_interval_s = 10.0
+"#;
+
+const EVAL_CRITERIA: &str = r#"description = "journal test"
+[protocol]
+observe_after_surfacing_min = 30
+water_vapour_pa = 6270
+[[criterion]]
+kind = "peak-total-volume"
+limit = 1.0
+[[criterion]]
+kind = "peak-radius"
+limit = 1e-3
+"#;
+
+#[test]
+fn evaluate_keeps_finished_runs_and_skips_them_on_restart() {
+    use decophantom::app::evaluate::{plan_candidates, run_matrix_journaled, PhantomSpec};
+    let d = tempdir("evaluate-journal");
+    let ph = d.join("phantom.toml");
+    let cr = d.join("criteria.toml");
+    std::fs::write(&ph, EVAL_PHANTOM).unwrap();
+    std::fs::write(&cr, EVAL_CRITERIA).unwrap();
+    let algs: Vec<PathBuf> = ["zhl16c-gf30-85.toml", "zhl16c-gf100-100.toml"]
+        .iter()
+        .map(|n| crate::common::root().join("algorithms").join(n))
+        .collect();
+    let evaluate = |out: &Path| -> Output {
+        let mut c = Command::new(bin());
+        c.args(["evaluate", "--depth", "30", "--time", "10"]);
+        for a in &algs {
+            c.arg("--algorithm").arg(a);
+        }
+        c.args(["--elasticity", "hyperelastic,none", "--phantom"])
+            .arg(&ph)
+            .arg("--criteria")
+            .arg(&cr)
+            .arg("--out")
+            .arg(out)
+            .output()
+            .unwrap()
+    };
+    let whole = d.join("whole");
+    let o = evaluate(&whole);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(!text(&o.stdout).contains("read back"));
+    // an evaluation into `second` that did all four runs but never wrote its folder (as a
+    // killed one would leave it): the library's journaled matrix, the journal not finished
+    let second = d.join("second");
+    let criteria = decophantom::risk::load_criteria(&cr).unwrap();
+    let phantom = PhantomSpec::load(Some(&ph), None).unwrap();
+    let laws = phantom
+        .resolve_laws(&["hyperelastic".into(), "none".into()])
+        .unwrap();
+    let loaded: Vec<_> = algs
+        .iter()
+        .map(|p| {
+            (
+                decophantom::algorithm::load_algorithm(p).unwrap(),
+                p.display().to_string(),
+            )
+        })
+        .collect();
+    let cands = plan_candidates(&loaded, 30.0, 10.0, None, &[], &criteria.protocol, None).unwrap();
+    let (ev, journal) = run_matrix_journaled(
+        cands,
+        phantom,
+        laws,
+        criteria,
+        &mut |_, _| {},
+        Some(&second),
+    )
+    .unwrap();
+    assert_eq!((ev.runs.len(), ev.resumed), (4, 0));
+    let jdir = journal.unwrap().dir().to_path_buf();
+    assert_eq!(jdir, d.join("second.partial"));
+    let runs = std::fs::read_to_string(jdir.join("runs.txt")).unwrap();
+    let lines: Vec<&str> = runs.lines().collect();
+    assert_eq!(lines.len(), 5, "{runs}");
+    assert!(lines[0].starts_with("# decophantom "));
+    // killed after three runs, one result file lost, the last line cut
+    let key = |l: &str| l.split(' ').next().unwrap().to_string();
+    std::fs::remove_file(jdir.join(format!("run-{}.dcr", key(lines[2])))).unwrap();
+    std::fs::write(
+        jdir.join("runs.txt"),
+        format!(
+            "{}\n{}\n{}\n{}\n{}",
+            lines[0],
+            lines[1],
+            lines[2],
+            lines[3],
+            &lines[4][..7]
+        ),
+    )
+    .unwrap();
+    let o = evaluate(&second);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    assert!(
+        text(&o.stdout).contains("2 of 4 runs read back from the journal"),
+        "{}",
+        text(&o.stdout)
+    );
+    // the same report as the uninterrupted evaluation (the wall times aside), journal gone
+    let mut compared = 0;
+    for e in std::fs::read_dir(&whole).unwrap() {
+        let name = e.unwrap().file_name();
+        if name == "timing.csv" {
+            continue;
+        }
+        let a = std::fs::read(whole.join(&name)).unwrap();
+        let b = std::fs::read(second.join(&name)).unwrap();
+        assert!(a == b, "{name:?} differs after the restart");
+        compared += 1;
+    }
+    assert!(compared >= 10, "{compared} files");
+    assert!(!jdir.exists());
+    // a journal of another evaluation is refused, not mixed in
+    std::fs::create_dir_all(&jdir).unwrap();
+    std::fs::write(
+        jdir.join("runs.txt"),
+        "# decophantom 0.1.0 evaluate runs=9 0\n",
+    )
+    .unwrap();
+    let o = evaluate(&second);
+    assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
+    assert!(text(&o.stderr).contains("journal of a different evaluation"));
+}
