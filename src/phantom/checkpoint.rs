@@ -1104,9 +1104,10 @@ pub fn read(file: &Path, inputs: &Inputs) -> Result<Checkpoint, Error> {
     Ok(cp)
 }
 
-/// Check the place of a checkpoint before the run: its folder is created if missing; a file
-/// already there must be a checkpoint (it is replaced by this run's), never a user's file.
-/// Errors are bad input naming `--checkpoint-every` (exit 2).
+/// Check the place of a checkpoint before the run (its folder is created at the first
+/// checkpoint, so a run refused before it writes nothing): the folder must be a folder or
+/// absent, and a file already there must be a checkpoint (it is replaced by this run's), never
+/// a user's file. Errors are bad input naming `--checkpoint-every` (exit 2).
 pub fn prepare(file: &Path) -> Result<(), Error> {
     let err =
         |m: String| Error::Input(InputError::new(m).in_file(file).field("--checkpoint-every"));
@@ -1117,10 +1118,6 @@ pub fn prepare(file: &Path) -> Result<(), Error> {
                 dir.display()
             )));
         }
-        std::fs::create_dir_all(dir).map_err(|e| Error::Io {
-            path: dir.to_path_buf(),
-            source: e,
-        })?;
     }
     match std::fs::symlink_metadata(file) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
@@ -1282,6 +1279,17 @@ impl Checkpointer {
         let start = Instant::now();
         let bytes = encode(&self.inputs, state, frames);
         let guard: Vec<&Path> = self.guard.iter().map(|p| p.as_path()).collect();
+        if let Some(dir) = self
+            .stats
+            .path
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+        {
+            std::fs::create_dir_all(dir).map_err(|e| Error::Io {
+                path: dir.to_path_buf(),
+                source: e,
+            })?;
+        }
         crate::report::output::write_file_atomic_with_inputs(&self.stats.path, &bytes, &guard)?;
         if let Some(dir) = self
             .stats

@@ -596,3 +596,22 @@ fn evaluate_keeps_finished_runs_and_skips_them_on_restart() {
     assert_eq!(o.status.code(), Some(2), "{}", text(&o.stderr));
     assert!(text(&o.stderr).contains("journal of a different evaluation"));
 }
+
+#[test]
+fn a_file_that_is_not_a_checkpoint_is_never_overwritten() {
+    let c = Case::new("checkpoint-user-file");
+    let ck = c.checkpoint_dir("out");
+    std::fs::create_dir_all(&ck).unwrap();
+    let mine = ck.join(checkpoint::FILE_NAME);
+    std::fs::write(&mine, "my notes\n").unwrap();
+    let o = c.run("out", &["--checkpoint-every", "0.01s"]);
+    let err = text(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(err.contains("--checkpoint-every") && err.contains("not a decophantom checkpoint"));
+    assert_eq!(std::fs::read_to_string(&mine).unwrap(), "my notes\n");
+    assert!(!c.dir.join("out").exists());
+    // a bad interval is refused before anything is simulated or created
+    let o = c.run("other", &["--checkpoint-every", "0min"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(!c.checkpoint_dir("other").exists() && !c.dir.join("other").exists());
+}
