@@ -281,7 +281,7 @@ pub struct EvaluateArgs {
     /// Repeat the dive after this surface interval, min (the phantom's state carries over).
     #[arg(long = "repeat-after", allow_hyphen_values = true)]
     pub repeat_after: Option<f64>,
-    /// Output folder (replaced whole; created if missing).
+    /// Output folder (replaced whole; created if missing); finished runs are kept in OUT.partial/ until then, and a restart skips them.
     #[arg(long)]
     pub out: std::path::PathBuf,
     /// Print the scores and ranking as JSON (schema decophantom.evaluate/1, docs/json.md).

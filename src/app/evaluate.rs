@@ -500,7 +500,20 @@ pub fn run_matrix_journaled(
             })
         })
         .collect();
-    let runs = results.into_iter().collect::<Result<Vec<_>, _>>()?;
+    let runs = match results.into_iter().collect::<Result<Vec<_>, _>>() {
+        Ok(runs) => runs,
+        Err(e) => {
+            // a journal that holds no finished run is no use to a restart: leave nothing
+            if let Some(j) = journal {
+                let finished = std::fs::read_to_string(j.dir().join("runs.txt"))
+                    .map_or(0, |t| t.lines().count().saturating_sub(1));
+                if finished == 0 {
+                    j.finish();
+                }
+            }
+            return Err(e);
+        }
+    };
     Ok((
         Evaluation {
             candidates,

@@ -38,7 +38,8 @@
 //! | *L* | payload: crate version (string); inputs (per section: name, hash `u64`, canonical text — empty when over 1 MiB); the run state; the frames |
 //! | 8 | FNV-1a 64 of every byte before it |
 //!
-//! The Fig. 5 grid (733 410 cells × 2 gases) makes a checkpoint of about 12 MB. It is written to
+//! The Fig. 5 grid (733 410 cells inside a box of 935 k, × 2 gases) makes a checkpoint of
+//! 15.1 MB at mid-run (0.14–0.17 s to encode, write and flush). It is written to
 //! a temporary file beside its place, flushed to disk and renamed over it, so a checkpoint file
 //! is always whole. A file of another format version, of another decophantom version, truncated
 //! or corrupt is refused with exit 2 (never a panic): every length is checked against the bytes

@@ -560,7 +560,7 @@ impl<'a> Simulation<'a> {
     }
 
     /// [`Self::run`], or its continuation from a checkpoint's loop state (`resume`: the
-    /// simulation was restored by [`super::checkpoint::RunState::restore`]; the initial state is
+    /// simulation was rebuilt by [`super::checkpoint::Checkpoint::resume`]; the initial state is
     /// not recorded again). After every complete step the run goes on from, the observer may
     /// take a checkpoint ([`Observer::checkpoint_due`]).
     pub(super) fn run_from(
