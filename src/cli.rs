@@ -290,7 +290,7 @@ pub struct EvaluateArgs {
     /// Repeat the dive after this surface interval, min (the phantom's state carries over).
     #[arg(long = "repeat-after", allow_hyphen_values = true)]
     pub repeat_after: Option<f64>,
-    /// Output folder (replaced whole; created if missing).
+    /// Output folder (replaced whole; created if missing); finished runs are kept in OUT.partial/ until then, and a restart skips them.
     #[arg(long)]
     pub out: std::path::PathBuf,
     /// Print the scores and ranking as JSON (schema decophantom.evaluate/1, docs/json.md).
@@ -330,6 +330,15 @@ pub struct SimulateArgs {
     /// Run even when the run is estimated to take more than 6 hours.
     #[arg(long)]
     pub force: bool,
+    /// Save the run's whole state every INTERVAL of wall time (60s, 5min, 1h) into OUT.checkpoint/checkpoint.dcp, and once more on Ctrl-C; removed when the run completes.
+    #[arg(long, value_name = "INTERVAL")]
+    pub checkpoint_every: Option<String>,
+    /// Continue from a checkpoint (the OUT.checkpoint folder or its file) with the same profile, phantom and options; the results are byte-identical to an uninterrupted run.
+    #[arg(long, value_name = "DIR")]
+    pub resume: Option<std::path::PathBuf>,
+    /// Testing: save a checkpoint after step N, then stop as if interrupted.
+    #[arg(long, value_name = "N", hide = true)]
+    pub checkpoint_at_step: Option<usize>,
 }
 
 /// Arguments of `elasticity`.
@@ -548,6 +557,13 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 phantom: a.phantom,
                 out: a.out.clone(),
                 stop: Some(interrupt_flag()),
+                checkpoint_every: a
+                    .checkpoint_every
+                    .as_deref()
+                    .map(decophantom::phantom::checkpoint::parse_interval)
+                    .transpose()?,
+                checkpoint_at_step: a.checkpoint_at_step,
+                resume: a.resume,
             };
             let mut bar = Progress::new();
             let run = decophantom::app::simulate::run(&req, &mut |t, e| bar.update(t, e));
@@ -555,6 +571,19 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             let run = run?;
             print!("{}", decophantom::app::simulate::describe(&run));
             wrote(&a.out);
+            if let Some(c) = run.checkpoints.as_ref().filter(|c| c.written > 0) {
+                if matches!(
+                    run.summary.ending,
+                    decophantom::phantom::sim::Ending::Interrupted { .. }
+                ) {
+                    eprintln!(
+                        "checkpoint at t = {:.1} s in {}: continue with --resume {}",
+                        c.time,
+                        c.path.display(),
+                        c.path.parent().unwrap_or(&c.path).display()
+                    );
+                }
+            }
             // interrupted runs wrote what they had, and say so with the usual SIGINT code
             Ok(match run.summary.ending {
                 decophantom::phantom::sim::Ending::Interrupted { .. } => 130,
@@ -637,6 +666,13 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 print!("{}", decophantom::app::json::evaluate(&ev));
             } else {
                 print!("{}", decophantom::app::evaluate::summary_text(&ev));
+                if ev.resumed > 0 {
+                    println!(
+                        "{} of {} runs read back from the journal of an unfinished evaluation",
+                        ev.resumed,
+                        ev.runs.len()
+                    );
+                }
                 wrote(&a.out);
             }
             Ok(0)

@@ -5,6 +5,8 @@ mod algorithms;
 mod analytic;
 #[path = "integration/bubble_steps.rs"]
 mod bubble_steps;
+#[path = "integration/checkpoint.rs"]
+mod checkpoint;
 #[path = "integration/cli_simulate.rs"]
 mod cli_simulate;
 #[path = "integration/common.rs"]

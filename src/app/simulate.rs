@@ -4,6 +4,7 @@
 
 use crate::error::Error;
 use crate::gas::Gas;
+use crate::phantom::checkpoint::{self, Checkpoint, Checkpointer};
 use crate::phantom::config::load_phantom;
 use crate::phantom::params::PhantomParams;
 use crate::phantom::sim::{
@@ -30,6 +31,14 @@ pub struct SimulateRequest {
     /// Set to true (e.g. by a Ctrl-C handler) to stop the run early; what was simulated up to
     /// then is written, and the summary says where it stopped.
     pub stop: Option<std::sync::Arc<AtomicBool>>,
+    /// Save the run's state every this much wall time (`--checkpoint-every`), into
+    /// [`checkpoint::default_path`] of `out`.
+    pub checkpoint_every: Option<std::time::Duration>,
+    /// Test hook (hidden `--checkpoint-at-step`): save the state after this step, then stop
+    /// as if interrupted.
+    pub checkpoint_at_step: Option<usize>,
+    /// Continue from this checkpoint (`--resume`: the file, or the folder holding it).
+    pub resume: Option<PathBuf>,
 }
 
 /// A finished run: its summary, frames and wall time.
@@ -43,12 +52,23 @@ pub struct SimRun {
     pub wall_seconds: f64,
     /// Import notes of the profile (dive logs: defaults used, repairs, watch time).
     pub notes: Vec<String>,
+    /// Checkpoints written (a checkpointed run), and the simulated time it resumed from.
+    pub checkpoints: Option<checkpoint::Stats>,
+    /// Simulated time the run was resumed from, s (`--resume`).
+    pub resumed_at: Option<f64>,
 }
 
 struct WithProgress<'a> {
     rec: Recorder,
     progress: &'a mut dyn FnMut(f64, f64),
     stop: Option<&'a AtomicBool>,
+    checkpointer: Option<&'a mut Checkpointer>,
+}
+
+impl WithProgress<'_> {
+    fn stop_requested(&self) -> bool {
+        self.stop.is_some_and(|s| s.load(Ordering::Relaxed))
+    }
 }
 
 impl Observer for WithProgress<'_> {
@@ -59,7 +79,23 @@ impl Observer for WithProgress<'_> {
         (self.progress)(time, end);
     }
     fn should_stop(&self) -> bool {
-        self.stop.is_some_and(|s| s.load(Ordering::Relaxed))
+        let asked = self.stop_requested();
+        match &self.checkpointer {
+            Some(c) => c.let_stop(asked),
+            None => asked,
+        }
+    }
+    fn checkpoint_due(&mut self, step: usize) -> bool {
+        let asked = self.stop_requested();
+        self.checkpointer
+            .as_mut()
+            .is_some_and(|c| c.due(step, asked))
+    }
+    fn checkpoint(&mut self, state: checkpoint::RunState) -> Result<(), Error> {
+        match self.checkpointer.as_mut() {
+            Some(c) => c.write(&state, &self.rec.frames),
+            None => Ok(()),
+        }
     }
 }
 
@@ -87,20 +123,47 @@ pub fn simulate_until(
     progress: &mut dyn FnMut(f64, f64),
     stop: Option<&AtomicBool>,
 ) -> Result<SimRun, Error> {
+    simulate_checkpointed(params, profile, progress, stop, None, None)
+}
+
+/// [`simulate_until`] with checkpoints (`checkpointer`) and/or continued from a checkpoint
+/// (`resume`: the checkpoint and its file, already checked against these inputs by
+/// [`checkpoint::read`]).
+pub fn simulate_checkpointed(
+    params: &PhantomParams,
+    profile: &PressureHistory,
+    progress: &mut dyn FnMut(f64, f64),
+    stop: Option<&AtomicBool>,
+    mut checkpointer: Option<&mut Checkpointer>,
+    resume: Option<(Checkpoint, &std::path::Path)>,
+) -> Result<SimRun, Error> {
     let start = std::time::Instant::now();
     super::cost::check(params, profile)?;
-    let mut sim = Simulation::new(params, profile)?;
     let mut obs = WithProgress {
         rec: Recorder::default(),
         progress,
         stop,
+        checkpointer: checkpointer.as_deref_mut(),
     };
-    let summary = sim.run(profile, &mut obs)?;
+    let (summary, resumed_at) = match resume {
+        None => (
+            Simulation::new(params, profile)?.run(profile, &mut obs)?,
+            None,
+        ),
+        Some((mut cp, file)) => {
+            let at = cp.state.time();
+            obs.rec.frames = std::mem::take(&mut cp.frames);
+            (cp.resume(params, profile, &mut obs, file)?, Some(at))
+        }
+    };
+    let frames = obs.rec.frames;
     Ok(SimRun {
         summary,
-        frames: obs.rec.frames,
+        frames,
         wall_seconds: start.elapsed().as_secs_f64(),
         notes: Vec::new(),
+        checkpoints: checkpointer.map(|c| c.stats.clone()),
+        resumed_at,
     })
 }
 
@@ -325,11 +388,48 @@ pub fn run(req: &SimulateRequest, progress: &mut dyn FnMut(f64, f64)) -> Result<
     };
     let phantom = load_phantom(&req.phantom)?;
     crate::phantom::config::require_bubbles(&phantom.params, &req.phantom)?;
-    let mut run = simulate_until(&phantom.params, &profile, progress, req.stop.as_deref())?;
+    // checkpoints: the inputs as parsed, the checkpoint to resume checked against them, and the
+    // place of this run's checkpoints, all before anything is simulated
+    let identity = checkpoint::Inputs::new(&phantom.params, &profile);
+    let resumed_from = req.resume.as_deref().map(checkpoint::locate);
+    let resume = match &resumed_from {
+        Some(file) => Some(checkpoint::read(file, &identity)?),
+        None => None,
+    };
+    let mut checkpointer = if req.checkpoint_every.is_some() || req.checkpoint_at_step.is_some() {
+        let path = checkpoint::default_path(&req.out);
+        checkpoint::prepare(&path)?;
+        Some(Checkpointer::new(
+            path,
+            identity,
+            inputs.iter().map(|p| p.to_path_buf()).collect(),
+            req.checkpoint_every,
+            req.checkpoint_at_step,
+        ))
+    } else {
+        None
+    };
+    let mut run = simulate_checkpointed(
+        &phantom.params,
+        &profile,
+        progress,
+        req.stop.as_deref(),
+        checkpointer.as_mut(),
+        resume.zip(resumed_from.as_deref()),
+    )?;
     run.notes = notes;
     let mut set = OutputSet::new();
     add_run_files(&mut set, "", &run, &profile.label, &phantom.params.name)?;
     set.commit_with_inputs(&req.out, &inputs)?;
+    // a finished run no longer needs its checkpoints (an interrupted one resumes from them)
+    if !matches!(run.summary.ending, Ending::Interrupted { .. }) {
+        if let Some(c) = &checkpointer {
+            checkpoint::remove(&c.stats.path);
+        }
+        if let Some(f) = &resumed_from {
+            checkpoint::remove(f);
+        }
+    }
     Ok(run)
 }
 
@@ -361,6 +461,17 @@ pub fn describe(run: &SimRun) -> String {
     let mut text = describe_results(run);
     text.pop();
     text.push_str(&format!("; wall {:.2} s\n", run.wall_seconds));
+    if let Some(t) = run.resumed_at {
+        text.push_str(&format!("resumed from a checkpoint at t = {t:.1} s\n"));
+    }
+    if let Some(c) = run.checkpoints.as_ref().filter(|c| c.written > 0) {
+        text.push_str(&format!(
+            "{} checkpoint(s) of {:.1} MB written in {:.2} s\n",
+            c.written,
+            c.bytes as f64 / 1e6,
+            c.seconds
+        ));
+    }
     text
 }
 

@@ -322,6 +322,14 @@ impl Grid {
         }
     }
 
+    /// The cells taken out of the gel by bubbles, in index order (the grid's codes and interior
+    /// spans are a function of this set and the mask: a checkpoint saves only the set).
+    pub fn excluded_cells(&self) -> Vec<usize> {
+        let mut cells: Vec<usize> = self.excluded.iter().map(|&c| c as usize).collect();
+        cells.sort_unstable();
+        cells
+    }
+
     /// Whether cell `idx` is taken out of the gel by a bubble.
     pub fn is_excluded(&self, idx: usize) -> bool {
         self.excluded.contains(&(idx as u32))

@@ -1,6 +1,7 @@
 //! The three-dimensional tissue-phantom bubble model (Walsh et al. 2017, section 2.1).
 
 pub mod bubble;
+pub mod checkpoint;
 pub mod config;
 pub mod diffusion;
 pub mod displacement;

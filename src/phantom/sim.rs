@@ -96,6 +96,16 @@ pub trait Observer {
     fn should_stop(&self) -> bool {
         false
     }
+    /// Whether to save a checkpoint now; asked after every complete step that the run goes on
+    /// from (`step`: steps taken so far). Default never.
+    fn checkpoint_due(&mut self, _step: usize) -> bool {
+        false
+    }
+    /// The run's whole state after a complete step, when [`Self::checkpoint_due`] said so
+    /// ([`super::checkpoint`]). An error ends the run.
+    fn checkpoint(&mut self, _state: super::checkpoint::RunState) -> Result<(), Error> {
+        Ok(())
+    }
 }
 
 /// Keeps every frame in memory.
@@ -182,57 +192,74 @@ pub struct RunSummary {
 }
 
 /// What the time loop accumulates over a run.
-struct RunLog {
-    max_radius: (f64, f64, usize),
-    peak_volume: (f64, f64),
-    min_concentration: f64,
-    steps: (usize, usize),
-    events: Vec<Event>,
-    ending: Ending,
-    next_record: f64,
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct RunLog {
+    pub(super) max_radius: (f64, f64, usize),
+    pub(super) peak_volume: (f64, f64),
+    pub(super) min_concentration: f64,
+    pub(super) steps: (usize, usize),
+    pub(super) events: Vec<Event>,
+    pub(super) ending: Ending,
+    pub(super) next_record: f64,
+}
+
+/// What the time loop carries from one step to the next besides the [`Simulation`]: the
+/// accumulated log, the step sizes and the per-bubble buffers (a checkpoint holds it).
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct LoopState {
+    pub(super) log: RunLog,
+    /// The step the physics allowed last, s.
+    pub(super) dt_prev: f64,
+    /// The step the bubbles' error estimate allows, s.
+    pub(super) bubble_dt: f64,
+    pub(super) tensions: Vec<f64>,
+    pub(super) fluxes: Vec<Vec<f64>>,
 }
 
 /// One bubble's exchange within a step, from the predictor ([`Simulation::exchange`]) to the
 /// corrector ([`Simulation::correct`]).
-#[derive(Debug, Clone, Copy)]
-struct StepExchange {
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(super) struct StepExchange {
     /// Content at the start of the step, mol per gas.
-    start: [f64; Gas::ALL.len()],
+    pub(super) start: [f64; Gas::ALL.len()],
     /// Gas the grid gave before diffusion, mol per gas.
-    taken: [f64; Gas::ALL.len()],
+    pub(super) taken: [f64; Gas::ALL.len()],
     /// Fluxes J_g(t) at the start of the step, mol/s.
-    flux: [f64; Gas::ALL.len()],
+    pub(super) flux: [f64; Gas::ALL.len()],
     /// The bubble takes part in the corrector (active and not dissolved by the predictor).
-    open: bool,
+    pub(super) open: bool,
 }
 
 /// The simulation state.
+///
+/// The fields marked `pub(super)` are the state a checkpoint saves ([`super::checkpoint`]);
+/// the others follow from the inputs or are scratch space.
 pub struct Simulation<'a> {
     params: &'a PhantomParams,
-    grid: Grid,
+    pub(super) grid: Grid,
     gases: Vec<Gas>,
     diffusivity: Vec<f64>,
     ostwald: Vec<f64>,
     explicit_limit: Vec<f64>,
-    fields: Vec<Vec<f64>>,
+    pub(super) fields: Vec<Vec<f64>>,
     scratch: Vec<f64>,
     /// Bubbles (all ever created; check `fate`).
     pub bubbles: Vec<Bubble>,
     rt: f64,
-    time: f64,
+    pub(super) time: f64,
     /// Gas that entered through open faces and by perfusion since the balance reference, mol.
-    inflow: f64,
-    initial_total: f64,
+    pub(super) inflow: f64,
+    pub(super) initial_total: f64,
     sphere: Vec<[f64; 3]>,
     kernel: Vec<(usize, f64)>,
-    steps_state: Vec<StepExchange>,
+    pub(super) steps_state: Vec<StepExchange>,
     /// Per bubble: the gel it displaces ([`displacement`]).
-    displaced: Vec<Displaced>,
+    pub(super) displaced: Vec<Displaced>,
     /// Change of the grid's gas by displacement since the balance reference, mol: gel pushed
     /// beyond the reach of the displacement or swallowed by a bubble ([`Self::displace`]).
-    displaced_gas: f64,
+    pub(super) displaced_gas: f64,
     /// Sub-grid nuclei of the nucleation model ([`Self::nucleate`]).
-    nuclei: NucleusPool,
+    pub(super) nuclei: NucleusPool,
 }
 
 fn fibonacci_sphere(n: usize) -> Vec<[f64; 3]> {
@@ -533,33 +560,62 @@ impl<'a> Simulation<'a> {
         profile: &PressureHistory,
         observer: &mut dyn Observer,
     ) -> Result<RunSummary, Error> {
+        self.run_from(profile, observer, None)
+    }
+
+    /// [`Self::run`], or its continuation from a checkpoint's loop state (`resume`: the
+    /// simulation was rebuilt by [`super::checkpoint::Checkpoint::resume`]; the initial state is
+    /// not recorded again). After every complete step the run goes on from, the observer may
+    /// take a checkpoint ([`Observer::checkpoint_due`]).
+    pub(super) fn run_from(
+        &mut self,
+        profile: &PressureHistory,
+        observer: &mut dyn Observer,
+        resume: Option<LoopState>,
+    ) -> Result<RunSummary, Error> {
         let end = profile.duration_s();
         let nb = self.bubbles.len();
         let ng = self.gases.len();
-        let mut log = RunLog {
-            max_radius: (0.0, 0.0, 0),
-            peak_volume: (0.0, self.time),
-            min_concentration: f64::INFINITY,
-            steps: (0, 0),
-            events: Vec::new(),
-            ending: Ending::Completed,
-            next_record: self.time,
-        };
         // the smallest explicit limit over the gases: fixed for the run
         let lim = self
             .explicit_limit
             .iter()
             .cloned()
             .fold(f64::INFINITY, f64::min);
-        let mut dt_prev = self.params.numerics.max_step.min(lim);
-        // the step the bubbles' error estimate allows ([`Self::correct`])
-        let mut bubble_dt = f64::INFINITY;
-        let mut tensions = vec![0.0; nb];
-        let mut fluxes = vec![vec![0.0; ng]; nb];
-        // record the initial state
-        let p0 = profile.ambient(self.time);
-        self.bubble_fluxes(profile, p0, &mut fluxes, &mut tensions);
-        self.observe(profile, p0, &tensions, observer, &mut log, true)?;
+        let LoopState {
+            mut log,
+            mut dt_prev,
+            mut bubble_dt,
+            mut tensions,
+            mut fluxes,
+        } = match resume {
+            Some(state) => state,
+            None => {
+                let mut log = RunLog {
+                    max_radius: (0.0, 0.0, 0),
+                    peak_volume: (0.0, self.time),
+                    min_concentration: f64::INFINITY,
+                    steps: (0, 0),
+                    events: Vec::new(),
+                    ending: Ending::Completed,
+                    next_record: self.time,
+                };
+                let mut tensions = vec![0.0; nb];
+                let mut fluxes = vec![vec![0.0; ng]; nb];
+                // record the initial state
+                let p0 = profile.ambient(self.time);
+                self.bubble_fluxes(profile, p0, &mut fluxes, &mut tensions);
+                self.observe(profile, p0, &tensions, observer, &mut log, true)?;
+                LoopState {
+                    log,
+                    dt_prev: self.params.numerics.max_step.min(lim),
+                    // the step the bubbles' error estimate allows ([`Self::correct`])
+                    bubble_dt: f64::INFINITY,
+                    tensions,
+                    fluxes,
+                }
+            }
+        };
         while self.time < end - 1e-9 {
             let t = self.time;
             let p = profile.ambient(t);
@@ -591,6 +647,16 @@ impl<'a> Simulation<'a> {
             self.observe(profile, p1, &tensions, observer, &mut log, false)?;
             if log.ending != Ending::Completed || self.time >= end - 1e-9 {
                 break;
+            }
+            if observer.checkpoint_due(log.steps.0 + log.steps.1) {
+                let state = LoopState {
+                    log: log.clone(),
+                    dt_prev,
+                    bubble_dt,
+                    tensions: tensions.clone(),
+                    fluxes: fluxes.clone(),
+                };
+                observer.checkpoint(super::checkpoint::RunState::capture(self, state))?;
             }
         }
         let total = self.total_moles();

@@ -5,6 +5,7 @@
 
 pub mod dive_plot;
 pub mod html;
+pub mod journal;
 pub mod output;
 pub mod overlay;
 pub mod plot;

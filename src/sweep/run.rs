@@ -9,12 +9,11 @@ use crate::fit::data::build_params;
 use crate::fit::model::run_one;
 use crate::fit::paths;
 use crate::profile::PressureHistory;
+use crate::report::journal::Journal;
 use crate::report::output::OutputSet;
 use rayon::prelude::*;
-use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
-use std::sync::Mutex;
 
 /// Points kept of each run's radius time course (for the report's plots).
 const COURSE_POINTS: usize = 200;
@@ -174,12 +173,10 @@ pub fn parse_courses(text: &str) -> Vec<(usize, Vec<(f64, f64)>)> {
     map.into_iter().collect()
 }
 
-/// The journal folder of an output folder: `DIR.partial` beside it.
+/// The journal folder of an output folder: `DIR.partial` beside it
+/// ([`crate::report::journal`]).
 pub fn journal_dir(out: &Path) -> PathBuf {
-    let name = out
-        .file_name()
-        .map_or("sweep".into(), |n| n.to_string_lossy().into_owned());
-    out.with_file_name(format!("{name}.partial"))
+    crate::report::journal::dir_of(out)
 }
 
 fn thin(points: Vec<(f64, f64)>) -> Vec<(f64, f64)> {
@@ -281,37 +278,25 @@ pub fn run_study(
         shard.index,
         shard.count
     );
-    let jdir = journal_dir(out);
-    let (jruns, jcourses) = (jdir.join("sensitivity.csv"), jdir.join("courses.csv"));
+    let names = ["sensitivity.csv", "courses.csv"];
     let mut done: Vec<Row> = Vec::new();
     let mut courses: Vec<(usize, Vec<(f64, f64)>)> = Vec::new();
-    if let Ok(text) = std::fs::read_to_string(&jruns) {
-        if text.lines().next() != Some(fp.as_str()) {
-            return Err(InputError::new(format!(
-                "'{}' holds the journal of a different study ({}); resume with the same settings, or delete that folder to start afresh",
-                jdir.display(),
-                text.lines().next().unwrap_or("no header")
-            ))
-            .field("--out")
-            .into());
-        }
-        done = parse_rows(&text, spec);
+    if let Some(texts) = Journal::previous(out, &fp, &names, "study")? {
+        done = parse_rows(&texts[0], spec);
         done.retain(|r| range.contains(&r.index));
         done.sort_by_key(|r| r.index);
         done.dedup_by_key(|r| r.index);
         let ids: std::collections::HashSet<usize> = done.iter().map(|r| r.index).collect();
-        courses = parse_courses(&std::fs::read_to_string(&jcourses).unwrap_or_default());
+        courses = parse_courses(&texts[1]);
         courses.retain(|c| ids.contains(&c.0));
     }
     // rewrite the journal whole (drops a line cut by a kill, and courses of unfinished runs)
-    std::fs::create_dir_all(&jdir).map_err(io(&jdir))?;
-    let mut text = format!("{fp}\n{}\n", header(spec));
+    let mut text = format!("{}\n", header(spec));
     for r in &done {
         text.push_str(&row_line(r));
         text.push('\n');
     }
-    std::fs::write(&jruns, text).map_err(io(&jruns))?;
-    std::fs::write(&jcourses, courses_text(&courses)).map_err(io(&jcourses))?;
+    let journal = Journal::start(out, &fp, &names, &[text, courses_text(&courses)])?;
 
     let resumed = done.len();
     let have: std::collections::HashSet<usize> = done.iter().map(|r| r.index).collect();
@@ -319,35 +304,16 @@ pub fn run_study(
     let total = range.len();
     let count = AtomicUsize::new(resumed);
     progress(resumed, total);
-    let files = Mutex::new((
-        std::fs::OpenOptions::new()
-            .append(true)
-            .open(&jruns)
-            .map_err(io(&jruns))?,
-        std::fs::OpenOptions::new()
-            .append(true)
-            .open(&jcourses)
-            .map_err(io(&jcourses))?,
-    ));
     let fresh: Vec<Result<(Row, Course), Error>> = pending
         .par_iter()
         .map(|&i| {
             let (row, course) = one(study, i, &values[i]);
-            {
-                let mut f = files
-                    .lock()
-                    .map_err(|_| Error::Solver("journal lock poisoned".into()))?;
-                // the course first: a run counts as done once its row is in
-                let c: String = course
-                    .iter()
-                    .map(|(t, r)| format!("{i},{},{}\n", num(*t), num(*r)))
-                    .collect();
-                f.1.write_all(c.as_bytes()).map_err(io(&jcourses))?;
-                f.1.flush().map_err(io(&jcourses))?;
-                f.0.write_all(format!("{}\n", row_line(&row)).as_bytes())
-                    .map_err(io(&jruns))?;
-                f.0.flush().map_err(io(&jruns))?;
-            }
+            // the course first: a run counts as done once its row is in
+            let c: String = course
+                .iter()
+                .map(|(t, r)| format!("{i},{},{}\n", num(*t), num(*r)))
+                .collect();
+            journal.append(&[format!("{}\n", row_line(&row)), c])?;
             progress(count.fetch_add(1, Ordering::Relaxed) + 1, total);
             Ok((row, course))
         })
@@ -367,7 +333,7 @@ pub fn run_study(
     };
     let set = outputs(&results, shard, command)?;
     set.commit(out)?;
-    let _ = std::fs::remove_dir_all(&jdir);
+    journal.finish();
     Ok(results)
 }
 

@@ -1,0 +1,143 @@
+//! Journals of work made of many runs (`sensitivity`, `evaluate`): a folder `OUT.partial/`
+//! beside the output folder, kept until the output folder is committed.
+//!
+//! The journal's first file starts with the work's fingerprint line and is its commit log: a
+//! run counts as done once its line is there. Whatever else the run leaves (lines in the
+//! other files, a result file written whole with [`Journal::put`]) is written and flushed
+//! first, so a kill between two writes leaves at most a line cut short (the reader drops it)
+//! or a result without its line (run again). A restart with the same fingerprint skips the
+//! runs the journal holds; a journal of other work is refused (exit 2), never mixed in; the
+//! folder is removed once the output is written.
+
+use crate::error::{Error, InputError};
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+    move |source| Error::Io {
+        path: path.to_path_buf(),
+        source,
+    }
+}
+
+/// The journal folder of an output folder: `OUT.partial` beside it.
+pub fn dir_of(out: &Path) -> PathBuf {
+    let name = out
+        .file_name()
+        .map_or("out".into(), |n| n.to_string_lossy().into_owned());
+    out.with_file_name(format!("{name}.partial"))
+}
+
+/// An open journal, appended to as runs finish (from several threads).
+#[derive(Debug)]
+pub struct Journal {
+    dir: PathBuf,
+    names: Vec<String>,
+    files: Mutex<Vec<std::fs::File>>,
+}
+
+impl Journal {
+    /// What an earlier, unfinished run of the same work left in the journal of `out`: the text
+    /// of each of the files `names` (the first without its fingerprint line; a missing file is
+    /// empty), or `None` without a journal. A journal whose first line is not `fingerprint`
+    /// belongs to other work (`what`: "study", "evaluation") and is refused.
+    pub fn previous(
+        out: &Path,
+        fingerprint: &str,
+        names: &[&str],
+        what: &str,
+    ) -> Result<Option<Vec<String>>, Error> {
+        let dir = dir_of(out);
+        let Ok(first) = std::fs::read_to_string(dir.join(names[0])) else {
+            return Ok(None);
+        };
+        let mut lines = first.splitn(2, '\n');
+        let head = lines.next().unwrap_or("");
+        if head != fingerprint {
+            return Err(InputError::new(format!(
+                "'{}' holds the journal of a different {what} ({}); resume with the same settings, or delete that folder to start afresh",
+                dir.display(),
+                if head.is_empty() { "no header" } else { head }
+            ))
+            .field("--out")
+            .into());
+        }
+        let mut texts = vec![lines.next().unwrap_or("").to_string()];
+        for name in &names[1..] {
+            texts.push(std::fs::read_to_string(dir.join(name)).unwrap_or_default());
+        }
+        Ok(Some(texts))
+    }
+
+    /// Start the journal of `out` with `contents` (file `names[i]` written whole with
+    /// `contents[i]`, the fingerprint line before the first's: what was kept of an earlier
+    /// journal, without lines cut by a kill), then open the files for appending.
+    pub fn start(
+        out: &Path,
+        fingerprint: &str,
+        names: &[&str],
+        contents: &[String],
+    ) -> Result<Journal, Error> {
+        let dir = dir_of(out);
+        std::fs::create_dir_all(&dir).map_err(io(&dir))?;
+        let mut files = Vec::new();
+        for (i, name) in names.iter().enumerate() {
+            let path = dir.join(name);
+            let text = if i == 0 {
+                format!("{fingerprint}\n{}", contents[0])
+            } else {
+                contents[i].clone()
+            };
+            std::fs::write(&path, text).map_err(io(&path))?;
+            files.push(
+                std::fs::OpenOptions::new()
+                    .append(true)
+                    .open(&path)
+                    .map_err(io(&path))?,
+            );
+        }
+        Ok(Journal {
+            dir,
+            names: names.iter().map(|n| n.to_string()).collect(),
+            files: Mutex::new(files),
+        })
+    }
+
+    /// Record a finished run: `parts[i]` appended to file i, the last file first and the commit
+    /// log (file 0) last, each flushed before the next.
+    pub fn append(&self, parts: &[String]) -> Result<(), Error> {
+        let mut files = self
+            .files
+            .lock()
+            .map_err(|_| Error::Solver("journal lock poisoned".into()))?;
+        for i in (0..parts.len().min(files.len())).rev() {
+            let path = self.dir.join(&self.names[i]);
+            files[i].write_all(parts[i].as_bytes()).map_err(io(&path))?;
+            files[i].flush().map_err(io(&path))?;
+        }
+        Ok(())
+    }
+
+    /// Write `bytes` whole into file `name` of the journal folder (atomically), before the
+    /// run's line is appended.
+    pub fn put(&self, name: &str, bytes: &[u8]) -> Result<(), Error> {
+        super::output::write_file_atomic(&self.dir.join(name), bytes)
+    }
+
+    /// The bytes of file `name` of the journal folder, if it is there.
+    pub fn get(&self, name: &str) -> Option<Vec<u8>> {
+        std::fs::read(self.dir.join(name)).ok()
+    }
+
+    /// The journal's folder.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    /// Remove the journal (its work is written).
+    pub fn finish(self) {
+        drop(self.files);
+        let _ = std::fs::remove_dir_all(&self.dir);
+    }
+}
