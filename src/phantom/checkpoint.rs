@@ -252,6 +252,9 @@ pub struct RunState {
     displaced: Vec<Displaced>,
     excluded: Vec<usize>,
     nuclei: Vec<Option<usize>>,
+    /// Per occupied cell of the nucleus pool: the largest crushing pressure seen, Pa (VPM
+    /// skins; all 0 without).
+    crushing: Vec<f64>,
     steps_state: Vec<StepExchange>,
     looping: LoopState,
 }
@@ -269,6 +272,7 @@ impl RunState {
             displaced: sim.displaced.clone(),
             excluded: sim.grid.excluded_cells(),
             nuclei: sim.nuclei.entries().iter().map(|e| e.bubble).collect(),
+            crushing: sim.nuclei.crushing().to_vec(),
             steps_state: sim.steps_state.clone(),
             looping,
         }
@@ -356,6 +360,7 @@ impl RunState {
                 nuclei.activate(i, *b);
             }
         }
+        nuclei.restore_crushing(&self.crushing)?;
         sim.nuclei = nuclei;
         sim.time = self.time;
         sim.fields = self.fields;
@@ -490,6 +495,7 @@ impl Enc {
         for b in &f.bubbles {
             self.usize(b.id);
             self.f64(b.radius);
+            self.f64(b.initial_radius);
             self.f64(b.volume);
             self.f64(b.area);
             self.f64s(&b.moles);
@@ -532,6 +538,7 @@ impl Enc {
                 }
             }
         }
+        self.f64s(&s.crushing);
         self.usize(s.steps_state.len());
         for st in &s.steps_state {
             self.f64s(&st.start);
@@ -773,6 +780,7 @@ impl Dec<'_> {
             bubbles.push(BubbleFrame {
                 id: self.usize()?,
                 radius: self.f64()?,
+                initial_radius: self.f64()?,
                 volume: self.f64()?,
                 area: self.f64()?,
                 moles: self.f64s()?,
@@ -818,6 +826,7 @@ impl Dec<'_> {
                 x => return Err(format!("a nucleus state of {x} at byte {}", self.pos)),
             });
         }
+        let crushing = self.f64s()?;
         let n = self.len(3 * 8 + 1)?;
         let mut steps_state = Vec::with_capacity(n);
         for _ in 0..n {
@@ -850,6 +859,7 @@ impl Dec<'_> {
             displaced,
             excluded,
             nuclei,
+            crushing,
             steps_state,
             looping: LoopState {
                 log: RunLog {

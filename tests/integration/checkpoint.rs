@@ -60,11 +60,15 @@ struct Case {
 
 impl Case {
     fn new(name: &str) -> Case {
+        Case::with_phantom(name, PHANTOM)
+    }
+
+    fn with_phantom(name: &str, phantom_text: &str) -> Case {
         let dir = tempdir(name);
         let profile = dir.join("dive.toml");
         let phantom = dir.join("phantom.toml");
         std::fs::write(&profile, DIVE).unwrap();
-        std::fs::write(&phantom, PHANTOM).unwrap();
+        std::fs::write(&phantom, phantom_text).unwrap();
         Case {
             dir,
             profile,
@@ -170,6 +174,67 @@ fn a_run_resumed_from_a_random_step_is_byte_identical() {
         assert_same_outputs(&whole, &c.dir.join(&resumed), &format!("step {n}"));
         // a completed run removes the checkpoint it resumed from, and its folder
         assert!(!file.exists() && !ck.exists());
+    }
+}
+
+/// The gel of [`PHANTOM`] open at the top, without placed bubbles, holding 20 micronuclei with
+/// VPM skins (γc = 0.257 N/m): the compression crushes them (each cell keeps the largest crushing
+/// pressure it has seen, part of the state) and the ascent activates some.
+const SKIN_PHANTOM: &str = r#"
+name = "checkpoint test, nucleating"
+[geometry]
+shape = "box"
+size_m = [2.0e-3, 2.0e-3, 2.0e-3]
+grid_step_m = 100e-6
+open_faces = ["top"]
+[material]
+surface_tension = 0.07
+[material.elasticity]
+law = "none"
+[gases.n2]
+diffusivity = 2.5e-9
+ostwald = 0.014
+[gases.o2]
+diffusivity = 2.5e-9
+ostwald = 0.027
+[nucleation]
+model = "critical-radius"
+number_density_per_m3 = 2.5e9
+slope_per_m = 5e5
+skin_compression = 0.257
+seed = 3
+[numerics]
+record_interval_s = 1.0
+"#;
+
+#[test]
+fn a_nucleating_run_with_crushed_skins_resumes_to_the_same_bytes() {
+    let c = Case::with_phantom("checkpoint-skins", SKIN_PHANTOM);
+    let o = c.run("whole", &[]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let whole = c.dir.join("whole");
+    // nuclei activated (no bubble was placed, so every row of bubbles.csv is a nucleated one)
+    let rows = std::fs::read_to_string(whole.join("bubbles.csv"))
+        .unwrap()
+        .lines()
+        .count();
+    assert!(rows > 10, "{rows} rows: nothing nucleated");
+    let steps: usize = summary_value(&whole, "steps_explicit")
+        .parse::<usize>()
+        .unwrap()
+        + summary_value(&whole, "steps_implicit")
+            .parse::<usize>()
+            .unwrap();
+    // stop at the bottom (after the crushing, before the activations) and near the end
+    for (k, n) in [steps / 4, 3 * steps / 4].into_iter().enumerate() {
+        let out = format!("stopped{k}");
+        let o = c.run(&out, &["--checkpoint-at-step", &n.to_string()]);
+        assert_eq!(o.status.code(), Some(130), "{}", text(&o.stderr));
+        let ck = c.checkpoint_dir(&out);
+        let resumed = format!("resumed{k}");
+        let o = c.run(&resumed, &["--resume", ck.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        assert_same_outputs(&whole, &c.dir.join(&resumed), &format!("step {n}"));
     }
 }
 
@@ -532,7 +597,17 @@ fn evaluate_keeps_finished_runs_and_skips_them_on_restart() {
             )
         })
         .collect();
-    let cands = plan_candidates(&loaded, 30.0, 10.0, None, &[], &criteria.protocol, None).unwrap();
+    let cands = plan_candidates(
+        &loaded,
+        30.0,
+        10.0,
+        None,
+        &[],
+        &[],
+        &criteria.protocol,
+        None,
+    )
+    .unwrap();
     let (ev, journal) = run_matrix_journaled(
         cands,
         phantom,

@@ -264,6 +264,25 @@ impl NucleusPool {
         self.crush[self.run_of[index]]
     }
 
+    /// The largest crushing pressure of each occupied cell, Pa, in the pool's cell order (the
+    /// state a checkpoint keeps).
+    pub fn crushing(&self) -> &[f64] {
+        &self.crush
+    }
+
+    /// Restore [`Self::crushing`] from a checkpoint (same inputs, so the same cells).
+    pub fn restore_crushing(&mut self, crush: &[f64]) -> Result<(), String> {
+        if crush.len() != self.crush.len() || crush.iter().any(|c| !(c.is_finite() && *c >= 0.0)) {
+            return Err(format!(
+                "it holds {} crushing pressures of nucleus cells; this run has {} cells with nuclei",
+                crush.len(),
+                self.crush.len()
+            ));
+        }
+        self.crush.copy_from_slice(crush);
+        Ok(())
+    }
+
     /// Every nucleus with its cell, threshold and state (sorted by cell, then threshold).
     pub fn entries(&self) -> &[PoolEntry] {
         &self.entries
