@@ -90,7 +90,7 @@ pub fn dive_log_history(
 ) -> Result<(PressureHistory, Vec<String>), InputError> {
     let mut notes = dive.notes.clone();
     let mut h = dive.history(vapour_pa)?;
-    let bad = |m: String| InputError::new(format!("dive '{}': {m}", dive.label));
+    let bad = |m: String| InputError::new(format!("dive '{}': {m}", dive.label)).at_line(dive.line);
     let last_p = *h.ambient_pa.last().unwrap_or(&dive.surface_pa);
     let last_depth =
         (last_p - dive.surface_pa) / (dive.density_kg_m3 * crate::units::STANDARD_GRAVITY);
