@@ -594,7 +594,10 @@ impl Schedule {
             ))
             .in_file(path)
             .field("legs.end_depth_m")
-            .at_line(line_of_nth(text, "[[legs]]", legs.len() - 1).unwrap_or_else(|| crate::error::last_line(text))));
+            .at_line(
+                line_of_nth(text, "[[legs]]", legs.len() - 1)
+                    .unwrap_or_else(|| crate::error::last_line(text)),
+            ));
         }
         let mut stops = Vec::with_capacity(raw.stops.len());
         for (i, s) in raw.stops.iter().enumerate() {

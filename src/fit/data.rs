@@ -364,12 +364,23 @@ pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
                 .map(|(i, _)| i + 1)
                 .or_else(|| line_of_key(&text, key))
                 .unwrap_or_else(|| crate::error::last_line(&text));
-            let what = x.file.as_ref().map(|f| format!("{}: ", f.display())).unwrap_or_default();
-            let field = x.field.as_deref().map(|f| format!(" ({f})")).unwrap_or_default();
-            InputError::new(format!("experiment '{}': {what}{}{field}", e.name, x.message))
-                .in_file(path)
-                .at_line(line)
-                .field(format!("experiment.{key}"))
+            let what = x
+                .file
+                .as_ref()
+                .map(|f| format!("{}: ", f.display()))
+                .unwrap_or_default();
+            let field = x
+                .field
+                .as_deref()
+                .map(|f| format!(" ({f})"))
+                .unwrap_or_default();
+            InputError::new(format!(
+                "experiment '{}': {what}{}{field}",
+                e.name, x.message
+            ))
+            .in_file(path)
+            .at_line(line)
+            .field(format!("experiment.{key}"))
         };
         if e.name.trim().is_empty() {
             return Err(err("name", "an experiment needs a non-empty name".into()).into());

@@ -340,14 +340,11 @@ fn parse_xml(text: &str, path: &Path) -> Result<Node, InputError> {
         ));
     }
     let doc = stack.pop().expect("root");
-    doc.children
-        .into_iter()
-        .next()
-        .ok_or_else(|| {
-            InputError::new("the file holds no XML element")
-                .in_file(path)
-                .at_line(crate::error::last_line(text))
-        })
+    doc.children.into_iter().next().ok_or_else(|| {
+        InputError::new("the file holds no XML element")
+            .in_file(path)
+            .at_line(crate::error::last_line(text))
+    })
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -613,7 +610,14 @@ fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
                     format!("depth '{d}' is not a finite number"),
                 ));
             };
-            check_sample(cx, s, ("sample.time", t), ("sample.depth", d), surface_pa, density_kg_m3)?;
+            check_sample(
+                cx,
+                s,
+                ("sample.time", t),
+                ("sample.depth", d),
+                surface_pa,
+                density_kg_m3,
+            )?;
             raw.push((t, d, s.offset));
         }
         let first_sample = raw.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);

@@ -662,3 +662,100 @@ fn hostile_corpus_is_refused_by_every_reader() {
     }
     assert!(count >= 50, "{count}");
 }
+
+/// A duration beyond the 30-day limit (or a depth beyond the accepted pressure) in a dive log,
+/// a waypoint CSV, a legacy file or a measurements CSV is refused naming the file, the line of
+/// the sample or row, and the field.
+#[test]
+fn durations_and_depths_in_logs_and_csvs_name_file_line_and_field() {
+    use decophantom::algorithm::waypoints::parse_waypoints_csv;
+    use decophantom::profile::divelog::parse;
+    let csv = |text: &str| {
+        parse_waypoints_csv(
+            text,
+            Path::new("w.csv"),
+            &decophantom::algorithm::conventions::DECOTENGU,
+            decophantom::gas::GasMix::AIR,
+        )
+        .unwrap_err()
+    };
+    let where_ = |e: &decophantom::error::InputError| {
+        (
+            e.file.clone().unwrap().to_string_lossy().into_owned(),
+            e.line,
+            e.field.clone(),
+        )
+    };
+    // 43 201 min is one minute past 30 days; 1e20 min; 1001 m
+    for (text, line, field) in [
+        ("time_min,depth_m\n0,0\n1,10\n43201,0\n", 4, "time_min"),
+        (
+            "time_min,depth_m\n0,0\n1,10\n1e20,10\n1.1e20,0\n",
+            4,
+            "time_min",
+        ),
+        ("time_min,depth_m\n0,0\n1,1001\n2,0\n", 3, "depth_m"),
+    ] {
+        let e = csv(text);
+        assert_eq!(
+            where_(&e),
+            ("w.csv".into(), Some(line), Some(field.into())),
+            "{e}"
+        );
+    }
+    assert!(csv("time_min,depth_m\n0,0\n1,10\n43201,0\n")
+        .message
+        .contains("30 days"));
+    // exactly 30 days is accepted
+    assert!(parse_waypoints_csv(
+        "time_min,depth_m\n0,0\n1,10\n43200,0\n",
+        Path::new("w.csv"),
+        &decophantom::algorithm::conventions::DECOTENGU,
+        decophantom::gas::GasMix::AIR,
+    )
+    .is_ok());
+    let ssrf = |last: &str| {
+        format!(
+            "<divelog program='subsurface' version='3'><dives>\n<dive number='1'>\n<divecomputer>\n<sample time='0:00 min' depth='0 m' />\n<sample time='2:00 min' depth='20 m' />\n{last}\n</divecomputer>\n</dive>\n</dives></divelog>\n"
+        )
+    };
+    for (last, field) in [
+        ("<sample time='43201:00 min' depth='0 m' />", "sample.time"),
+        ("<sample time='1e20' depth='0 m' />", "sample.time"),
+        ("<sample time='3:00 min' depth='1e9 m' />", "sample.depth"),
+    ] {
+        let e = parse(&ssrf(last), Path::new("d.xml")).unwrap_err();
+        assert_eq!(
+            where_(&e),
+            ("d.xml".into(), Some(6), Some(field.into())),
+            "{e}"
+        );
+    }
+    let uddf = "<uddf><profiledata><repetitiongroup><dive>\n<samples>\n<waypoint><divetime>0</divetime><depth>0</depth></waypoint>\n<waypoint><divetime>3e6</divetime><depth>0</depth></waypoint>\n</samples></dive></repetitiongroup></profiledata></uddf>\n";
+    let e = parse(uddf, Path::new("d.uddf")).unwrap_err();
+    assert_eq!(
+        where_(&e),
+        ("d.uddf".into(), Some(4), Some("waypoint.divetime".into())),
+        "{e}"
+    );
+    // a dive that fits but whose watch time at the surface does not: the dive's line
+    let e = parse(
+        &ssrf("<sample time='43199:00 min' depth='0 m' />"),
+        Path::new("d.xml"),
+    )
+    .map(|d| decophantom::profile::dive_log_history(&d[0], 0.0, 3600.0))
+    .unwrap()
+    .unwrap_err();
+    assert!(e.message.contains("30 days") && e.line == Some(2), "{e}");
+    // measurements: a time past 30 days names its row
+    let e = decophantom::fit::data::parse_measurements(
+        "experiment,bubble,time_s,radius_m\na,0,0,1e-4\na,0,2592001,1e-4\n",
+        Path::new("m.csv"),
+    )
+    .unwrap_err();
+    assert_eq!(
+        where_(&e),
+        ("m.csv".into(), Some(3), Some("time_s".into())),
+        "{e}"
+    );
+}

@@ -578,15 +578,12 @@ fn run_reader(name: &str) {
         assert_eq!(check(r, &path, b), Ok(true), "seed {s}");
     }
     let mut runner = proptest::test_runner::TestRunner::new(config());
-    let result = runner.run(
-        &(0..seeds.len(), mutations()),
-        |(k, muts)| {
-            let bytes = apply(&seeds[k], &muts);
-            check(r, &path, &bytes)
-                .map(|_| ())
-                .map_err(|m| TestCaseError::fail(format!("{m}\nmutant:\n{}", String::from_utf8_lossy(&bytes))))
-        },
-    );
+    let result = runner.run(&(0..seeds.len(), mutations()), |(k, muts)| {
+        let bytes = apply(&seeds[k], &muts);
+        check(r, &path, &bytes).map(|_| ()).map_err(|m| {
+            TestCaseError::fail(format!("{m}\nmutant:\n{}", String::from_utf8_lossy(&bytes)))
+        })
+    });
     if let Err(e) = result {
         panic!("{name}: {e}");
     }
@@ -638,9 +635,8 @@ fn survey() {
         for _ in 0..n {
             let (k, muts) = strat.new_tree(&mut runner).unwrap().current();
             let bytes = apply(&seeds[k], &muts);
-            let res = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-                check(r, &path, &bytes)
-            }));
+            let res =
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| check(r, &path, &bytes)));
             match res {
                 Ok(Ok(true)) => accepted += 1,
                 Ok(Ok(false)) => {}
@@ -649,18 +645,24 @@ fn survey() {
                         .find("mutant.")
                         .and_then(|i| m[i..].find(": ").map(|j| &m[i + j..]))
                         .unwrap_or(&m);
-                    let key: String = tail.chars().filter(|c| !c.is_ascii_digit()).take(70).collect();
+                    let key: String = tail
+                        .chars()
+                        .filter(|c| !c.is_ascii_digit())
+                        .take(70)
+                        .collect();
                     seen.entry(key).or_insert((m, muts));
                 }
                 Err(_) => {
-                    seen.entry(format!("PANIC {muts:?}")).or_insert((
-                        "panic".into(),
-                        muts.clone(),
-                    ));
+                    seen.entry(format!("PANIC {muts:?}"))
+                        .or_insert(("panic".into(), muts.clone()));
                 }
             }
         }
-        println!("== {}: {n} mutants, {accepted} accepted, {} distinct failures", r.name, seen.len());
+        println!(
+            "== {}: {n} mutants, {accepted} accepted, {} distinct failures",
+            r.name,
+            seen.len()
+        );
         for (m, muts) in seen.values() {
             println!("  {m}\n     <- {muts:?}");
         }
