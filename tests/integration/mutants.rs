@@ -4,8 +4,9 @@
 //! a key, column or attribute renamed, a line duplicated) and the mutant is written to a file
 //! and read through the reader's file entry point, in process. Every case must:
 //!
-//! - not panic (proptest fails the case on a panic);
-//! - return within [`LIMIT`];
+//! - not panic;
+//! - return within [`LIMIT`] (each read runs on its own thread: a hang fails the case rather
+//!   than stopping the run);
 //! - when refused, name the file and a line inside it (every format here has lines).
 //!
 //! The committed mutants under `tests/data/hostile/<reader>/` (the cases that once failed) run
@@ -509,8 +510,22 @@ pub fn read_checked(
     path: &Path,
     bytes: &[u8],
 ) -> Result<Option<InputError>, String> {
+    // on a thread of its own, so that a hang fails the case instead of stopping the run
     let t = Instant::now();
-    let r = (reader.read)(path);
+    let (tx, rx) = std::sync::mpsc::channel();
+    let (read, owned) = (reader.read, path.to_path_buf());
+    std::thread::spawn(move || {
+        let _ = tx.send(read(&owned));
+    });
+    let r = match rx.recv_timeout(LIMIT) {
+        Ok(r) => r,
+        Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+            return Err(format!("{}: no answer within {LIMIT:?}", reader.name))
+        }
+        Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+            return Err(format!("{}: panicked (message above)", reader.name))
+        }
+    };
     let took = t.elapsed();
     if took > LIMIT {
         return Err(format!("{}: took {took:?}", reader.name));
@@ -667,4 +682,43 @@ fn survey() {
             println!("  {m}\n     <- {muts:?}");
         }
     }
+}
+
+/// The harness itself: a panicking reader and a hanging one are failures, not a stopped run.
+#[test]
+fn harness_reports_panics_and_hangs() {
+    let dir = tempdir("mutants-harness");
+    let p = dir.join("x.txt");
+    let panics = Reader {
+        name: "panics",
+        ext: "txt",
+        seeds: &[],
+        read: |_| panic!("a reader bug (expected by this test)"),
+        unlined: &[],
+    };
+    let e = check(&panics, &p, b"x").unwrap_err();
+    assert!(e.contains("panicked"), "{e}");
+    let hangs = Reader {
+        name: "hangs",
+        ext: "txt",
+        seeds: &[],
+        read: |_| {
+            std::thread::sleep(LIMIT + Duration::from_millis(500));
+            Ok(())
+        },
+        unlined: &[],
+    };
+    let t = Instant::now();
+    let e = check(&hangs, &p, b"x").unwrap_err();
+    assert!(e.contains("no answer") && t.elapsed() < LIMIT * 2, "{e}");
+    let silent = Reader {
+        name: "silent",
+        ext: "txt",
+        seeds: &[],
+        read: |_| Err(InputError::new("no file, no line")),
+        unlined: &[],
+    };
+    assert!(check(&silent, &p, b"x")
+        .unwrap_err()
+        .contains("without naming the file"));
 }
