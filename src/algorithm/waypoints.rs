@@ -127,7 +127,16 @@ pub fn read_legacy_schedule(
         let depth = ((p - 1.0) / MSW_PA).max(0.0);
         csv.push_str(&format!("{},{}\n", t / 60.0, depth));
     }
-    parse_waypoints_csv(&csv, path, conventions, default_gas)
+    // the CSV's row k + 1 is the file's line k; its columns are the file's time and value
+    parse_waypoints_csv(&csv, path, conventions, default_gas).map_err(|mut e| {
+        e.line = e.line.map(|l| l.saturating_sub(1).max(1));
+        e.field = e.field.map(|f| match f.as_str() {
+            "time_min" => "time".into(),
+            "depth_m" => "value".into(),
+            _ => f,
+        });
+        e
+    })
 }
 
 /// Read a waypoint CSV file into a schedule in the given conventions (surface pressure,

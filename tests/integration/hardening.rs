@@ -759,3 +759,36 @@ fn durations_and_depths_in_logs_and_csvs_name_file_line_and_field() {
         "{e}"
     );
 }
+
+/// A legacy two-column file read as a schedule (`check --schedule dive.txt`) names the file's
+/// own line and column when the schedule is refused.
+#[test]
+fn legacy_schedules_name_the_files_own_line() {
+    let dir = tempdir("hard-legacy-schedule");
+    // never surfaces: the last line (3) is at 10 m
+    let p = write(&dir, "d.txt", "0 0\n1 10\n20 10\n");
+    let e = decophantom::algorithm::waypoints::read_legacy_schedule(
+        &p,
+        &decophantom::algorithm::conventions::DECOTENGU,
+        decophantom::gas::GasMix::AIR,
+    )
+    .unwrap_err();
+    assert_eq!(
+        (e.line, e.field.as_deref()),
+        (Some(3), Some("value")),
+        "{e}"
+    );
+    // 1001 m on line 2
+    let p = write(&dir, "e.txt", "0 0\n1 1001\n2 0\n");
+    let e = decophantom::algorithm::waypoints::read_legacy_schedule(
+        &p,
+        &decophantom::algorithm::conventions::DECOTENGU,
+        decophantom::gas::GasMix::AIR,
+    )
+    .unwrap_err();
+    assert_eq!(
+        (e.line, e.field.as_deref()),
+        (Some(2), Some("value")),
+        "{e}"
+    );
+}
