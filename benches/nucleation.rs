@@ -33,6 +33,7 @@ fn nucleation(c: &mut Criterion) {
         distribution: SizeDistribution::Exponential { slope: 1e8 },
         margin: None,
         seed: 2017,
+        skin_compression: None,
     });
     let mut group = c.benchmark_group("nucleation");
     group

@@ -194,9 +194,11 @@ pub struct CheckArgs {
     /// .txt, or a Subsurface (.xml, .ssrf) / UDDF (.uddf) dive log.
     #[arg(long)]
     pub schedule: std::path::PathBuf,
-    /// Which dive of a dive log (1-based; required when the log holds more than one).
+    /// Which dive(s) of a dive log: N (1-based), a range N-M or `all`: consecutive dives
+    /// run as one, with the surface intervals of the logged start times, the gel, bubbles
+    /// and nuclei carried across. Required when the log holds more than one.
     #[arg(long)]
-    pub dive: Option<usize>,
+    pub dive: Option<decophantom::profile::sequence::DiveSelection>,
     /// Criteria TOML (algorithms/criteria/*.toml).
     #[arg(long)]
     pub criteria: std::path::PathBuf,
@@ -235,10 +237,11 @@ pub struct DiveArgs {
     /// Deco gas, MIX@SWITCH_DEPTH_M or MIX (switch at its MOD at 1.6 bar); repeatable.
     #[arg(long = "deco-gas")]
     pub deco_gas: Vec<String>,
-    /// Travel gas MIX@0..DEPTH_M, e.g. 21/35@0..60: breathed from the surface to DEPTH, then
-    /// the bottom gas (for hypoxic bottom mixes); available again on the ascent from DEPTH.
+    /// Travel gas MIX@FROM..TO (m), e.g. 21/35@0..60: breathed on the descent over that range,
+    /// then the next travel gas or the bottom gas (for hypoxic bottom mixes); available again
+    /// on the ascent from TO. Repeatable (ranges follow each other from the surface).
     #[arg(long = "travel-gas")]
-    pub travel_gas: Option<String>,
+    pub travel_gas: Vec<String>,
 }
 
 /// Arguments of `evaluate`.
@@ -256,6 +259,10 @@ pub struct EvaluateArgs {
     /// Deco gas, MIX@SWITCH_DEPTH_M or MIX (switch at its MOD at 1.6 bar); repeatable.
     #[arg(long = "deco-gas")]
     pub deco_gas: Vec<String>,
+    /// Travel gas MIX@FROM..TO (m), e.g. 21/35@0..60, for planned hypoxic bottom mixes;
+    /// repeatable.
+    #[arg(long = "travel-gas")]
+    pub travel_gas: Vec<String>,
     /// Algorithm TOML; repeat for each algorithm to compare.
     #[arg(long, required_unless_present = "schedule")]
     pub algorithm: Vec<std::path::PathBuf>,
@@ -263,9 +270,11 @@ pub struct EvaluateArgs {
     /// two-column .txt, or a Subsurface (.xml, .ssrf) / UDDF (.uddf) dive log; repeatable.
     #[arg(long)]
     pub schedule: Vec<std::path::PathBuf>,
-    /// Which dive of a dive log given with --schedule (1-based).
+    /// Which dive(s) of a dive log: N (1-based), a range N-M or `all`: consecutive dives
+    /// run as one, with the surface intervals of the logged start times, the gel, bubbles
+    /// and nuclei carried across. Required when the log holds more than one.
     #[arg(long)]
-    pub dive: Option<usize>,
+    pub dive: Option<decophantom::profile::sequence::DiveSelection>,
     /// Elasticity laws: all, or names (comma-separated or repeated); default the phantom's own.
     #[arg(long)]
     pub elasticity: Vec<String>,
@@ -313,9 +322,11 @@ pub struct SimulateArgs {
     /// Water-vapour pressure subtracted at the open faces, Pa (legacy/dive-log profiles; default 0).
     #[arg(long = "vapour-pa")]
     pub vapour_pa: Option<f64>,
-    /// Which dive of a dive log (1-based).
+    /// Which dive(s) of a dive log: N (1-based), a range N-M or `all`: consecutive dives
+    /// run as one, with the surface intervals of the logged start times, the gel, bubbles
+    /// and nuclei carried across. Required when the log holds more than one.
     #[arg(long)]
-    pub dive: Option<usize>,
+    pub dive: Option<decophantom::profile::sequence::DiveSelection>,
     /// Run even when the run is estimated to take more than 6 hours.
     #[arg(long)]
     pub force: bool,
@@ -481,7 +492,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 time_min: a.dive.time,
                 gas: a.dive.gas,
                 deco_gases: a.dive.deco_gas,
-                travel_gas: a.dive.travel_gas,
+                travel_gases: a.dive.travel_gas,
                 format: a
                     .format
                     .as_deref()
@@ -607,6 +618,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 time_min: a.time,
                 gas: a.gas,
                 deco_gases: a.deco_gas,
+                travel_gases: a.travel_gas,
                 algorithms: a.algorithm,
                 schedules: a.schedule,
                 dive: a.dive,

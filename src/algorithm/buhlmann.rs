@@ -638,11 +638,11 @@ impl ZhL16Gf {
         };
         // Descent and bottom.
         let bottom = plan.bottom_gas;
-        if let Some(t) = plan.travel_gas {
-            dive.gas = t.mix;
-            dive.travel(t.switch_depth_m, t.mix);
+        // on each travel gas over its range, then on the bottom gas
+        for (_, to_m, mix) in plan.descent_segments() {
+            dive.gas = mix;
+            dive.travel(to_m, mix);
         }
-        dive.travel(plan.depth_m, bottom);
         let bottom_min = if c.bottom_time_includes_descent {
             plan.bottom_time_min - dive.runtime_min
         } else {
@@ -876,7 +876,7 @@ mod tests {
             bottom_time_min: 25.0,
             bottom_gas: GasMix::AIR,
             deco_gases: vec![],
-            travel_gas: None,
+            travel_gases: vec![],
         };
         let s = alg.plan(&plan).unwrap();
         assert!(!s.stops.is_empty());
@@ -898,7 +898,7 @@ mod tests {
             bottom_time_min: 25.0,
             bottom_gas: GasMix::AIR,
             deco_gases: vec![],
-            travel_gas: None,
+            travel_gases: vec![],
         })
         .unwrap()
     }

@@ -11,6 +11,9 @@
 //! model = "zh-l16c"
 //! gf_low = 30
 //! gf_high = 85
+//! [gases]                         # optional; --deco-gas / --travel-gas replace these lists
+//! deco = ["50@21", "100@6"]       # as --deco-gas: MIX@SWITCH_DEPTH_M or MIX (at its MOD)
+//! travel = ["21/35@0..60"]        # as --travel-gas: MIX@FROM..TO (m), ranges from the surface
 //! ```
 
 use super::conventions::{Conventions, GfLowAnchor, StopRounding};
@@ -27,6 +30,33 @@ struct RawAlgorithmFile {
     label: Option<String>,
     conventions: Option<RawConventions>,
     params: Option<toml::Value>,
+    gases: Option<RawGases>,
+}
+
+/// `[gases]` as written: the same strings as `--deco-gas` and `--travel-gas`.
+#[derive(Debug, Default, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawGases {
+    #[serde(default)]
+    deco: Vec<String>,
+    #[serde(default)]
+    travel: Vec<String>,
+}
+
+/// The gases an algorithm file sets (`[gases]`), validated; used when the command line gives
+/// none of that kind.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct FileGases {
+    /// The algorithm file (named in errors about these gases).
+    pub path: std::path::PathBuf,
+    /// Deco gases (`gases.deco`).
+    pub deco: Vec<super::DecoGas>,
+    /// Travel gases (`gases.travel`).
+    pub travel: Vec<super::TravelGas>,
+    /// Line of `deco =` in the file, if any.
+    pub deco_line: Option<usize>,
+    /// Line of `travel =` in the file, if any.
+    pub travel_line: Option<usize>,
 }
 
 /// `[conventions]` as written: a preset and/or any field of [`Conventions`].
@@ -58,6 +88,8 @@ pub struct LoadedAlgorithm {
     pub conventions: Conventions,
     /// The algorithm.
     pub algorithm: Box<dyn DecoAlgorithm>,
+    /// Gases set in the file's `[gases]` table (empty lists when it has none).
+    pub gases: FileGases,
 }
 
 impl std::fmt::Debug for LoadedAlgorithm {
@@ -325,11 +357,52 @@ fn parse_algorithm_unlined(
         }
     })?;
     let label = raw.label.unwrap_or_else(|| algorithm.label());
+    let gases = resolve_gases(raw.gases.unwrap_or_default(), &conventions, text, path)?;
     Ok(LoadedAlgorithm {
         kind: raw.kind,
         label,
         conventions,
         algorithm,
+        gases,
+    })
+}
+
+/// Parse `[gases]` with the same readers as the command line; errors name `gases.deco` or
+/// `gases.travel` and the line.
+fn resolve_gases(
+    raw: RawGases,
+    conventions: &Conventions,
+    text: &str,
+    path: &Path,
+) -> Result<FileGases, InputError> {
+    let section = line_of_header(text, "[gases]");
+    let deco_line = section.and(line_of_key(text, "deco"));
+    let travel_line = section.and(line_of_key(text, "travel"));
+    let at = |key: &str, line: Option<usize>, msg: String| {
+        let mut e = InputError::new(msg)
+            .in_file(path)
+            .field(format!("gases.{key}"));
+        if let Some(l) = line.or(section) {
+            e = e.at_line(l);
+        }
+        e
+    };
+    let deco = raw
+        .deco
+        .iter()
+        .map(|s| super::DecoGas::parse(s, conventions).map_err(|m| at("deco", deco_line, m)))
+        .collect::<Result<Vec<_>, _>>()?;
+    let travel = raw
+        .travel
+        .iter()
+        .map(|s| super::schedule::parse_travel_gas(s).map_err(|m| at("travel", travel_line, m)))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(FileGases {
+        path: path.to_path_buf(),
+        deco,
+        travel,
+        deco_line,
+        travel_line,
     })
 }
 

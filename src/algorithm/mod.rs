@@ -14,7 +14,7 @@ pub mod waypoints;
 
 pub use config::{load_algorithm, LoadedAlgorithm};
 pub use conventions::Conventions;
-pub use schedule::{DecoGas, DivePlan, GasSwitch, Leg, LegKind, Schedule, Stop};
+pub use schedule::{DecoGas, DivePlan, GasSwitch, Leg, LegKind, Schedule, Stop, TravelGas};
 
 /// A decompression algorithm: dive plan in, schedule out.
 pub trait DecoAlgorithm: Send + Sync {

@@ -50,18 +50,31 @@ impl DecoGas {
 pub const MAX_PLAN_DEPTH_M: f64 = 1000.0;
 
 impl DivePlan {
-    /// The gases available on the ascent: the deco gases, and the travel gas from its switch
-    /// depth unless a deco gas is switched to at the same depth.
+    /// The gases available on the ascent: the deco gases, and each travel gas from the deep
+    /// end of its range (where the diver left it on the way down) unless a deco gas is
+    /// switched to at the same depth.
     pub fn ascent_gases(&self) -> Vec<DecoGas> {
         let mut out = self.deco_gases.clone();
-        if let Some(t) = self.travel_gas {
-            if !out
-                .iter()
-                .any(|d| (d.switch_depth_m - t.switch_depth_m).abs() < 1e-9)
-            {
-                out.push(t);
+        for t in &self.travel_gases {
+            if !out.iter().any(|d| (d.switch_depth_m - t.to_m).abs() < 1e-9) {
+                out.push(DecoGas {
+                    mix: t.mix,
+                    switch_depth_m: t.to_m,
+                });
             }
         }
+        out
+    }
+
+    /// The descent as (from m, to m, gas) segments: each travel gas over its range (shallowest
+    /// first), then the bottom gas from the deepest travel gas's end to the bottom.
+    pub fn descent_segments(&self) -> Vec<(f64, f64, GasMix)> {
+        let mut travel = self.travel_gases.clone();
+        travel.sort_by(|a, b| a.from_m.total_cmp(&b.from_m));
+        let mut out: Vec<(f64, f64, GasMix)> =
+            travel.iter().map(|t| (t.from_m, t.to_m, t.mix)).collect();
+        let start = travel.last().map_or(0.0, |t| t.to_m);
+        out.push((start, self.depth_m, self.bottom_gas));
         out
     }
 
@@ -109,49 +122,19 @@ impl DivePlan {
         }
         let ppo2 = |mix: GasMix, d: f64| mix.o2 * conventions.pressure_at(d) / 1e5;
         let g = self.bottom_gas;
-        if let Some(tg) = &self.travel_gas {
-            let lab = tg.mix.label();
-            let err = |msg: String| Err(InputError::new(msg).field("travel-gas"));
-            if ppo2(tg.mix, 0.0) < HYPOXIC_PPO2_BAR - 1e-12 {
-                return err(format!(
-                    "travel gas {lab} is hypoxic at the surface (ppO2 {:.3} bar < {HYPOXIC_PPO2_BAR} bar)",
-                    ppo2(tg.mix, 0.0)
-                ));
-            }
-            if !(tg.switch_depth_m.is_finite()
-                && tg.switch_depth_m > 0.0
-                && tg.switch_depth_m < self.depth_m)
-            {
-                return err(format!(
-                    "travel gas {lab}: switch depth {} m must be positive and shallower than the dive ({} m)",
-                    tg.switch_depth_m, self.depth_m
-                ));
-            }
-            let m = mod_m(tg.mix, MAX_PPO2_BAR, conventions).round();
-            if tg.switch_depth_m > m + 1e-9 {
-                return err(format!(
-                    "travel gas {lab} breathed to {} m is beyond its MOD {m} m (ppO2 {MAX_PPO2_BAR} bar)",
-                    tg.switch_depth_m
-                ));
-            }
-            if ppo2(g, tg.switch_depth_m) < HYPOXIC_PPO2_BAR - 1e-12 {
+        if self.travel_gases.is_empty() {
+            if ppo2(g, 0.0) < HYPOXIC_PPO2_BAR - 1e-12 {
                 return Err(InputError::new(format!(
-                    "bottom gas {} is hypoxic at the travel-gas switch depth {} m (ppO2 {:.3} bar < {HYPOXIC_PPO2_BAR} bar); switch deeper",
+                    "bottom gas {} is hypoxic at the surface (ppO2 {:.3} bar < {HYPOXIC_PPO2_BAR} bar); \
+                     it cannot be breathed on the descent — choose a mix with more oxygen, or give a \
+                     travel gas (--travel-gas 21/35@0..60)",
                     g.label(),
-                    tg.switch_depth_m,
-                    ppo2(g, tg.switch_depth_m)
+                    ppo2(g, 0.0)
                 ))
-                .field("travel-gas"));
+                .field("gas"));
             }
-        } else if ppo2(g, 0.0) < HYPOXIC_PPO2_BAR - 1e-12 {
-            return Err(InputError::new(format!(
-                "bottom gas {} is hypoxic at the surface (ppO2 {:.3} bar < {HYPOXIC_PPO2_BAR} bar); \
-                 it cannot be breathed on the descent — choose a mix with more oxygen, or give a \
-                 travel gas (--travel-gas 21/35@0..60)",
-                g.label(),
-                ppo2(g, 0.0)
-            ))
-            .field("gas"));
+        } else {
+            self.validate_travel_gases(conventions)?;
         }
         let max_depth = mod_m(g, MAX_PPO2_BAR, conventions).round();
         if self.depth_m > max_depth + 1e-9 {
@@ -205,6 +188,73 @@ impl DivePlan {
         }
         Ok(())
     }
+
+    /// The travel gases: ranges contiguous from the surface, each shallower than the bottom,
+    /// not hypoxic at its shallow end ([`HYPOXIC_PPO2_BAR`]), within its MOD
+    /// ([`MAX_PPO2_BAR`], rounded to the metre as for deco gases) at its deep end, and the
+    /// bottom gas not hypoxic where it takes over. Errors name `travel-gas`.
+    fn validate_travel_gases(&self, conventions: &Conventions) -> Result<(), InputError> {
+        let ppo2 = |mix: GasMix, d: f64| mix.o2 * conventions.pressure_at(d) / 1e5;
+        let err = |msg: String| Err(InputError::new(msg).field("travel-gas"));
+        let mut travel = self.travel_gases.clone();
+        travel.sort_by(|a, b| a.from_m.total_cmp(&b.from_m));
+        let mut reached = 0.0;
+        for tg in &travel {
+            let lab = tg.mix.label();
+            let range = format!("{}@{}..{}", lab, tg.from_m, tg.to_m);
+            if !(tg.from_m.is_finite() && tg.to_m.is_finite() && tg.to_m > tg.from_m) {
+                return err(format!(
+                    "travel gas {range}: the range must run from a shallower to a deeper depth (m)"
+                ));
+            }
+            if (tg.from_m - reached).abs() > 1e-9 {
+                return err(if reached == 0.0 {
+                    format!(
+                        "travel gas {range} starts at {} m; the first travel gas is breathed from the surface (write @0..DEPTH)",
+                        tg.from_m
+                    )
+                } else {
+                    format!(
+                        "travel gas {range} starts at {} m but the previous travel gas ends at {reached} m; \
+                         travel gas ranges must follow each other without gap or overlap",
+                        tg.from_m
+                    )
+                });
+            }
+            if tg.to_m >= self.depth_m {
+                return err(format!(
+                    "travel gas {range} reaches {} m, not shallower than the dive ({} m); \
+                     the bottom gas must take over above the bottom",
+                    tg.to_m, self.depth_m
+                ));
+            }
+            let shallow = ppo2(tg.mix, tg.from_m);
+            if shallow < HYPOXIC_PPO2_BAR - 1e-12 {
+                return err(format!(
+                    "travel gas {range} is hypoxic at its shallow end {} m (ppO2 {shallow:.3} bar < {HYPOXIC_PPO2_BAR} bar)",
+                    tg.from_m
+                ));
+            }
+            let m = mod_m(tg.mix, MAX_PPO2_BAR, conventions).round();
+            if tg.to_m > m + 1e-9 {
+                return err(format!(
+                    "travel gas {range} breathed to {} m is beyond its MOD {m} m (ppO2 {:.2} bar > {MAX_PPO2_BAR} bar at its deep end)",
+                    tg.to_m,
+                    ppo2(tg.mix, tg.to_m)
+                ));
+            }
+            reached = tg.to_m;
+        }
+        let g = self.bottom_gas;
+        if ppo2(g, reached) < HYPOXIC_PPO2_BAR - 1e-12 {
+            return err(format!(
+                "bottom gas {} is hypoxic at the travel-gas switch depth {reached} m (ppO2 {:.3} bar < {HYPOXIC_PPO2_BAR} bar); switch deeper",
+                g.label(),
+                ppo2(g, reached)
+            ));
+        }
+        Ok(())
+    }
 }
 
 /// A decompression gas and the depth at which it is switched to.
@@ -227,46 +277,55 @@ pub struct DivePlan {
     pub bottom_gas: GasMix,
     /// Decompression gases.
     pub deco_gases: Vec<DecoGas>,
-    /// Travel gas breathed from the surface down to its `switch_depth_m`, where the diver
-    /// switches to the bottom gas (needed for hypoxic bottom mixes). On the ascent it is
-    /// available again from that depth, like a deco gas (as Subsurface's planner uses every
-    /// gas carried); `None`: the bottom gas from the surface.
+    /// Travel gases, each breathed over its depth range on the descent (the ranges follow
+    /// each other from the surface; the bottom gas takes over at the deepest range's end),
+    /// needed for hypoxic bottom mixes. On the ascent each is available again from the deep
+    /// end of its range, like a deco gas (as Subsurface's planner uses every gas carried).
+    /// Empty: the bottom gas from the surface.
     #[serde(default)]
-    pub travel_gas: Option<DecoGas>,
+    pub travel_gases: Vec<TravelGas>,
 }
 
-/// Parse a travel gas `21/35@0..60` or `21/35@60`: the mix, breathed from the surface to the
-/// depth after the `@` (m), where the bottom gas takes over.
-pub fn parse_travel_gas(s: &str) -> Result<DecoGas, String> {
+/// A travel gas and the depth range over which it is breathed on the descent.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+pub struct TravelGas {
+    /// The mix.
+    pub mix: GasMix,
+    /// Shallow end of the range, m (0 for the first travel gas).
+    pub from_m: f64,
+    /// Deep end of the range, m: where the next travel gas or the bottom gas takes over.
+    pub to_m: f64,
+}
+
+/// Parse a travel gas `21/35@0..60` (mix, then the depth range in m over which it is breathed
+/// on the descent) or `21/35@60` (short for `@0..60`).
+pub fn parse_travel_gas(s: &str) -> Result<TravelGas, String> {
     let (mix_s, range) = s.split_once('@').ok_or_else(|| {
-        format!("travel gas '{s}' needs its depth range: write MIX@0..DEPTH_M, e.g. 21/35@0..60")
+        format!("travel gas '{s}' needs its depth range: write MIX@FROM..TO (m), e.g. 21/35@0..60")
     })?;
     let mix = GasMix::parse(mix_s)?;
-    let until = match range.split_once("..") {
-        Some((from, to)) => {
-            let from: f64 = from
-                .trim()
-                .trim_end_matches('m')
-                .parse()
-                .map_err(|_| format!("cannot read the start depth in '{s}'"))?;
-            if from != 0.0 {
-                return Err(format!(
-                    "travel gas '{s}' starts at {from} m; a travel gas is breathed from the surface (write @0..DEPTH)"
-                ));
-            }
-            to
+    if mix.o2 <= 0.0 {
+        return Err(format!("travel gas '{s}' has no oxygen"));
+    }
+    let num = |x: &str, what: &str| -> Result<f64, String> {
+        let v: f64 = x
+            .trim()
+            .trim_end_matches('m')
+            .trim()
+            .parse()
+            .map_err(|_| format!("cannot read the {what} depth in travel gas '{s}': write MIX@FROM..TO (m), e.g. 21/35@0..60"))?;
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!(
+                "travel gas '{s}': the {what} depth must be zero or a positive number of metres"
+            ));
         }
-        None => range,
+        Ok(v)
     };
-    let switch_depth_m: f64 = until
-        .trim()
-        .trim_end_matches('m')
-        .parse()
-        .map_err(|_| format!("cannot read the switch depth in '{s}': write MIX@0..DEPTH_M"))?;
-    Ok(DecoGas {
-        mix,
-        switch_depth_m,
-    })
+    let (from_m, to_m) = match range.split_once("..") {
+        Some((from, to)) => (num(from, "start")?, num(to, "end")?),
+        None => (0.0, num(range, "end")?),
+    };
+    Ok(TravelGas { mix, from_m, to_m })
 }
 
 /// The kind of a schedule leg.

@@ -49,7 +49,7 @@ pub fn read_schedule_with_notes(
     path: &Path,
     conventions: &Conventions,
     default_gas: GasMix,
-    dive: Option<usize>,
+    dive: Option<crate::profile::sequence::DiveSelection>,
 ) -> Result<ScheduleImport, InputError> {
     if crate::profile::is_dive_log(path) {
         return read_divelog_schedule(path, conventions, dive);
@@ -75,7 +75,7 @@ pub fn read_schedule_with_notes(
 pub fn read_divelog_schedule(
     path: &Path,
     conventions: &Conventions,
-    dive: Option<usize>,
+    dive: Option<crate::profile::sequence::DiveSelection>,
 ) -> Result<ScheduleImport, InputError> {
     use crate::profile::{divelog, select_dive};
     let d = select_dive(path, divelog::read(path)?, dive)?;

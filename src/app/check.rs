@@ -27,7 +27,7 @@ pub struct CheckRequest {
     /// Schedule file (`.toml`, `.csv`, legacy `.txt`, or a Subsurface/UDDF dive log).
     pub schedule: PathBuf,
     /// Which dive of a dive log (1-based; required when the log holds more than one).
-    pub dive: Option<usize>,
+    pub dive: Option<crate::profile::sequence::DiveSelection>,
     /// Criteria file.
     pub criteria: PathBuf,
     /// Phantom file (built-in hydrogel-dive if absent).
@@ -95,19 +95,20 @@ pub fn run(
     );
     let _ = writeln!(
         text,
-        "{:<32} {:>12} {:>12} {:>12}  {:<10} result",
-        "criterion", "value", "limit", "margin", "unit"
+        "{:<32} {:>12} {:>12} {:>12}  {:<10} {:<6} absolute",
+        "criterion", "value", "limit", "margin", "unit", "result"
     );
     for s in &ev.runs[0].scores {
         let _ = writeln!(
             text,
-            "{:<32} {:>12} {:>12} {:>12}  {:<10} {}",
+            "{:<32} {:>12} {:>12} {:>12}  {:<10} {:<6} {}",
             s.label,
             sig_text(s.value, 4, true),
             sig_text(s.limit, 4, true),
             sig_text(s.margin, 4, true),
             s.unit,
-            if s.pass { "pass" } else { "FAIL" }
+            if s.pass { "pass" } else { "FAIL" },
+            s.absolute.map(|a| sig_text(a, 4, true)).unwrap_or_default()
         );
     }
     let fails = ev.runs[0].scores.iter().filter(|s| !s.pass).count();

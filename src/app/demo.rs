@@ -111,6 +111,7 @@ pub fn run_sized(
         DEMO_DIVE.1,
         None,
         &[],
+        &[],
         &criteria.protocol,
         None,
     )?;

@@ -420,12 +420,14 @@ pub struct EvaluateRequest {
     pub gas: Option<String>,
     /// Deco gases (`50@21`, `O2`).
     pub deco_gases: Vec<String>,
+    /// Travel gases (`21/35@0..60`), repeatable.
+    pub travel_gases: Vec<String>,
     /// Algorithm files (at least one algorithm or schedule).
     pub algorithms: Vec<PathBuf>,
     /// Schedule files compared as they are (TOML, CSV, legacy .txt, dive logs).
     pub schedules: Vec<PathBuf>,
     /// Which dive of a dive log given as a schedule (1-based).
-    pub dive: Option<usize>,
+    pub dive: Option<crate::profile::sequence::DiveSelection>,
     /// Elasticity laws (`all`, names; empty → the phantom's own).
     pub elasticity: Vec<String>,
     /// Phantom file (built-in hydrogel-dive if absent).
@@ -441,18 +443,20 @@ pub struct EvaluateRequest {
 }
 
 /// Plan with each algorithm: the candidates (labels made unique with the file stem).
+#[allow(clippy::too_many_arguments)] // the dive's fields, as on the command line
 pub fn plan_candidates(
     algorithms: &[(LoadedAlgorithm, String)],
     depth_m: f64,
     time_min: f64,
     gas: Option<&str>,
     deco_gases: &[String],
+    travel_gases: &[String],
     protocol: &Protocol,
     repeat_after_min: Option<f64>,
 ) -> Result<Vec<Candidate>, InputError> {
     let mut out: Vec<Candidate> = Vec::new();
     for (alg, source) in algorithms {
-        let (_, schedule) = plan_dive(alg, depth_m, time_min, gas, deco_gases, None)?;
+        let (_, schedule) = plan_dive(alg, depth_m, time_min, gas, deco_gases, travel_gases)?;
         let mut label = alg.label.clone();
         if out.iter().any(|c| c.label == label) {
             let stem = Path::new(source)
@@ -478,7 +482,7 @@ pub fn plan_candidates(
 /// stem.
 pub fn schedule_candidates(
     files: &[PathBuf],
-    dive: Option<usize>,
+    dive: Option<crate::profile::sequence::DiveSelection>,
     protocol: &Protocol,
     repeat_after_min: Option<f64>,
     taken: &[Candidate],
@@ -561,6 +565,7 @@ pub fn run(
             time_min,
             req.gas.as_deref(),
             &req.deco_gases,
+            &req.travel_gases,
             &criteria.protocol,
             req.repeat_after_min,
         )?,
@@ -578,7 +583,7 @@ pub fn run(
     let mut parts: Vec<String> = Vec::new();
     if let Some((depth_m, time_min)) = planned {
         parts.push(format!(
-            "{} m for {} min on {}{}",
+            "{} m for {} min on {}{}{}",
             depth_m,
             time_min,
             req.gas.as_deref().unwrap_or("air"),
@@ -586,6 +591,11 @@ pub fn run(
                 String::new()
             } else {
                 format!(", deco gases {}", req.deco_gases.join(", "))
+            },
+            if req.travel_gases.is_empty() {
+                String::new()
+            } else {
+                format!(", travel gases {}", req.travel_gases.join(", "))
             }
         ));
     }
@@ -679,7 +689,8 @@ pub fn schedule_table(ev: &Evaluation) -> Result<Table, Error> {
 /// `scores.csv`: one row per run and criterion, keyed by the criterion's registry `kind`
 /// (stable) with the criteria file's `label` in its own column, numbers at full precision
 /// (the shortest text that reads back to the same f64): `schedule,elasticity,kind,label,unit,
-/// value,limit,margin,value_over_limit,result`.
+/// value,limit,margin,value_over_limit,result,absolute_value` (`absolute_value`: the absolute
+/// value behind a growth score, e.g. the peak volume with the nuclei; empty for the others).
 pub fn scores_csv(ev: &Evaluation) -> Result<String, Error> {
     let mut w = csv::Writer::from_writer(Vec::new());
     let csv_err = |e: csv::Error| Error::Solver(format!("scores.csv: {e}"));
@@ -694,6 +705,7 @@ pub fn scores_csv(ev: &Evaluation) -> Result<String, Error> {
         "margin",
         "value_over_limit",
         "result",
+        "absolute_value",
     ])
     .map_err(csv_err)?;
     for r in &ev.runs {
@@ -709,6 +721,7 @@ pub fn scores_csv(ev: &Evaluation) -> Result<String, Error> {
                 &s.margin.to_string(),
                 &s.ratio().to_string(),
                 if s.pass { "pass" } else { "FAIL" },
+                &s.absolute.map(|a| a.to_string()).unwrap_or_default(),
             ])
             .map_err(csv_err)?;
         }
@@ -734,6 +747,7 @@ pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
             Column::plain("margin"),
             Column::plain("value/limit"),
             Column::plain("result"),
+            Column::plain("absolute"),
         ],
     );
     for r in &ev.runs {
@@ -748,6 +762,10 @@ pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
                 Cell::sig(s.margin, 4),
                 Cell::fixed(s.ratio(), 3),
                 Cell::text(if s.pass { "pass" } else { "FAIL" }),
+                match s.absolute {
+                    Some(a) => Cell::sig(a, 4),
+                    None => Cell::text(""),
+                },
             ])
             .map_err(Error::Solver)?;
         }
@@ -1188,7 +1206,12 @@ pub fn add_report(
     page.section("Scores");
     let scores = scores_table(ev)?;
     set.add(format!("{prefix}scores.csv"), scores_csv(ev)?);
-    let mut crit = String::from("Criteria (value ≤ limit passes; margin = limit − value):\n");
+    let mut crit = String::from(
+        "Criteria (value ≤ limit passes; margin = limit − value). Peak volume and peak radius \
+         score the growth the schedule causes, above each bubble's initial radius R0 (`measure = \
+         \"growth\"`, the default); the table's *absolute* column gives the absolute peak beside \
+         them, nuclei included:\n",
+    );
     for c in &ev.criteria.criteria {
         crit.push_str(&format!(
             "\n- **{}** (`{}`, {}): {}; limit {}",

@@ -27,6 +27,9 @@ pub struct ScoreJson {
     pub margin: f64,
     /// value ≤ limit.
     pub pass: bool,
+    /// The absolute value behind a growth score (peak volume with the nuclei, peak radius),
+    /// in `unit`; null for criteria whose value is itself absolute.
+    pub absolute: Option<f64>,
 }
 
 impl From<&Score> for ScoreJson {
@@ -39,6 +42,7 @@ impl From<&Score> for ScoreJson {
             limit: s.limit,
             margin: s.margin,
             pass: s.pass,
+            absolute: s.absolute,
         }
     }
 }

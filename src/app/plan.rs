@@ -56,8 +56,9 @@ pub struct PlanRequest {
     pub gas: Option<String>,
     /// Deco gases, `50@21` or `50` (switch at the MOD at 1.6 bar).
     pub deco_gases: Vec<String>,
-    /// Travel gas `21/35@0..60`: from the surface to 60 m, then the bottom gas.
-    pub travel_gas: Option<String>,
+    /// Travel gases `21/35@0..60` (breathed from the surface to 60 m, then the next travel
+    /// gas or the bottom gas); repeatable, ranges following each other from the surface.
+    pub travel_gases: Vec<String>,
     /// Format of the printed table.
     pub format: PlanFormat,
     /// Where to write the schedule, if anywhere (whole or not at all).
@@ -125,14 +126,17 @@ pub struct PlanOutcome {
 }
 
 /// Plan a dive with a loaded algorithm from command-line strings (bottom gas, deco gases
-/// `50@21` or `50`); errors point at the command-line option. Used by `plan` and `evaluate`.
+/// `50@21` or `50`, travel gases `21/35@0..60`); errors point at the command-line option.
+/// Deco or travel gases not given on the command line come from the algorithm file's
+/// `[gases]` (errors about those name the file, line and `gases.deco` / `gases.travel`).
+/// Used by `plan` and `evaluate`.
 pub fn plan_dive(
     alg: &LoadedAlgorithm,
     depth_m: f64,
     time_min: f64,
     gas: Option<&str>,
     deco_gases: &[String],
-    travel_gas: Option<&str>,
+    travel_gases: &[String],
 ) -> Result<(DivePlan, Schedule), InputError> {
     let cmd =
         |field: &str, msg: String| InputError::new(msg).in_file("<command line>").field(field);
@@ -140,36 +144,60 @@ pub fn plan_dive(
         Some(g) => GasMix::parse(g).map_err(|m| cmd("--gas", m))?,
         None => GasMix::AIR,
     };
-    let deco_gases = deco_gases
-        .iter()
-        .map(|s| DecoGas::parse(s, &alg.conventions).map_err(|m| cmd("--deco-gas", m)))
-        .collect::<Result<Vec<_>, _>>()?;
-    let travel_gas = travel_gas
-        .map(|t| parse_travel_gas(t).map_err(|m| cmd("--travel-gas", m)))
-        .transpose()?;
+    let deco_from_file = deco_gases.is_empty() && !alg.gases.deco.is_empty();
+    let deco_gases = if deco_from_file {
+        alg.gases.deco.clone()
+    } else {
+        deco_gases
+            .iter()
+            .map(|s| DecoGas::parse(s, &alg.conventions).map_err(|m| cmd("--deco-gas", m)))
+            .collect::<Result<Vec<_>, _>>()?
+    };
+    let travel_from_file = travel_gases.is_empty() && !alg.gases.travel.is_empty();
+    let travel_gases = if travel_from_file {
+        alg.gases.travel.clone()
+    } else {
+        travel_gases
+            .iter()
+            .map(|t| parse_travel_gas(t).map_err(|m| cmd("--travel-gas", m)))
+            .collect::<Result<Vec<_>, _>>()?
+    };
     let plan = DivePlan {
         depth_m,
         bottom_time_min: time_min,
         bottom_gas,
         deco_gases,
-        travel_gas,
+        travel_gases,
     };
-    plan.validate(&alg.conventions).map_err(|e| {
-        let f = e.field.clone().map(|f| format!("--{f}"));
-        let mut e = e.in_file("<command line>");
-        e.field = f;
-        e
-    })?;
-    let schedule = alg.algorithm.plan(&plan).map_err(|e| {
-        if e.file.is_none() {
-            let f = e.field.clone().map(|f| format!("--{f}"));
-            let mut e = e.in_file("<command line>");
-            e.field = f;
-            e
-        } else {
-            e
+    // where an error about a field of the plan points: the file's [gases] or the command line
+    let locate = |e: InputError| -> InputError {
+        let from_file = match e.field.as_deref() {
+            Some("travel-gas") if travel_from_file => Some(("gases.travel", alg.gases.travel_line)),
+            Some("deco-gas") if deco_from_file => Some(("gases.deco", alg.gases.deco_line)),
+            _ => None,
+        };
+        match from_file {
+            Some((field, line)) => {
+                let mut e = e.in_file(&alg.gases.path);
+                e.field = Some(field.to_string());
+                if let Some(l) = line {
+                    e = e.at_line(l);
+                }
+                e
+            }
+            None => {
+                let f = e.field.clone().map(|f| format!("--{f}"));
+                let mut e = e.in_file("<command line>");
+                e.field = f;
+                e
+            }
         }
-    })?;
+    };
+    plan.validate(&alg.conventions).map_err(locate)?;
+    let schedule =
+        alg.algorithm
+            .plan(&plan)
+            .map_err(|e| if e.file.is_none() { locate(e) } else { e })?;
     Ok((plan, schedule))
 }
 
@@ -198,7 +226,7 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
         req.time_min,
         req.gas.as_deref(),
         &req.deco_gases,
-        req.travel_gas.as_deref(),
+        &req.travel_gases,
     )?;
     let oxygen = oxygen::exposure(&schedule);
     check_plan_numbers(&schedule, &oxygen)?;
@@ -207,7 +235,7 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
     } else {
         None
     };
-    let settings = settings(&alg, req);
+    let settings = settings(&alg, req, &plan);
     let mut warnings = Vec::new();
     if oxygen.cns_percent > CNS_WARN_PERCENT {
         warnings.push(format!(
@@ -312,7 +340,7 @@ pub fn no_deco_limit(alg: &LoadedAlgorithm, plan: &DivePlan) -> Option<f64> {
 }
 
 /// The settings the plan used, as `(name, value)` rows: what `dt-lint` echoes.
-fn settings(alg: &LoadedAlgorithm, req: &PlanRequest) -> Vec<(String, String)> {
+fn settings(alg: &LoadedAlgorithm, req: &PlanRequest, plan: &DivePlan) -> Vec<(String, String)> {
     let c = &alg.conventions;
     let o = &req.overrides;
     let mark = |set: bool| if set { " (command line)" } else { "" };
@@ -370,6 +398,34 @@ fn settings(alg: &LoadedAlgorithm, req: &PlanRequest) -> Vec<(String, String)> {
             ),
         ),
     ];
+    if !plan.travel_gases.is_empty() {
+        let from = if req.travel_gases.is_empty() {
+            " (algorithm file)"
+        } else {
+            ""
+        };
+        let list: Vec<String> = plan
+            .travel_gases
+            .iter()
+            .map(|t| format!("{} {}–{} m", gas_text(t.mix), t.from_m, t.to_m))
+            .collect();
+        rows.push((
+            "travel gases".to_string(),
+            format!("{}{from}", list.join(", ")),
+        ));
+    }
+    if req.deco_gases.is_empty() && !alg.gases.deco.is_empty() {
+        let list: Vec<String> = alg
+            .gases
+            .deco
+            .iter()
+            .map(|d| format!("{} from {} m", gas_text(d.mix), d.switch_depth_m))
+            .collect();
+        rows.push((
+            "deco gases".to_string(),
+            format!("{} (algorithm file)", list.join(", ")),
+        ));
+    }
     if o.gf_low.is_some() || o.gf_high.is_some() {
         rows.insert(
             1,

@@ -24,7 +24,7 @@ use super::bubble::{Balance, Bubble, BubbleFate};
 use super::diffusion;
 use super::displacement::{self, Displaced};
 use super::grid::{Face, Grid};
-use super::nucleation::NucleusPool;
+use super::nucleation::{Nucleus, NucleusPool};
 use super::params::{BubblePlacement, PhantomParams};
 use crate::error::Error;
 use crate::gas::Gas;
@@ -50,6 +50,10 @@ pub struct BubbleFrame {
     pub id: usize,
     /// Radius, m.
     pub radius: f64,
+    /// R0: the radius the bubble was created with, m (its nucleus at t = 0 or at activation;
+    /// for a bubble formed by coalescence, the radius of the summed R0 volumes). Criteria
+    /// measure growth above it.
+    pub initial_radius: f64,
     /// Volume, m³.
     pub volume: f64,
     /// Surface area, m².
@@ -1359,6 +1363,7 @@ impl<'a> Simulation<'a> {
                 .map(|b| BubbleFrame {
                     id: b.id,
                     radius: b.radius,
+                    initial_radius: b.initial_radius,
                     volume: b.volume(),
                     area: b.area(),
                     moles: b.moles.clone(),
@@ -1384,8 +1389,13 @@ impl Simulation<'_> {
             .nucleation
             .nuclei(&self.grid)
             .map_err(|e| input(&e.field, e.message))?;
-        NucleusPool::new(&nuclei, &self.grid, self.params.surface_tension)
-            .map_err(|m| input("nucleation", m))
+        NucleusPool::new(
+            &nuclei,
+            &self.grid,
+            self.params.surface_tension,
+            self.params.nucleation.skin_compression(),
+        )
+        .map_err(|e| input(&e.field, e.message))
     }
 
     /// The nuclei of the run and their state (empty under the `fixed` model).
@@ -1448,19 +1458,23 @@ impl Simulation<'_> {
         let mut confirmed = Vec::with_capacity(ready.len());
         for index in ready {
             let e = pool.entries()[index];
-            let rho = self.coupling_radius_at(e.nucleus.radius, false);
+            let threshold = pool.threshold(index);
+            let rho = self.coupling_radius_at(pool.activation_radius(index), false);
             let mut tension = fixed;
             for (g, kg) in k.iter().enumerate() {
                 let here = self.fields[g][e.cell];
                 tension += self.sphere_mean(g, e.nucleus.position, rho, here) * kg;
             }
-            if tension - p1 > e.threshold {
+            if tension - p1 > threshold {
                 confirmed.push(index);
             }
         }
         let mut result = Ok(());
         for index in confirmed {
-            let n = pool.entries()[index].nucleus;
+            let n = Nucleus {
+                radius: pool.activation_radius(index),
+                ..pool.entries()[index].nucleus
+            };
             let engulfed = self.bubbles.iter().any(|b| {
                 b.active()
                     && (0..3)

@@ -10,6 +10,7 @@ use crate::units::{PressureUnit, TimeUnit};
 
 pub mod divelog;
 pub mod legacy;
+pub mod sequence;
 pub mod toml;
 
 /// Options for [`load`]: what a legacy two-column file does not say. A TOML profile states all
@@ -27,8 +28,9 @@ pub struct LoadOptions {
     /// Water-vapour pressure subtracted at the open faces, Pa (legacy and dive-log default 0;
     /// give the alveolar value, e.g. 6 270 Pa, when a breathed gas drives the phantom).
     pub vapour_pa: Option<f64>,
-    /// Which dive of a dive log (1-based); required when the log holds more than one.
-    pub dive: Option<usize>,
+    /// Which dive(s) of a dive log (1-based; a range or `all` joins consecutive dives);
+    /// required when the log holds more than one.
+    pub dive: Option<sequence::DiveSelection>,
 }
 
 /// Longest history accepted, s: 30 days simulated. Longer profiles, repeated cycles, dive logs
@@ -53,31 +55,47 @@ pub fn is_dive_log(path: &Path) -> bool {
         .is_some_and(|e| matches!(e.as_str(), "xml" | "ssrf" | "uddf"))
 }
 
-/// Choose dive `dive` (1-based) of a log; required when the log holds more than one.
+/// Choose dive `dive` (1-based) of a log; required when the log holds more than one. A range
+/// or `all` joins consecutive dives into one with the logged surface intervals
+/// ([`sequence::join`]).
 pub fn select_dive(
     path: &Path,
     mut dives: Vec<divelog::ImportedDive>,
-    dive: Option<usize>,
+    dive: Option<sequence::DiveSelection>,
 ) -> Result<divelog::ImportedDive, InputError> {
-    let k = match (dive, dives.len()) {
-        (None, 1) => 0,
+    use sequence::DiveSelection;
+    let n = dives.len();
+    let missing = |k: usize| {
+        InputError::new(format!(
+            "dive {k} does not exist: the log holds {n} dive(s), numbered from 1"
+        ))
+        .in_file(path)
+        .field("dive")
+    };
+    let (first, last) = match (dive, n) {
+        (None, 1) => (1, 1),
         (None, n) => {
             return Err(InputError::new(format!(
-                "the log holds {n} dives; choose one with a dive number 1..={n}"
+                "the log holds {n} dives; choose one with a dive number 1..={n} (or a range N-M, or all, to run them in sequence)"
             ))
             .in_file(path)
             .field("dive"))
         }
-        (Some(k), n) if k >= 1 && k <= n => k - 1,
-        (Some(k), n) => {
-            return Err(InputError::new(format!(
-                "dive {k} does not exist: the log holds {n} dive(s), numbered from 1"
-            ))
-            .in_file(path)
-            .field("dive"))
-        }
+        (Some(DiveSelection::One(k)), _) => (k, k),
+        (Some(DiveSelection::Range(a, b)), _) => (a, b),
+        (Some(DiveSelection::All), _) => (1, n),
     };
-    Ok(dives.swap_remove(k))
+    if first < 1 || first > n {
+        return Err(missing(first));
+    }
+    if last > n {
+        return Err(missing(last));
+    }
+    if first == last {
+        return Ok(dives.swap_remove(first - 1));
+    }
+    let chosen: Vec<_> = dives.drain(first - 1..last).collect();
+    sequence::join(chosen, first).map_err(|m| InputError::new(m).in_file(path).field("dive"))
 }
 
 /// A logged dive as a pressure history followed by `watch_s` at the surface (on air), with

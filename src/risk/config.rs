@@ -137,6 +137,7 @@ impl CriteriaSet {
                     c.criterion.as_ref(),
                     c.criterion.evaluate(run),
                     c.limit,
+                    c.criterion.absolute(run),
                 )
             })
             .collect()

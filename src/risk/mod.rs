@@ -70,6 +70,19 @@ pub enum Window {
     AfterSurfacing,
 }
 
+/// What a peak criterion measures (`measure = ...` in its `[[criterion]]` entry).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Measure {
+    /// The growth the schedule causes: the value above each bubble's R0 (its radius at
+    /// creation: the nucleus at t = 0 or at activation), so a run in which nothing grows scores
+    /// 0 whatever the seed (default). The absolute value is reported beside it.
+    #[default]
+    Growth,
+    /// The absolute value, seed included (the scores before issue 12).
+    Absolute,
+}
+
 /// A risk criterion: one number from a run's bubble history, in [`RiskCriterion::unit`].
 pub trait RiskCriterion: Send + Sync + std::fmt::Debug {
     /// The TOML `kind` of the criterion (its registry key).
@@ -83,6 +96,12 @@ pub trait RiskCriterion: Send + Sync + std::fmt::Debug {
     /// One line saying what is measured, with its parameters, for reports.
     fn describe(&self) -> String {
         self.name().to_string()
+    }
+    /// For a criterion that scores growth above the starting state: the absolute value behind
+    /// it (e.g. the peak volume with the nuclei), in the same unit, reported beside the score.
+    /// `None` (default) when the value is itself absolute.
+    fn absolute(&self, _run: &RunData) -> Option<f64> {
+        None
     }
 }
 
@@ -138,6 +157,8 @@ pub struct Score {
     pub pass: bool,
     /// limit − value, in `unit` (positive when the criterion passes).
     pub margin: f64,
+    /// The absolute value behind a growth score ([`RiskCriterion::absolute`]), in `unit`.
+    pub absolute: Option<f64>,
 }
 
 impl Score {
@@ -151,7 +172,13 @@ impl Score {
 /// bug or a numerical failure, never a result (the binary exits 3 with this message).
 pub fn check_finite(scores: &[Score]) -> Result<(), String> {
     for s in scores {
-        for (what, v) in [("value", s.value), ("limit", s.limit), ("margin", s.margin)] {
+        let abs = s.absolute.unwrap_or(0.0);
+        for (what, v) in [
+            ("value", s.value),
+            ("limit", s.limit),
+            ("margin", s.margin),
+            ("absolute value", abs),
+        ] {
             if !v.is_finite() {
                 return Err(format!(
                     "criterion '{}' ({}) gave a non-finite {what} ({v}); nothing was written",
@@ -163,8 +190,14 @@ pub fn check_finite(scores: &[Score]) -> Result<(), String> {
     Ok(())
 }
 
-/// Score `value` against `limit`.
-pub fn score(label: &str, c: &dyn RiskCriterion, value: f64, limit: f64) -> Score {
+/// Score `value` against `limit`; `absolute` is the absolute value behind a growth score.
+pub fn score(
+    label: &str,
+    c: &dyn RiskCriterion,
+    value: f64,
+    limit: f64,
+    absolute: Option<f64>,
+) -> Score {
     Score {
         label: label.to_string(),
         kind: c.name(),
@@ -173,6 +206,7 @@ pub fn score(label: &str, c: &dyn RiskCriterion, value: f64, limit: f64) -> Scor
         limit,
         pass: value <= limit,
         margin: limit - value,
+        absolute,
     }
 }
 
@@ -187,11 +221,20 @@ pub(crate) mod testing {
         BubbleFrame {
             id,
             radius: r,
+            initial_radius: r,
             volume: 4.0 / 3.0 * PI * r.powi(3),
             area: 4.0 * PI * r * r,
             moles: vec![0.0],
             gel_tension: tension,
             position: [0.0; 3],
+        }
+    }
+
+    /// A bubble created at radius `r0` (m), now of radius `r`.
+    pub fn grown(id: usize, r0: f64, r: f64) -> BubbleFrame {
+        BubbleFrame {
+            initial_radius: r0,
+            ..bubble(id, r, 0.0)
         }
     }
 

@@ -83,7 +83,7 @@ fn matches_decotengu_stop_for_stop_and_minute_for_minute() {
             bottom_time_min: d.time_min,
             bottom_gas: d.gas,
             deco_gases: d.deco.clone(),
-            travel_gas: None,
+            travel_gases: vec![],
         };
         let s = alg.plan(&plan).unwrap();
         let got: Vec<(f64, f64)> = s.stops.iter().map(|st| (st.depth_m, st.stop_min)).collect();
@@ -111,7 +111,7 @@ fn decotengu_docstring_example_through_the_shipped_file() {
         bottom_time_min: 40.0,
         bottom_gas: GasMix::AIR,
         deco_gases: vec![],
-        travel_gas: None,
+        travel_gases: vec![],
     };
     let b = load_algorithm(&root().join("algorithms/zhl16b-gf30-85.toml")).unwrap();
     let s = b.algorithm.plan(&plan).unwrap();
@@ -143,7 +143,7 @@ fn every_shipped_zhl16_file_loads_and_plans() {
         bottom_time_min: 25.0,
         bottom_gas: GasMix::AIR,
         deco_gases: vec![],
-        travel_gas: None,
+        travel_gases: vec![],
     };
     let mut n = 0;
     for e in std::fs::read_dir(dir).unwrap() {
@@ -193,7 +193,7 @@ fn schedule_toml_round_trips_and_feeds_the_phantom() {
             DecoGas::parse("50", &DECOTENGU).unwrap(),
             DecoGas::parse("100@6", &DECOTENGU).unwrap(),
         ],
-        travel_gas: None,
+        travel_gases: vec![],
     };
     let s = alg.plan(&plan).unwrap();
     let dir = tempdir("schedule-roundtrip");

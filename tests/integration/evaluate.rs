@@ -103,14 +103,14 @@ fn s(p: &Path) -> &str {
 }
 
 /// scores.csv as rows of text cells: schedule, elasticity, kind, label, unit, value, limit,
-/// margin, value_over_limit, result.
+/// margin, value_over_limit, result, absolute_value.
 fn scores(dir: &Path) -> Vec<Vec<String>> {
     let text = std::fs::read_to_string(dir.join("scores.csv")).unwrap();
     let mut lines = text.lines();
     let header = lines.next().unwrap();
     assert_eq!(
         header,
-        "schedule,elasticity,kind,label,unit,value,limit,margin,value_over_limit,result"
+        "schedule,elasticity,kind,label,unit,value,limit,margin,value_over_limit,result,absolute_value"
     );
     lines
         .map(|l| l.split(',').map(str::to_string).collect())
@@ -205,7 +205,7 @@ fn evaluate_writes_a_consistent_well_formed_report() {
     let md = std::fs::read_to_string(out.join("report.md")).unwrap();
     let md_rows: Vec<Vec<String>> = md
         .lines()
-        .filter(|l| l.starts_with("| ") && l.matches(" | ").count() == 8)
+        .filter(|l| l.starts_with("| ") && l.matches(" | ").count() == 9)
         .map(|l| {
             l.trim_matches(|c| c == '|' || c == ' ')
                 .split(" | ")
@@ -282,8 +282,15 @@ fn fast_ascent_scores_worse_than_stops_and_check_exit_codes() {
             "{c}: fast ascent {f} should exceed the schedule with stops {st}"
         );
     }
-    // bubbles grew at all (peak radius above R0 = 100 µm) in the fast ascent
-    assert!(value(&got[0], "peak-radius") > 100.0);
+    // bubbles grew at all in the fast ascent: peak-radius scores the growth above R0 = 100 µm,
+    // and its absolute value (last column) is R0 plus that growth
+    assert!(value(&got[0], "peak-radius") > 0.0);
+    let row = got[0].iter().find(|r| r[3] == "peak-radius").unwrap();
+    let absolute: f64 = row[10].parse().unwrap();
+    assert!(
+        (absolute - 100.0 - value(&got[0], "peak-radius")).abs() < 1e-9,
+        "{row:?}"
+    );
     // the fast ascent fails the tight limits (exit 1); everything passes limits ×1e6 (exit 0)
     let (code, out1, _) = run(&[
         "check",
@@ -426,8 +433,13 @@ fn dive_logs_are_checked_and_evaluated_as_schedules() {
     // the schedule and its history: the log's own surface and density, then the protocol's
     // watch time at the surface (30 min in these criteria), so the run goes on after the
     // last sample
-    let imp =
-        read_schedule_with_notes(&log, &DECOTENGU, decophantom::gas::GasMix::AIR, Some(2)).unwrap();
+    let imp = read_schedule_with_notes(
+        &log,
+        &DECOTENGU,
+        decophantom::gas::GasMix::AIR,
+        Some(decophantom::profile::sequence::DiveSelection::One(2)),
+    )
+    .unwrap();
     assert!((imp.schedule.runtime_min() - 38.0).abs() < 1e-9);
     assert!(imp.notes.iter().any(|n| n.contains("water density")));
     let protocol = decophantom::risk::Protocol {

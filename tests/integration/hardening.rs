@@ -336,6 +336,15 @@ fn numbers_that_would_be_written_wrong_are_refused() {
         limit: 1.0,
         pass: false,
         margin: f64::NEG_INFINITY,
+        absolute: None,
+    };
+    assert!(decophantom::risk::check_finite(std::slice::from_ref(&s)).is_err());
+    // nor a finite score whose absolute value beside it is not
+    let s = decophantom::risk::Score {
+        value: 1.0,
+        margin: 0.0,
+        absolute: Some(f64::NAN),
+        ..s
     };
     assert!(decophantom::risk::check_finite(&[s]).is_err());
 }

@@ -95,6 +95,7 @@ fn nuclei_activate_exactly_above_the_critical_supersaturation() {
         },
         margin: None,
         seed: 11,
+        skin_compression: None,
     };
     let (below, all) = activated_at(model, critical * (1.0 - 1e-6));
     assert_eq!(all.len(), 50);
@@ -109,6 +110,7 @@ fn nuclei_activate_exactly_above_the_critical_supersaturation() {
         distribution: SizeDistribution::Exponential { slope: 1e6 },
         margin: None,
         seed: 5,
+        skin_compression: None,
     };
     let s = 150_000.0;
     let (got, all) = activated_at(model, s);
@@ -130,6 +132,7 @@ fn an_activated_bubble_starts_at_its_nucleus_radius_with_gas_taken_from_the_gel(
         },
         margin: None,
         seed: 2,
+        skin_compression: None,
     };
     let p = sealed_cube(model);
     let prof = constant(0.05);
@@ -162,6 +165,81 @@ fn an_activated_bubble_starts_at_its_nucleus_radius_with_gas_taken_from_the_gel(
     assert!(sum.gas_balance_error < 1e-12);
 }
 
+/// Which of 20 nuclei of 1 µm (skins of compression `skin`, N/m, or bare) activate in a sealed
+/// gel of uniform gel tension 1 atm + `s` (Pa), held at `hold` Pa above 1 atm for 20 s, then
+/// brought to 1 atm over 10 s and held 10 s more: the number of nuclei that activated and the
+/// radius the first bubble starts at.
+fn activated_after_crushing(skin: Option<f64>, hold: f64, s: f64) -> (usize, Option<f64>) {
+    let model = CriticalRadius {
+        number_density: 2e10, // 20 nuclei in the 1 mm³ gel
+        distribution: SizeDistribution::LogNormal {
+            median: 1e-6,
+            sigma: 0.0,
+        },
+        margin: None,
+        seed: 7,
+        skin_compression: skin,
+    };
+    let p = sealed_cube(model);
+    let prof = PressureHistory::with_gas(
+        "crush",
+        vec![0.0, 20.0, 30.0, 40.0],
+        vec![ATM_PA + hold, ATM_PA + hold, ATM_PA, ATM_PA],
+        GasMix::AIR,
+        0.0,
+    )
+    .unwrap();
+    let mut sim = uniform(&p, &prof, s);
+    sim.run(&prof, &mut Recorder::default()).unwrap();
+    // nuclei that became a bubble at least once (a bubble started at the knife edge may
+    // dissolve, return its nucleus to the pool and form again: count positions, not bubbles)
+    let mut at: Vec<[f64; 3]> = sim.bubbles.iter().map(|b| b.position).collect();
+    at.sort_by(|a, b| a.partial_cmp(b).unwrap());
+    at.dedup();
+    (at.len(), sim.bubbles.first().map(|b| b.initial_radius))
+}
+
+#[test]
+fn vpm_skins_and_crushing_set_the_threshold_in_a_uniform_gel() {
+    // Yount's VPM (Yount 1979; Yount & Hoffman 1986), computed here from the crushed radius:
+    // a nucleus of radius r crushed by ΔP (permeable regime) shrinks to
+    // 1/r' = 1/r + ΔP/(2(γc − γ)); with its skin it grows above 2γ(γc − γ)/(γc·r').
+    // γc = 0.257 N/m (Yount 1979), γ = 0.07 N/m, r = 1 µm. The gel (sealed, no exchange)
+    // keeps the tension 1 atm + s, so a hold at 1 atm + 400 kPa crushes by ΔP = 400 kPa − s
+    // and at the end the supersaturation is s: the critical s solves
+    // s = 2γ(γc − γ)/(γc·r'(400 kPa − s)), found here by bisection.
+    let (gc, r, hold) = (0.257, 1e-6, 400e3);
+    let threshold = |dp: f64| {
+        let r_crushed = 1.0 / (1.0 / r + dp / (2.0 * (gc - GAMMA)));
+        2.0 * GAMMA * (gc - GAMMA) / (gc * r_crushed)
+    };
+    let (mut lo, mut hi) = (0.0, hold);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if mid > threshold(hold - mid) {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    let critical = 0.5 * (lo + hi);
+    // ≈ 165.7 kPa: above both the bare 2γ/r = 140 kPa and the uncrushed skin's 101.9 kPa
+    assert!((critical - 165.7e3).abs() < 0.1e3, "{critical}");
+    let (below, _) = activated_after_crushing(Some(gc), hold, critical * (1.0 - 1e-6));
+    assert_eq!(below, 0, "activated below the crushed threshold");
+    let (above, r0) = activated_after_crushing(Some(gc), hold, critical * (1.0 + 1e-6));
+    assert_eq!(above, 20, "all must activate above the crushed threshold");
+    // the bubble starts where its Laplace pressure is the threshold, 2γ/threshold
+    let r0 = r0.unwrap();
+    assert!((r0 - 2.0 * GAMMA / critical).abs() < 1e-5 * r0, "{r0}");
+    // the same gel without the hold (no crushing): the skin alone, 101.9 kPa, is exceeded at
+    // 150 kPa; bare nuclei ignore crushing (2γ/r = 140 kPa)
+    assert_eq!(activated_after_crushing(Some(gc), 0.0, 150e3).0, 20);
+    assert_eq!(activated_after_crushing(Some(gc), hold, 150e3).0, 0);
+    assert_eq!(activated_after_crushing(None, hold, 150e3).0, 20);
+    assert_eq!(activated_after_crushing(None, hold, 139e3).0, 0);
+}
+
 #[test]
 fn the_same_seed_gives_the_same_bubbles() {
     let model = |seed| CriticalRadius {
@@ -169,6 +247,7 @@ fn the_same_seed_gives_the_same_bubbles() {
         distribution: SizeDistribution::Exponential { slope: 4e6 },
         margin: None,
         seed,
+        skin_compression: None,
     };
     let run = |seed| {
         let mut p = PhantomParams::box_phantom([1.5e-3; 3], 100e-6);
@@ -212,6 +291,7 @@ fn the_activated_fraction_converges_to_the_exponential_tail() {
             distribution: SizeDistribution::Exponential { slope: beta },
             margin: Some(0.0),
             seed: 2017,
+            skin_compression: None,
         };
         let (act, all) = activated_at(model, s);
         assert_eq!(all.len() as f64, n);
@@ -270,6 +350,7 @@ fn bubbles_after_dive(hold: f64, rate: f64) -> (usize, usize) {
         distribution: SizeDistribution::Exponential { slope: 5e6 },
         margin: Some(0.5e-3),
         seed: 426,
+        skin_compression: None,
     });
     let prof = dive(hold, rate, 60.0);
     let mut sim = Simulation::new(&p, &prof).unwrap();
@@ -564,9 +645,10 @@ fn assert_no_lower(first: &[(&str, f64)], second: &[(&str, f64)]) {
 #[test]
 fn a_repeated_dive_scores_no_lower_than_the_same_dive_made_first() {
     // issue 12: residual gas in the gel and the bubbles still there make the repeated dive
-    // worse, never better. Measured (README, "Nucleation"): peak volume 0.293 → 0.476 mm³,
-    // peak radius 207 → 246 µm, peak supersaturation 193 → 221 kPa, bubbles formed 15 → 23,
-    // first activation 15.4 and 15.5 min before the end of each window.
+    // worse, never better. Measured (README, "Nucleation"; peak volume and radius as growth
+    // above R0, the default measure): peak volume 0.293 → 0.476 mm³, peak radius growth
+    // 204.6 → 244.5 µm, peak supersaturation 193 → 221 kPa, bubbles formed 15 → 23, first
+    // activation 15.4 and 15.5 min before the end of each window.
     let (first, second) = first_and_repeated(true);
     eprintln!("nucleation: first {first:?}\n            repeated {second:?}");
     assert_no_lower(&first, &second);
@@ -581,9 +663,71 @@ fn under_fixed_nuclei_the_repeated_dive_is_no_lower_here_too() {
     // the same gel with one fixed 100 µm bubble (R_min = 86.5 µm): the bubble stays open
     // through the 20 min interval (it never shrinks back to R_min), so it starts the second
     // dive larger and in a gel with residual gas; bubble-count and activation-time are 0
-    // (nothing forms). Measured: peak volume 0.088 → 0.150 mm³, peak radius 276 → 329 µm.
+    // (nothing forms). Measured, as growth above R0 = 100 µm: peak volume 0.0838 → 0.1456 mm³,
+    // peak radius 175.9 → 229.5 µm (absolute 276 → 329 µm).
     let (first, second) = first_and_repeated(false);
     eprintln!("fixed: first {first:?}\n       repeated {second:?}");
     assert_no_lower(&first, &second);
     assert_eq!((second[4].1, second[5].1), (0.0, 0.0));
+}
+
+#[test]
+fn consecutive_logged_dives_run_as_one_history_with_the_logged_surface_interval() {
+    // tests/data/divelogs/repetitive-logged.xml (read off the file): dive 1 starts
+    // 2019-06-14 09:12:00 and its last sample is 45:00 min; dive 2 starts 12:40:00, i.e.
+    // 3 h 28 min = 12 480 s after dive 1, a surface interval of 12 480 − 2 700 s = 163 min.
+    use decophantom::gas::GasMix;
+    use decophantom::profile::sequence::DiveSelection;
+    use decophantom::profile::{divelog, select_dive};
+    let path = super::common::data("divelogs/repetitive-logged.xml");
+    let pick = |s| select_dive(&path, divelog::read(&path).unwrap(), Some(s));
+    let d1 = pick(DiveSelection::One(1)).unwrap();
+    let d2 = pick(DiveSelection::One(2)).unwrap();
+    let both = pick(DiveSelection::Range(1, 2)).unwrap();
+    assert_eq!(pick(DiveSelection::All).unwrap(), both);
+    let offset = 12_480.0;
+    assert_eq!(d1.duration_s(), 2_700.0);
+    // dive 1 unchanged, then every sample of dive 2 shifted by its start time
+    assert_eq!(both.samples[..d1.samples.len()], d1.samples[..]);
+    for &(t, z) in &d2.samples {
+        assert!(
+            both.samples.contains(&(t + offset, z)),
+            "dive 2 sample ({t} s, {z} m) not at {} s",
+            t + offset
+        );
+    }
+    let h = both.history(0.0).unwrap();
+    let h2 = d2.history(0.0).unwrap();
+    // in the surface interval: the surface, on air
+    for t in [2_800.0, 6_000.0, offset - 60.0] {
+        assert!((h.ambient(t) - both.surface_pa).abs() < 1e-6, "{t}");
+        assert_eq!(both.gas_at(t), GasMix::AIR, "{t}");
+    }
+    // in dive 2: its own depths and gases (the surface pressure is dive 1's: 1.012 bar, dive
+    // 2 states 1.011 bar, which is noted)
+    for t in [120.0, 180.0, 600.0, 1_800.0] {
+        let dp = h.ambient(t + offset) - both.surface_pa;
+        let dp2 = h2.ambient(t) - d2.surface_pa;
+        assert!((dp - dp2).abs() < 1e-6 * dp2, "{t}: {dp} vs {dp2}");
+        assert_eq!(both.gas_at(t + offset), d2.gas_at(t), "{t}");
+    }
+    assert!((both.surface_pa - 101_200.0).abs() < 1e-6);
+    assert!(
+        both.notes.iter().any(|n| n.contains("163 min")),
+        "{:?}",
+        both.notes
+    );
+    assert!(both.notes.iter().any(|n| n.contains("101100")));
+    // a dive the log does not hold, and a range that runs backwards on the command line
+    let e = pick(DiveSelection::Range(1, 3)).unwrap_err().to_string();
+    assert!(e.contains("dive 3 does not exist"), "{e}");
+    let out = std::process::Command::new(super::common::bin())
+        .args(["simulate", "--profile"])
+        .arg(&path)
+        .args(["--dive", "2-1", "--out"])
+        .arg(super::common::tempdir("dive-range").join("x"))
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("runs backwards"));
 }

@@ -502,7 +502,7 @@ fn dive_profile_plot_and_the_tissue_loading_it_draws() {
             20.0,
             Some("18/45"),
             &["50".to_string(), "100".to_string()],
-            None,
+            &[],
         )
         .unwrap();
         let l = loading(&sched, &alg.conventions, 1.0, 0.25);
@@ -536,4 +536,464 @@ fn dive_profile_plot_and_the_tissue_loading_it_draws() {
             "{file}: {at:?}"
         );
     }
+}
+
+/// Travel-gas dives against DecoTengu 0.14.1 (tests/oracles/decotengu_travel_reference.csv,
+/// written by `decotengu_tables.py travel`: 110 m on 10/70 with 21/35 from the surface to
+/// 60 m at GF 30/85 and 50/80, two travel gases 21/35@0..40 + 15/55@40..70, and ZH-L16B on
+/// 12/65 at 100 m). Every stop, every minute and the runtime match (DecoTengu given each
+/// travel gas also as a deco gas at the deep end of its range, where ours offers it again).
+#[test]
+fn travel_gas_dives_match_decotengu() {
+    let path = root().join("tests/oracles/decotengu_travel_reference.csv");
+    let mut rdr = csv::Reader::from_path(&path).unwrap();
+    let mut n = 0;
+    for rec in rdr.records() {
+        let r = rec.unwrap();
+        let file = if &r[1] == "zh-l16b" {
+            "algorithms/zhl16b-gf30-85.toml"
+        } else {
+            "algorithms/zhl16c-gf30-85.toml"
+        };
+        let gf = format!("{}/{}", &r[2], &r[3]);
+        let mut args = vec![
+            "--algorithm",
+            file,
+            "--gf",
+            &gf,
+            "--depth",
+            &r[4],
+            "--time",
+            &r[5],
+            "--gas",
+            &r[6],
+        ];
+        let travel: Vec<String> = r[7].split_whitespace().map(str::to_string).collect();
+        let deco: Vec<String> = r[8].split_whitespace().map(str::to_string).collect();
+        for t in &travel {
+            args.push("--travel-gas");
+            args.push(t);
+        }
+        for d in &deco {
+            args.push("--deco-gas");
+            args.push(d);
+        }
+        let v = plan_json(&args);
+        let want: Vec<(f64, f64)> = r[10]
+            .split_whitespace()
+            .map(|s| {
+                let (d, t) = s.split_once(':').unwrap();
+                (d.parse().unwrap(), t.parse().unwrap())
+            })
+            .collect();
+        assert_eq!(stops(&v), want, "dive {}", &r[0]);
+        let runtime = v["schedule"]["legs"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|l| l["duration_s"].as_f64().unwrap())
+            .sum::<f64>()
+            / 60.0;
+        let want_rt: f64 = r[9].parse().unwrap();
+        assert!(
+            (runtime - want_rt).abs() < 1e-6,
+            "dive {}: {runtime}",
+            &r[0]
+        );
+        n += 1;
+    }
+    assert_eq!(n, 4);
+}
+
+/// The tissue loading of a travel-gas descent, against an independent computation in this
+/// test: Schreiner's equation for N2 and He over each linear leg of the planned schedule
+/// (21/35 from 0 to 60 m, 10/70 from 60 to 110 m, the bottom), ZH-L16C half-times and a, b
+/// for both gases (Bühlmann, Tauchmedizin 2002, compartment 1b), DecoTengu's conventions.
+/// Checked: each compartment's fraction of its M-value gradient at the switch depth and at
+/// the end of the bottom (the `plan --plot` loading), the GF-100 % ceiling there, and that
+/// the planner's first stop is where the independent GF-low ceiling puts it (the ceiling
+/// after the ascent to the first stop is not below it; 3 m higher it would be).
+#[test]
+fn travel_gas_descent_loading_matches_an_independent_schreiner_computation() {
+    use decophantom::algorithm::load_algorithm;
+    use decophantom::algorithm::loading::loading;
+    const HT_N2: [f64; 16] = [
+        5.0, 8.0, 12.5, 18.5, 27.0, 38.3, 54.3, 77.0, 109.0, 146.0, 187.0, 239.0, 305.0, 390.0,
+        498.0, 635.0,
+    ];
+    const A_N2: [f64; 16] = [
+        1.1696, 1.0, 0.8618, 0.7562, 0.62, 0.5043, 0.441, 0.4, 0.375, 0.35, 0.3295, 0.3065, 0.2835,
+        0.261, 0.248, 0.2327,
+    ];
+    const B_N2: [f64; 16] = [
+        0.5578, 0.6514, 0.7222, 0.7825, 0.8126, 0.8434, 0.8693, 0.891, 0.9092, 0.9222, 0.9319,
+        0.9403, 0.9477, 0.9544, 0.9602, 0.9653,
+    ];
+    const HT_HE: [f64; 16] = [
+        1.88, 3.02, 4.72, 6.99, 10.21, 14.48, 20.53, 29.11, 41.2, 55.19, 70.69, 90.34, 115.29,
+        147.42, 188.24, 240.03,
+    ];
+    const A_HE: [f64; 16] = [
+        1.6189, 1.383, 1.1919, 1.0458, 0.922, 0.8205, 0.7305, 0.6502, 0.595, 0.5545, 0.5333,
+        0.5189, 0.5181, 0.5176, 0.5172, 0.5119,
+    ];
+    const B_HE: [f64; 16] = [
+        0.477, 0.5747, 0.6527, 0.7223, 0.7582, 0.7957, 0.8279, 0.8553, 0.8757, 0.8903, 0.8997,
+        0.9073, 0.9122, 0.9171, 0.9217, 0.9267,
+    ];
+    let (ps, bpm, wv) = (1.01325, 0.09985, 0.0627);
+    let alg = load_algorithm(&root().join("algorithms/zhl16c-gf30-85.toml")).unwrap();
+    let fn2_surface = alg.conventions.surface_tissue_n2_fraction;
+    let (_, s) = decophantom::app::plan::plan_dive(
+        &alg,
+        110.0,
+        20.0,
+        Some("10/70"),
+        &["50".to_string(), "100".to_string()],
+        &["21/35@0..60".to_string()],
+    )
+    .unwrap();
+    // the legs: down on 21/35 to 60 m, on 10/70 to 110 m, the bottom
+    let l = &s.legs;
+    assert_eq!((l[0].start_depth_m, l[0].end_depth_m), (0.0, 60.0));
+    assert!((l[0].gas.o2 - 0.21).abs() < 1e-12 && (l[0].gas.he - 0.35).abs() < 1e-12);
+    assert!(
+        (l[0].duration_s - 180.0).abs() < 1e-9,
+        "{}",
+        l[0].duration_s
+    );
+    assert_eq!((l[1].start_depth_m, l[1].end_depth_m), (60.0, 110.0));
+    assert!((l[1].gas.o2 - 0.10).abs() < 1e-12 && (l[1].gas.he - 0.70).abs() < 1e-12);
+
+    // Schreiner: p(t) = pi0 + R(t − 1/k) − (pi0 − p0 − R/k)·e^{−kt}, per gas
+    let schreiner = |p0: f64, f: f64, amb0: f64, rate_bar_min: f64, t: f64, ht: f64| {
+        let k = std::f64::consts::LN_2 / ht;
+        let pi0 = f * (amb0 - wv);
+        let r = f * rate_bar_min;
+        pi0 + r * (t - 1.0 / k) - (pi0 - p0 - r / k) * (-k * t).exp()
+    };
+    let mut n2 = [fn2_surface * (ps - wv); 16];
+    let mut he = [0.0; 16];
+    let mut t_end = Vec::new(); // (runtime at the leg's end, tissues)
+    let mut t = 0.0;
+    for leg in l.iter().filter(|x| x.duration_s > 0.0) {
+        let minutes = leg.duration_s / 60.0;
+        let amb0 = ps + leg.start_depth_m * bpm;
+        let rate = (leg.end_depth_m - leg.start_depth_m) * bpm / minutes;
+        for i in 0..16 {
+            n2[i] = schreiner(n2[i], leg.gas.n2(), amb0, rate, minutes, HT_N2[i]);
+            he[i] = schreiner(he[i], leg.gas.he, amb0, rate, minutes, HT_HE[i]);
+        }
+        t += minutes;
+        t_end.push((t, leg.end_depth_m, n2, he, leg.kind));
+    }
+    let ab = |i: usize, n2: &[f64; 16], he: &[f64; 16]| {
+        let p = n2[i] + he[i];
+        (
+            p,
+            (A_N2[i] * n2[i] + A_HE[i] * he[i]) / p,
+            (B_N2[i] * n2[i] + B_HE[i] * he[i]) / p,
+        )
+    };
+    // tolerated ambient pressure at a gradient factor (Baker's form), the largest over all
+    let ceiling = |gf: f64, n2: &[f64; 16], he: &[f64; 16]| {
+        (0..16)
+            .map(|i| {
+                let (p, a, b) = ab(i, n2, he);
+                (p - a * gf) / (gf / b - gf + 1.0)
+            })
+            .fold(f64::NEG_INFINITY, f64::max)
+    };
+    let samples = loading(&s, &alg.conventions, 1.0, 0.5);
+    let at = |time: f64| {
+        samples
+            .iter()
+            .find(|x| (x.time_min - time).abs() < 1e-9)
+            .unwrap()
+    };
+    // at the switch depth (end of the travel-gas descent) and at the end of the bottom
+    let bottom_end = t_end
+        .iter()
+        .position(|x| x.4 == decophantom::algorithm::LegKind::Bottom)
+        .unwrap();
+    for k in [0, bottom_end] {
+        let (time, depth, n2k, hek, _) = &t_end[k];
+        let amb = ps + depth * bpm;
+        let got = at(*time);
+        for i in 0..16 {
+            let (p, a, b) = ab(i, n2k, hek);
+            let want = (p - amb) / (amb / b + a - amb);
+            assert!(
+                (got.gradient[i] - want).abs() < 1e-9,
+                "{depth} m compartment {}: {} vs {want}",
+                i + 1,
+                got.gradient[i]
+            );
+        }
+        let want_ceil = ((ceiling(1.0, n2k, hek) - ps) / bpm).max(0.0);
+        assert!(
+            (got.ceiling_m - want_ceil).abs() < 1e-9,
+            "{} vs {want_ceil}",
+            got.ceiling_m
+        );
+    }
+    // travel gas on-gasses helium, and the bottom ceiling is real
+    assert!(t_end[0].3[0] > 0.5, "{:?}", t_end[0].3);
+    assert!(ceiling(1.0, &t_end[bottom_end].2, &t_end[bottom_end].3) > ps);
+    // the first stop: independent GF-low (30 %) ceiling at the arrival there
+    let first = t_end
+        .iter()
+        .position(|x| x.4 == decophantom::algorithm::LegKind::Stop)
+        .unwrap();
+    let (_, stop_depth, n2a, hea, _) = &t_end[first - 1];
+    assert_eq!(*stop_depth, s.stops[0].depth_m);
+    let c_at = ceiling(0.30, n2a, hea);
+    assert!(c_at <= ps + stop_depth * bpm + 1e-9, "{c_at}");
+    // 3 m higher on the same gas at 10 m/min: above the ceiling
+    let gas = l[first].gas;
+    let (mut n2b, mut heb) = (*n2a, *hea);
+    for i in 0..16 {
+        let amb0 = ps + stop_depth * bpm;
+        n2b[i] = schreiner(n2b[i], gas.n2(), amb0, -10.0 * bpm, 0.3, HT_N2[i]);
+        heb[i] = schreiner(heb[i], gas.he, amb0, -10.0 * bpm, 0.3, HT_HE[i]);
+    }
+    assert!(ceiling(0.30, &n2b, &heb) > ps + (stop_depth - 3.0) * bpm);
+    println!(
+        "110 m 10/70 travel 21/35@0..60: first stop {} m, runtime {:.1} min",
+        s.stops[0].depth_m,
+        s.runtime_min()
+    );
+}
+
+/// Travel gases are checked before planning, naming the option (exit 2): hypoxic at the
+/// shallow end of the range, beyond the MOD at its deep end, ranges with a gap, a range
+/// reaching the bottom, the bottom mix hypoxic where it takes over; a hypoxic bottom mix
+/// without a travel gas names `--gas` and suggests `--travel-gas`. `evaluate` takes
+/// `--travel-gas` with the same checks.
+#[test]
+fn travel_gas_errors_name_the_option() {
+    let base = [
+        "--algorithm",
+        "algorithms/vpmb-2-baker.toml",
+        "--depth",
+        "110",
+        "--time",
+        "20",
+        "--gas",
+        "10/70",
+    ];
+    for (travel, needle) in [
+        (&["10/50@0..60"][..], "hypoxic at its shallow end"),
+        (&["21/35@0..70"][..], "MOD"),
+        (&["21/35@0..40", "15/55@45..70"][..], "without gap"),
+        (&["21/35@10..60"][..], "from the surface"),
+        (
+            &["21/35@0..30", "15/55@30..110"][..],
+            "not shallower than the dive",
+        ),
+        (&["21/35@0..4"][..], "bottom gas 10/70 is hypoxic"),
+        (&["21/35"][..], "depth range"),
+    ] {
+        let mut a = base.to_vec();
+        for t in travel {
+            a.extend_from_slice(&["--travel-gas", t]);
+        }
+        let (code, out, err) = plan(&a);
+        assert_eq!(code, 2, "{travel:?}: {err}");
+        assert!(out.is_empty());
+        assert!(
+            err.contains("--travel-gas") && err.contains(needle),
+            "{travel:?}: {err}"
+        );
+    }
+    // a travel gas breathable at its shallow end that is not 0 m (second range): accepted
+    let mut a = base.to_vec();
+    a.extend_from_slice(&[
+        "--travel-gas",
+        "21/35@0..40",
+        "--travel-gas",
+        "14/60@40..80",
+    ]);
+    let (code, _, err) = plan(&a);
+    assert_eq!(code, 0, "{err}");
+    // evaluate: the same checks before any run
+    let o = Command::new(bin())
+        .current_dir(root())
+        .args([
+            "evaluate",
+            "--algorithm",
+            "algorithms/zhl16c-gf30-85.toml",
+            "--depth",
+            "110",
+            "--time",
+            "20",
+            "--gas",
+            "10/70",
+            "--travel-gas",
+            "10/50@0..60",
+            "--criteria",
+            "algorithms/criteria/default.toml",
+            "--out",
+            "/nonexistent-dir/never-written",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("--travel-gas") && err.contains("hypoxic"),
+        "{err}"
+    );
+}
+
+/// `[gases]` in an algorithm file: `travel` and `deco` lists read like the command line,
+/// used when the command line gives none (which replaces them), errors naming the file, the
+/// line and `gases.travel`; unknown keys refused.
+#[test]
+fn travel_and_deco_gases_from_the_algorithm_file() {
+    let dir = crate::common::tempdir("plan-gases");
+    let base = std::fs::read_to_string(root().join("algorithms/zhl16c-gf30-85.toml")).unwrap();
+    let write = |name: &str, gases: &str| {
+        let p = dir.join(name);
+        std::fs::write(&p, format!("{base}\n[gases]\n{gases}\n")).unwrap();
+        p
+    };
+    let good = write(
+        "good.toml",
+        "travel = [\"21/35@0..60\"]\ndeco = [\"50\", \"100\"]",
+    );
+    let args = |alg: &std::path::Path| {
+        vec![
+            "--algorithm".to_string(),
+            alg.display().to_string(),
+            "--depth".into(),
+            "110".into(),
+            "--time".into(),
+            "20".into(),
+            "--gas".into(),
+            "10/70".into(),
+        ]
+    };
+    let a = args(&good);
+    let from_file = plan_json(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let mut b = a.clone();
+    b.extend(
+        [
+            "--travel-gas",
+            "21/35@0..60",
+            "--deco-gas",
+            "50",
+            "--deco-gas",
+            "100",
+        ]
+        .map(String::from),
+    );
+    let from_cli = plan_json(&b.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(stops(&from_file), stops(&from_cli));
+    assert!(!stops(&from_file).is_empty());
+    // the command line replaces the file's list
+    let mut c = a.clone();
+    c.extend(
+        [
+            "--travel-gas",
+            "21/35@0..40",
+            "--travel-gas",
+            "15/55@40..70",
+        ]
+        .map(String::from),
+    );
+    let replaced = plan_json(&c.iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(replaced["schedule"]["legs"][1]["gas"], "15/55");
+    // errors name the file, the line and the field
+    let bad = write("bad.toml", "deco = [\"50\"]\ntravel = [\"10/50@0..60\"]");
+    let (code, _, err) = plan(&args(&bad).iter().map(String::as_str).collect::<Vec<_>>());
+    assert_eq!(code, 2, "{err}");
+    let line = base.lines().count() + 4;
+    assert!(
+        err.contains("bad.toml")
+            && err.contains("gases.travel")
+            && err.contains(&format!("bad.toml:{line}:"))
+            && err.contains("hypoxic"),
+        "{err}"
+    );
+    let unknown = write("unknown.toml", "travell = [\"21/35@0..60\"]");
+    let (code, _, err) = plan(
+        &args(&unknown)
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("travell"), "{err}");
+    let unreadable = write("unreadable.toml", "travel = [\"21/35@0..sixty\"]");
+    let (code, _, err) = plan(
+        &args(&unreadable)
+            .iter()
+            .map(String::as_str)
+            .collect::<Vec<_>>(),
+    );
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("gases.travel") && err.contains("end depth"),
+        "{err}"
+    );
+}
+
+/// The logged 110 m trimix dive of Subsurface's test file (`../shared/dive-files/
+/// subsurface__test51.xml`, dives/test51.xml of subsurface/subsurface: EAN55 to 20 m, 31/30
+/// to 40 m, 11/60 to 110 m, surface pressure 0.896 bar) re-planned with two travel gases in
+/// Subsurface's conventions. The logged plan first stops at 51 m after 5 min at 110 m; the
+/// re-plan with the same 5 min at 110 m and ZH-L16C GF 30/85 first stops there too. The log
+/// spent 10 min at 20 m before going deeper (our plans descend straight), so its 123.5 min
+/// runtime is not comparable and only printed. Skipped when `../shared` is absent.
+#[test]
+fn logged_110_m_subsurface_dive_replans_with_travel_gases() {
+    let Some(log) = crate::common::shared("dive-files/subsurface__test51.xml") else {
+        return;
+    };
+    let text = std::fs::read_to_string(log).unwrap();
+    assert!(
+        text.contains("<depth max='110.0 m'") && text.contains("<surface pressure='0.896 bar'")
+    );
+    // time at 110 m in the log: 20:00 to 25:00; our bottom time includes the descent
+    // (18 m/min in Subsurface's conventions: 6.11 min to 110 m)
+    let time = format!("{}", 110.0 / 18.0 + 5.0);
+    let v = plan_json(&[
+        "--algorithm",
+        "algorithms/zhl16c-gf30-85-subsurface.toml",
+        "--surface-pressure",
+        "896",
+        "--depth",
+        "110",
+        "--time",
+        &time,
+        "--gas",
+        "11/60",
+        "--travel-gas",
+        "55@0..20",
+        "--travel-gas",
+        "31/30@20..40",
+        "--deco-gas",
+        "31/30@42",
+        "--deco-gas",
+        "55@20",
+        "--deco-gas",
+        "100@6",
+    ]);
+    let legs = v["schedule"]["legs"].as_array().unwrap();
+    let gases: Vec<&str> = legs[..3]
+        .iter()
+        .map(|l| l["gas"].as_str().unwrap())
+        .collect();
+    assert_eq!(gases, ["EAN55", "31/30", "11/60"]);
+    let st = stops(&v);
+    assert_eq!(st[0].0, 51.0, "{st:?}");
+    println!(
+        "test51 re-plan: first stop {} m (log 51 m), runtime {:.1} min (log 123.5 min)",
+        st[0].0,
+        legs.iter()
+            .map(|l| l["duration_s"].as_f64().unwrap())
+            .sum::<f64>()
+            / 60.0
+    );
 }

@@ -814,13 +814,13 @@ fn load_dispatches_dive_logs() {
     let e = profile::load(&ostc, &LoadOptions::default()).unwrap_err();
     assert!(e.message.contains("2 dives"), "{e}");
     let two = LoadOptions {
-        dive: Some(2),
+        dive: Some(decophantom::profile::sequence::DiveSelection::One(2)),
         ..LoadOptions::default()
     };
     let h = profile::load(&ostc, &two).unwrap();
     assert!(h.label.contains("12:40"), "{}", h.label);
     let three = LoadOptions {
-        dive: Some(3),
+        dive: Some(decophantom::profile::sequence::DiveSelection::One(3)),
         ..LoadOptions::default()
     };
     assert!(profile::load(&ostc, &three).is_err());

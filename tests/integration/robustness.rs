@@ -88,7 +88,7 @@ proptest! {
         let text = mutate(&read("algorithms/zhl16c-gf30-85.toml"), &e);
         if let Ok(a) = decophantom::algorithm::config::parse_algorithm(&text, Path::new("a.toml")) {
             // a file that loads must also plan (or refuse the plan) without panicking
-            let plan = decophantom::algorithm::DivePlan { depth_m: 40.0, bottom_time_min: 20.0, bottom_gas: GasMix::AIR, deco_gases: vec![] , travel_gas: None};
+            let plan = decophantom::algorithm::DivePlan { depth_m: 40.0, bottom_time_min: 20.0, bottom_gas: GasMix::AIR, deco_gases: vec![] , travel_gases: vec![]};
             let _ = a.algorithm.plan(&plan);
         }
         let text = mutate(&read("algorithms/vpmb-2-baker.toml"), &e);

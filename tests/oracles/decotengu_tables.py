@@ -6,6 +6,8 @@ through its public API; none of its code is part of decophantom. Run:
 
     python3 -m venv /tmp/dt && /tmp/dt/bin/pip install decotengu==0.14.1
     /tmp/dt/bin/python tests/oracles/decotengu_tables.py > tests/oracles/decotengu_reference.csv
+    /tmp/dt/bin/python tests/oracles/decotengu_tables.py travel \
+        > tests/oracles/decotengu_travel_reference.csv
 
 Each row is one dive in DecoTengu's default conventions (surface 1.01325 bar, 0.09985 bar/m,
 water vapour 0.0627 bar, descent 20 m/min, ascent 10 m/min, 3 m stops, last stop 3 m unless
@@ -79,5 +81,60 @@ def main():
         ])
 
 
-if __name__ == '__main__':
+if __name__ == '__main__' and sys.argv[1:] != ['travel']:
     main()
+
+
+# Travel-gas dives (`travel` mode, tests/oracles/decotengu_travel_reference.csv):
+# (model, gf_low, gf_high, depth, time, bottom (o2, he), [(o2, he, from_m, to_m)] travel
+# gases, [(o2, he, switch_depth)] deco gases). DecoTengu breathes a travel gas on the descent
+# only; decophantom offers it again on the ascent from the deep end of its range, so each
+# travel gas is also given to DecoTengu as a deco gas switched at that depth (same ascent).
+TRAVEL_DIVES = [
+    ('zh-l16c', 30, 85, 110, 20, (10, 70), [(21, 35, 0, 60)], [(50, 0, 22), (100, 0, 6)]),
+    ('zh-l16c', 50, 80, 110, 20, (10, 70), [(21, 35, 0, 60)], [(50, 0, 22), (100, 0, 6)]),
+    ('zh-l16c', 30, 85, 110, 20, (10, 70), [(21, 35, 0, 40), (15, 55, 40, 70)],
+     [(50, 0, 22), (100, 0, 6)]),
+    ('zh-l16b', 30, 70, 100, 15, (12, 65), [(21, 35, 0, 57)], [(50, 0, 22), (100, 0, 6)]),
+]
+
+
+def run_travel(model, gf_low, gf_high, depth, time, bottom, travel, deco):
+    engine = decotengu.create()
+    engine.model = ZH_L16B_GF() if model == 'zh-l16b' else ZH_L16C_GF()
+    engine.model.gf_low = gf_low / 100
+    engine.model.gf_high = gf_high / 100
+    for o2, he, frm, _ in travel:
+        engine.add_gas(frm, o2, he, travel=True)
+    engine.add_gas(travel[-1][3], bottom[0], bottom[1])
+    for o2, he, _, to in travel:
+        engine.add_gas(to, o2, he)
+    for o2, he, d in deco:
+        engine.add_gas(d, o2, he)
+    steps = list(engine.calculate(depth, time))
+    stops = ' '.join(
+        '{:g}:{:g}'.format(s.depth, s.time) for s in engine.deco_table
+    )
+    return steps[-1].time, stops
+
+
+def main_travel():
+    w = csv.writer(sys.stdout, lineterminator='\n')
+    w.writerow([
+        'dive', 'model', 'gf_low', 'gf_high', 'depth_m', 'time_min', 'gas',
+        'travel_gases', 'deco_gases', 'runtime_min', 'stops',
+    ])
+    for i, (model, lo, hi, depth, time, bottom, travel, deco) in enumerate(
+            TRAVEL_DIVES, 1):
+        runtime, stops = run_travel(model, lo, hi, depth, time, bottom, travel, deco)
+        w.writerow([
+            i, model, lo, hi, depth, time, gas_text(*bottom),
+            ' '.join('{}@{}..{}'.format(gas_text(o2, he), f, t)
+                     for o2, he, f, t in travel),
+            ' '.join('{}@{}'.format(gas_text(o2, he), d) for o2, he, d in deco),
+            repr(round(runtime, 10)), stops,
+        ])
+
+
+if __name__ == '__main__' and sys.argv[1:] == ['travel']:
+    main_travel()

@@ -69,6 +69,26 @@ pub struct RawVpmbParams {
     /// Run the critical-volume algorithm (VPM-B); `false` keeps the initial gradients.
     #[serde(default = "default_true")]
     pub critical_volume: bool,
+    /// When the critical-volume iteration stops (`baker` or `deco-time`).
+    #[serde(default)]
+    pub critical_volume_convergence: CvaConvergence,
+}
+
+/// When the critical-volume iteration has converged.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum CvaConvergence {
+    /// Baker's VPMDECO: as soon as the phase-volume time of any one compartment changed by
+    /// at most 1 min from the previous pass; the final schedule is that pass's gradients
+    /// replayed (VPMDECO.FOR, and its faithful ports: bwaite/vpmb, the C ports).
+    #[default]
+    Baker,
+    /// Subsurface's planner (core/planner.cpp, "CVA time converges"): the gradients are
+    /// always updated from the last pass's phase-volume times, and the pass after the deco
+    /// time fell by less than 10 s between two passes is the final schedule. With whole
+    /// minutes at the stop a pass changes the deco time by whole minutes, and Baker's 1-min
+    /// test then stops one pass early (a deeper first stop, longer shallow stops).
+    DecoTime,
 }
 
 fn default_lambda() -> f64 {
@@ -112,6 +132,7 @@ impl Default for RawVpmbParams {
             regeneration_time_constant_min: default_regen(),
             other_gases_mmhg: default_other(),
             critical_volume: true,
+            critical_volume_convergence: CvaConvergence::Baker,
         }
     }
 }
@@ -139,6 +160,8 @@ pub struct VpmbParams {
     pub lambda_pa_min: f64,
     /// Whether the critical-volume algorithm runs.
     pub critical_volume: bool,
+    /// When the critical-volume iteration stops.
+    pub critical_volume_convergence: CvaConvergence,
 }
 
 fn check(field: &str, v: f64, lo: f64, hi: f64, unit: &str) -> Result<f64, String> {
@@ -221,6 +244,7 @@ impl RawVpmbParams {
             other_gases_pa: other / 760.0 * crate::units::ATM_PA,
             lambda_pa_min: lambda * physics::PA_PER_FSW,
             critical_volume: self.critical_volume,
+            critical_volume_convergence: self.critical_volume_convergence,
         })
     }
 }

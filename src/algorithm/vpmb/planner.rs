@@ -10,7 +10,7 @@ use super::physics::{
     bisect, critical_volume_gradient, haldane, rate_constants, regenerate, schreiner,
     surface_phase_volume_time, Skin, HE_HALF_TIMES_MIN, N, N2_HALF_TIMES_MIN,
 };
-use super::VpmB;
+use super::{CvaConvergence, VpmB};
 use crate::algorithm::conventions::StopRounding;
 use crate::algorithm::{DecoGas, DivePlan, Leg, LegKind, Schedule, Stop};
 use crate::error::InputError;
@@ -234,15 +234,8 @@ impl<'a> Planner<'a> {
         let mut onset = [Onset::default(); N];
         let t_surface = self.surface_tissues();
         let mut t = t_surface;
-        // descent: on the travel gas to its switch depth, then on the bottom gas
-        let mut segments = Vec::new();
-        match self.plan.travel_gas {
-            Some(tg) => {
-                segments.push((0.0, tg.switch_depth_m, tg.mix));
-                segments.push((tg.switch_depth_m, depth, gas));
-            }
-            None => segments.push((0.0, depth, gas)),
-        }
+        // descent: on each travel gas over its range, then on the bottom gas
+        let segments = self.plan.descent_segments();
         let mut descent = 0.0;
         let mut legs = Vec::new();
         for &(d0, d1, mix) in &segments {
@@ -590,7 +583,7 @@ impl<'a> Planner<'a> {
     pub(super) fn schedule(&self) -> Result<Schedule, InputError> {
         let p = &self.alg.params;
         let c = &self.alg.conventions;
-        let (bottom, mut legs) = self.bottom_phase();
+        let (bottom, legs) = self.bottom_phase();
         // Regeneration over the dive, then the initial allowable gradients.
         let mut g0 = PerGas {
             he: [0.0; N],
@@ -633,14 +626,38 @@ impl<'a> Planner<'a> {
             (c.surface_pressure_pa - self.wv()) * self.alg.conventions.surface_tissue_n2_fraction;
         let mut allowable = g0;
         let mut last_pvt = [0.0; N];
+        // deco times of the passes so far (Subsurface's rule), min
+        let mut deco_times: Vec<f64> = Vec::new();
+        let finish = |first: f64, allowable: &PerGas, mut legs: Vec<Leg>| {
+            let fin = self.pass(depth, first, bottom.tissues, bottom.run_time, allowable)?;
+            legs.extend(fin.legs.into_iter().filter(|l| l.duration_s > 0.0));
+            Ok(Schedule {
+                label: self.alg.label.clone(),
+                surface_pressure_pa: c.surface_pressure_pa,
+                pa_per_m: c.pa_per_m,
+                water_vapour_pa: c.water_vapour_pa,
+                legs,
+                stops: fin.stops,
+            })
+        };
         for _ in 0..MAX_CVA_ITERATIONS {
+            // Subsurface: this pass is the final one when the deco time fell by less than
+            // 10 s between the two previous passes
+            let n = deco_times.len();
+            let final_by_deco_time = p.critical_volume_convergence == CvaConvergence::DecoTime
+                && n >= 2
+                && deco_times[n - 2] - deco_times[n - 1] < 10.0 / 60.0;
             let first = self.first_stop(&t_zone, zone, &allowable)?;
+            if final_by_deco_time {
+                return finish(first, &allowable, legs);
+            }
             let trial = self.pass(zone, first, t_zone, rt_zone, &allowable)?;
             // The deco phase volume time runs from the start of the ascent (end of the
             // bottom time) to surfacing. Counting it from the start of the deco zone instead
             // relaxes the gradients slightly more; the start-of-ascent reading reproduces
             // Baker's VPMDECO.OUT schedules (see tests/integration/vpmb.rs).
             let deco_time = trial.run_time - bottom.run_time;
+            deco_times.push(deco_time);
             let mut pvt = [0.0; N];
             let mut converged = false;
             for i in 0..N {
@@ -656,17 +673,9 @@ impl<'a> Planner<'a> {
                     converged = true;
                 }
             }
-            if converged || !p.critical_volume {
-                let fin = self.pass(depth, first, bottom.tissues, bottom.run_time, &allowable)?;
-                legs.extend(fin.legs.into_iter().filter(|l| l.duration_s > 0.0));
-                return Ok(Schedule {
-                    label: self.alg.label.clone(),
-                    surface_pressure_pa: c.surface_pressure_pa,
-                    pa_per_m: c.pa_per_m,
-                    water_vapour_pa: c.water_vapour_pa,
-                    legs,
-                    stops: fin.stops,
-                });
+            let baker = p.critical_volume_convergence == CvaConvergence::Baker;
+            if (converged && baker) || !p.critical_volume {
+                return finish(first, &allowable, legs);
             }
             for i in 0..N {
                 allowable.he[i] = critical_volume_gradient(

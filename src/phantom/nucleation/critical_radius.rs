@@ -29,6 +29,8 @@
 //! # sigma = 0.5                 # log-normal: σ of ln r (required; 0 = monodisperse)
 //! margin_m = 0.2e-3             # no nucleus closer to a face, m; default one grid step h
 //! seed = 2017                   # ChaCha8 seed (required)
+//! # skin_compression = 0.257    # γc, N/m: VPM skins and crushing (Yount 1979); omit for bare
+//! #                             # nuclei (threshold 2γ/r). See the parent module.
 //! ```
 
 use super::{raw, NucleationError, NucleationModel, Nucleus};
@@ -50,6 +52,7 @@ struct Raw {
     sigma: Option<f64>,
     margin_m: Option<f64>,
     seed: u64,
+    skin_compression: Option<f64>,
 }
 
 /// The size distribution of the nuclei's radii.
@@ -111,6 +114,8 @@ pub struct CriticalRadius {
     pub margin: Option<f64>,
     /// ChaCha8 seed.
     pub seed: u64,
+    /// γc, N/m: VPM skin compression (Yount 1979: 0.257 N/m); `None`: bare nuclei.
+    pub skin_compression: Option<f64>,
 }
 
 impl CriticalRadius {
@@ -166,6 +171,10 @@ impl NucleationModel for CriticalRadius {
             });
         }
         Ok(out)
+    }
+
+    fn skin_compression(&self) -> Option<f64> {
+        self.skin_compression
     }
 }
 
@@ -228,11 +237,17 @@ pub fn build(t: toml::Table) -> Result<Box<dyn NucleationModel>, NucleationError
         Some(m) => Some(range("margin_m", m, 0.0, 10.0, "m")?),
         None => None,
     };
+    let skin_compression = match r.skin_compression {
+        // γc > γ is checked against the material when the pool is built
+        Some(g) => Some(range("skin_compression", g, 1e-3, 10.0, "N/m")?),
+        None => None,
+    };
     Ok(Box::new(CriticalRadius {
         number_density,
         distribution,
         margin,
         seed: r.seed,
+        skin_compression,
     }))
 }
 
@@ -278,6 +293,7 @@ mod tests {
             distribution: SizeDistribution::Exponential { slope: 1e6 },
             margin: Some(0.0),
             seed: 3,
+            skin_compression: None,
         };
         let n = m.nuclei(&g).unwrap();
         assert_eq!(n.len(), 2000);
