@@ -95,7 +95,8 @@ pub fn select_dive(
         return Ok(dives.swap_remove(first - 1));
     }
     let chosen: Vec<_> = dives.drain(first - 1..last).collect();
-    sequence::join(chosen, first).map_err(|m| InputError::new(m).in_file(path).field("dive"))
+    sequence::join_located(chosen, first)
+        .map_err(|(m, line)| InputError::new(m).in_file(path).at_line(line).field("dive"))
 }
 
 /// A logged dive as a pressure history followed by `watch_s` at the surface (on air), with

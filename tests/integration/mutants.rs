@@ -343,9 +343,12 @@ fn divelog(p: &Path) -> Result<(), InputError> {
         dive_log_history(&d, 0.0, DIVE_LOG_WATCH_S).map_err(|e| e.in_file(p))?;
     }
     // and as a schedule (`check --schedule log.xml`, every dive)
+    use decophantom::profile::sequence::DiveSelection;
     let n = divelog::read(p)?.len();
-    for k in 1..=n {
-        let s = decophantom::algorithm::waypoints::read_divelog_schedule(p, &DECOTENGU, Some(k))?;
+    // every dive, and all of them joined with their surface intervals (`--dive all`)
+    let all = (n > 1).then_some(DiveSelection::All);
+    for sel in (1..=n).map(DiveSelection::One).chain(all) {
+        let s = decophantom::algorithm::waypoints::read_divelog_schedule(p, &DECOTENGU, Some(sel))?;
         s.schedule
             .to_pressure_history()
             .map_err(|m| InputError::new(m).in_file(p))?;
