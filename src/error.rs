@@ -116,6 +116,55 @@ pub fn line_of_key(text: &str, key: &str) -> Option<usize> {
         .map(|i| i + 1)
 }
 
+/// Read a text file for a reader. A file that cannot be read is named with the I/O error
+/// (`cannot read <what>: ...`); one that is not UTF-8 is named with the line of its first
+/// invalid byte.
+pub fn read_text(path: &Path, what: &str) -> Result<String, InputError> {
+    let bytes = std::fs::read(path)
+        .map_err(|e| InputError::new(format!("cannot read {what}: {e}")).in_file(path))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let at = e.utf8_error().valid_up_to();
+        let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
+        InputError::new(format!(
+            "{what} is not UTF-8 text (invalid byte at offset {at}); save it as UTF-8"
+        ))
+        .in_file(path)
+        .at_line(line)
+    })
+}
+
+/// Number of the last line of `text` (1 for an empty text): where something missing from a
+/// file would be added.
+pub fn last_line(text: &str) -> usize {
+    text.lines().count().max(1)
+}
+
+/// An error found after parsing, given a line when it has none: the line of its field's key
+/// (the leaf `key =`, else the table `[a.b]` / `[[a]]`, trying the field's parents in turn),
+/// else the last line of the file. Every refusal of a file then names a line.
+pub fn ensure_line(e: InputError, text: &str) -> InputError {
+    // a command-line option (`--gf`) is not in the file
+    if e.line.is_some() || e.field.as_deref().is_some_and(|f| f.starts_with("--")) {
+        return e;
+    }
+    let field_line = e.field.as_deref().and_then(|f| {
+        let parts: Vec<&str> = f.split('.').collect();
+        (0..parts.len()).rev().find_map(|k| {
+            line_of_key(text, parts[k]).or_else(|| {
+                let table = parts[..=k].join(".");
+                text.lines()
+                    .position(|l| {
+                        let t = l.split('#').next().unwrap_or("").trim();
+                        t == format!("[{table}]") || t == format!("[[{table}]]")
+                    })
+                    .map(|i| i + 1)
+            })
+        })
+    });
+    let line = field_line.unwrap_or_else(|| last_line(text));
+    e.at_line(line)
+}
+
 /// A number for a message: plain when it reads well (-40, 0.07, 2500), else in scientific
 /// notation (1e-308, 2.561e-12), so that an absurd value does not print 300 digits.
 pub fn num(v: f64) -> String {

@@ -33,6 +33,8 @@ mod gas_convention;
 mod growth;
 #[path = "integration/hardening.rs"]
 mod hardening;
+#[path = "integration/mutants.rs"]
+mod mutants;
 #[path = "integration/nucleation.rs"]
 mod nucleation;
 #[path = "integration/paper_findings.rs"]

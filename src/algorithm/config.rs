@@ -223,9 +223,7 @@ pub fn load_algorithm_with(
     path: &Path,
     overrides: &Overrides,
 ) -> Result<LoadedAlgorithm, InputError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        InputError::new(format!("cannot read the algorithm file: {e}")).in_file(path)
-    })?;
+    let text = crate::error::read_text(path, "the algorithm file")?;
     parse_algorithm_with(&text, path, overrides)
 }
 
@@ -244,6 +242,14 @@ pub fn parse_algorithm_with(
     overrides: &Overrides,
 ) -> Result<LoadedAlgorithm, InputError> {
     overrides.validate()?;
+    parse_algorithm_unlined(text, path, overrides).map_err(|e| crate::error::ensure_line(e, text))
+}
+
+fn parse_algorithm_unlined(
+    text: &str,
+    path: &Path,
+    overrides: &Overrides,
+) -> Result<LoadedAlgorithm, InputError> {
     let mut raw: RawAlgorithmFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
     if overrides.gf_low.is_some() || overrides.gf_high.is_some() {
         let has_gf = raw

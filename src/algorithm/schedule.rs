@@ -520,6 +520,10 @@ impl Schedule {
     /// error messages. Checks: at least one leg, legs continuous in depth, depths ≥ 0,
     /// durations ≥ 0, stops/bottoms at constant depth, and the last leg ends at the surface.
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Schedule, InputError> {
+        Self::from_toml_str_unlined(text, path).map_err(|e| crate::error::ensure_line(e, text))
+    }
+
+    fn from_toml_str_unlined(text: &str, path: &Path) -> Result<Schedule, InputError> {
         let raw: RawSchedule = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
         let at_key = |key: &str, msg: String| {
             let mut e = InputError::new(msg).in_file(path).field(key);
@@ -585,11 +589,31 @@ impl Schedule {
                         ),
                     ));
                 }
+                let p = raw.surface_pressure_pa + v * raw.pa_per_m;
+                if p > crate::profile::MAX_AMBIENT_PA {
+                    return Err(err(
+                        f,
+                        format!(
+                            "depth {v} m is {} Pa with surface_pressure_pa and pa_per_m; the accepted range ends at {:e} Pa (200 bar)",
+                            crate::error::num(p),
+                            crate::profile::MAX_AMBIENT_PA
+                        ),
+                    ));
+                }
             }
             if !(l.duration_s.is_finite() && l.duration_s >= 0.0) {
                 return Err(err(
                     "duration_s",
                     format!("duration {} s must be zero or positive", l.duration_s),
+                ));
+            }
+            if l.duration_s > 0.0 && total_s + l.duration_s == total_s {
+                return Err(err(
+                    "duration_s",
+                    format!(
+                        "duration {} s is too short to count after {total_s} s; give 0 or a longer leg",
+                        crate::error::num(l.duration_s)
+                    ),
                 ));
             }
             total_s += l.duration_s;
@@ -628,7 +652,11 @@ impl Schedule {
                 "the schedule never surfaces: its last leg ends at {last} m; add an ascent to 0 m"
             ))
             .in_file(path)
-            .field("legs.end_depth_m"));
+            .field("legs.end_depth_m")
+            .at_line(
+                line_of_nth(text, "[[legs]]", legs.len() - 1)
+                    .unwrap_or_else(|| crate::error::last_line(text)),
+            ));
         }
         let mut stops = Vec::with_capacity(raw.stops.len());
         for (i, s) in raw.stops.iter().enumerate() {
@@ -678,8 +706,7 @@ impl Schedule {
 
     /// Read a schedule TOML file.
     pub fn read(path: &Path) -> Result<Schedule, InputError> {
-        let text = std::fs::read_to_string(path)
-            .map_err(|e| InputError::new(format!("cannot read the schedule: {e}")).in_file(path))?;
+        let text = crate::error::read_text(path, "the schedule")?;
         Schedule::from_toml_str(&text, path)
     }
 

@@ -127,7 +127,16 @@ pub fn read_legacy_schedule(
         let depth = ((p - 1.0) / MSW_PA).max(0.0);
         csv.push_str(&format!("{},{}\n", t / 60.0, depth));
     }
-    parse_waypoints_csv(&csv, path, conventions, default_gas)
+    // the CSV's row k + 1 is the file's line k; its columns are the file's time and value
+    parse_waypoints_csv(&csv, path, conventions, default_gas).map_err(|mut e| {
+        e.line = e.line.map(|l| l.saturating_sub(1).max(1));
+        e.field = e.field.map(|f| match f.as_str() {
+            "time_min" => "time".into(),
+            "depth_m" => "value".into(),
+            _ => f,
+        });
+        e
+    })
 }
 
 /// Read a waypoint CSV file into a schedule in the given conventions (surface pressure,
@@ -137,9 +146,7 @@ pub fn read_waypoints_csv(
     conventions: &Conventions,
     default_gas: GasMix,
 ) -> Result<Schedule, InputError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        InputError::new(format!("cannot read the waypoint file: {e}")).in_file(path)
-    })?;
+    let text = crate::error::read_text(path, "the waypoint file")?;
     parse_waypoints_csv(&text, path, conventions, default_gas)
 }
 
@@ -182,6 +189,9 @@ pub fn parse_waypoints_csv(
     let gi = col("gas");
     let mut pts: Vec<(f64, f64, GasMix, usize)> = Vec::new();
     let mut gas = default_gas;
+    // the schedule's time as its legs will sum it, s
+    let mut now_s = 0.0;
+    let mut last_line = header_line;
     for rec in rdr.records() {
         let rec = rec.map_err(|e| {
             let mut err = InputError::new(format!("bad CSV row: {e}")).in_file(path);
@@ -203,6 +213,7 @@ pub fn parse_waypoints_csv(
                         .field(name)
                 })
         };
+        last_line = line;
         let t = num(ti, "time_min")?;
         let d = num(di, "depth_m")?;
         if d < 0.0 {
@@ -211,12 +222,34 @@ pub fn parse_waypoints_csv(
                 .at_line(line)
                 .field("depth_m"));
         }
+        if t * 60.0 > crate::profile::MAX_DURATION_S {
+            return Err(InputError::new(format!(
+                "time {} min: {}",
+                crate::error::num(t),
+                crate::profile::duration_message(t * 60.0)
+            ))
+            .in_file(path)
+            .at_line(line)
+            .field("time_min"));
+        }
+        let p = conventions.surface_pressure_pa + d * conventions.pa_per_m;
+        if d > super::schedule::MAX_PLAN_DEPTH_M || p > crate::profile::MAX_AMBIENT_PA {
+            return Err(InputError::new(format!(
+                "depth {} m is beyond the accepted {} m",
+                crate::error::num(d),
+                super::schedule::MAX_PLAN_DEPTH_M
+            ))
+            .in_file(path)
+            .at_line(line)
+            .field("depth_m"));
+        }
         if let Some(g) = gi.and_then(|i| rec.get(i)).filter(|s| !s.is_empty()) {
             gas = GasMix::parse(g)
                 .map_err(|m| InputError::new(m).in_file(path).at_line(line).field("gas"))?;
         }
         if let Some(&(tp, _, _, _)) = pts.last() {
-            if t <= tp {
+            let dur = (t - tp) * 60.0;
+            if t <= tp || now_s + dur == now_s {
                 return Err(InputError::new(format!(
                     "time {t} min does not increase (previous row is at {tp} min)"
                 ))
@@ -224,6 +257,7 @@ pub fn parse_waypoints_csv(
                 .at_line(line)
                 .field("time_min"));
             }
+            now_s += dur;
         } else if t != 0.0 {
             return Err(InputError::new(format!(
                 "the first waypoint must be at time 0, not {t} min"
@@ -235,7 +269,10 @@ pub fn parse_waypoints_csv(
         pts.push((t, d, gas, line));
     }
     if pts.len() < 2 {
-        return Err(InputError::new("a schedule needs at least two waypoints").in_file(path));
+        return Err(InputError::new("a schedule needs at least two waypoints")
+            .in_file(path)
+            .at_line(last_line)
+            .field("time_min"));
     }
     let (_, last_d, _, last_line) = *pts.last().unwrap();
     if last_d != 0.0 {

@@ -90,8 +90,7 @@ impl Measurements {
 /// that is not a finite number, a negative radius, a non-positive sd, a bubble index that is
 /// not a non-negative integer, and a time that does not increase within a bubble.
 pub fn read_measurements(path: &Path) -> Result<Measurements, InputError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::new(format!("cannot read measurements: {e}")).in_file(path))?;
+    let text = crate::error::read_text(path, "the measurements")?;
     parse_measurements(&text, path)
 }
 
@@ -103,7 +102,11 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
         .from_reader(text.as_bytes());
     let headers = rdr
         .headers()
-        .map_err(|e| InputError::new(format!("cannot read the header: {e}")).in_file(path))?
+        .map_err(|e| {
+            InputError::new(format!("cannot read the header: {e}"))
+                .in_file(path)
+                .at_line(1)
+        })?
         .clone();
     let col = |name: &str| headers.iter().position(|h| h == name);
     let mut cols = [0usize; 4];
@@ -236,7 +239,9 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
         });
     }
     if series.is_empty() {
-        return Err(InputError::new("no measurements (only a header)").in_file(path));
+        return Err(InputError::new("no measurements (only a header)")
+            .in_file(path)
+            .at_line(crate::error::last_line(text)));
     }
     Ok(Measurements {
         file: path.to_path_buf(),
@@ -327,8 +332,7 @@ pub fn bubble_count(p: &PhantomParams) -> usize {
 
 /// Read `experiments.toml` and everything it names.
 pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::new(format!("cannot read experiments file: {e}")).in_file(path))?;
+    let text = crate::error::read_text(path, "the experiments file")?;
     let raw: RawExperiments = toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let err = |key: &str, m: String| {
@@ -336,13 +340,48 @@ pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
         if let Some(l) = line_of_key(&text, key.rsplit('.').next().unwrap_or(key)) {
             e = e.at_line(l);
         }
-        e
+        crate::error::ensure_line(e, &text)
     };
     let mut list: Vec<Experiment> = Vec::new();
     if raw.experiment.is_empty() {
         return Err(err("experiment", "no [[experiment]] entries".into()).into());
     }
-    for e in &raw.experiment {
+    for (k, e) in raw.experiment.iter().enumerate() {
+        // a problem of a named file with no line of its own (missing, unreadable, or refused
+        // for an option given here) is named at this experiment's entry
+        let entry = |key: &str, x: InputError| -> InputError {
+            if x.line.is_some() {
+                return x;
+            }
+            let line = text
+                .lines()
+                .enumerate()
+                .filter(|(_, l)| {
+                    let t = l.trim_start();
+                    t.starts_with(key) && t[key.len()..].trim_start().starts_with('=')
+                })
+                .nth(k)
+                .map(|(i, _)| i + 1)
+                .or_else(|| line_of_key(&text, key))
+                .unwrap_or_else(|| crate::error::last_line(&text));
+            let what = x
+                .file
+                .as_ref()
+                .map(|f| format!("{}: ", f.display()))
+                .unwrap_or_default();
+            let field = x
+                .field
+                .as_deref()
+                .map(|f| format!(" ({f})"))
+                .unwrap_or_default();
+            InputError::new(format!(
+                "experiment '{}': {what}{}{field}",
+                e.name, x.message
+            ))
+            .in_file(path)
+            .at_line(line)
+            .field(format!("experiment.{key}"))
+        };
         if e.name.trim().is_empty() {
             return Err(err("name", "an experiment needs a non-empty name".into()).into());
         }
@@ -368,13 +407,19 @@ pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
             vapour_pa: e.vapour_pa,
             dive: None,
         };
-        let profile = crate::app::simulate::load_profile_or_schedule(&dir.join(&e.profile), &opts)?;
+        let profile =
+            match crate::app::simulate::load_profile_or_schedule(&dir.join(&e.profile), &opts) {
+                Ok(p) => p,
+                Err(Error::Input(x)) => return Err(entry("profile", x).into()),
+                Err(other) => return Err(other),
+            };
         let phantom_path = dir.join(&e.phantom);
-        let ptext = std::fs::read_to_string(&phantom_path).map_err(|x| {
-            InputError::new(format!("cannot read phantom file: {x}")).in_file(&phantom_path)
-        })?;
+        let ptext = crate::error::read_text(&phantom_path, "the phantom file")
+            .map_err(|x| entry("phantom", x))?;
         // validate as a phantom file first, so errors point at its own lines
-        let params = parse_phantom(&ptext, &phantom_path)?.params;
+        let params = parse_phantom(&ptext, &phantom_path)
+            .map_err(|x| entry("phantom", x))?
+            .params;
         let phantom: toml::Table = ptext
             .parse()
             .map_err(|x: toml::de::Error| toml_error(&phantom_path, &ptext, &x))?;

@@ -192,13 +192,16 @@ pub struct LoadedPhantom {
 
 /// Read and validate a phantom TOML file.
 pub fn load_phantom(path: &Path) -> Result<LoadedPhantom, InputError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|e| InputError::new(format!("cannot read phantom file: {e}")).in_file(path))?;
+    let text = crate::error::read_text(path, "the phantom file")?;
     parse_phantom(&text, path)
 }
 
 /// Parse and validate phantom TOML text (`path` is used in messages).
 pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputError> {
+    parse_phantom_unlined(text, path).map_err(|e| crate::error::ensure_line(e, text))
+}
+
+fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, InputError> {
     let raw: RawPhantom = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
     let err = |key: &str, msg: String| {
         let leaf = key.rsplit('.').next().unwrap_or(key);

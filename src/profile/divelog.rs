@@ -80,6 +80,8 @@ pub struct ImportedDive {
     pub stated_duration_s: Option<f64>,
     /// What was assumed or repaired while reading (defaults, prepended surface point, …).
     pub notes: Vec<String>,
+    /// 1-based line of the dive's element in the file (for errors about the dive as a whole).
+    pub line: usize,
 }
 
 impl ImportedDive {
@@ -115,9 +117,13 @@ impl ImportedDive {
     /// alveolar for a breathed gas). Closed-circuit dives are refused.
     pub fn history(&self, vapour_pa: f64) -> Result<PressureHistory, InputError> {
         if self.closed_circuit {
+            let field = match self.format {
+                Format::Subsurface => "divecomputer.dctype",
+                Format::Uddf => "divemode",
+            };
             return Err(InputError::new(format!(
                 "dive '{}' is a closed-circuit (rebreather) dive: its inspired gas depends on the set-point, which decophantom does not model; choose an open-circuit dive"
-            , self.label)));
+            , self.label)).at_line(self.line).field(field));
         }
         let mut times: Vec<f64> = self.samples.iter().map(|s| s.0).collect();
         let mut depths: Vec<f64> = self.samples.iter().map(|s| s.1).collect();
@@ -135,7 +141,7 @@ impl ImportedDive {
         let gas: Vec<GasMix> = (0..nseg).map(|i| self.gas_at(times[i])).collect();
         let ambient = depths.iter().map(|&d| self.ambient_pa(d)).collect();
         PressureHistory::new(self.label.clone(), times, ambient, gas, vapour_pa)
-            .map_err(|e| InputError::new(format!("dive '{}': {e}", self.label)))
+            .map_err(|e| InputError::new(format!("dive '{}': {e}", self.label)).at_line(self.line))
     }
 }
 
@@ -168,7 +174,10 @@ pub fn parse(text: &str, path: &Path) -> Result<Vec<ImportedDive>, InputError> {
         }
     };
     if dives.is_empty() {
-        return Err(InputError::new("the file holds no dive with depth samples").in_file(path));
+        return Err(InputError::new("the file holds no dive with depth samples")
+            .in_file(path)
+            .at_line(line_at(text, root.offset))
+            .field("dive"));
     }
     Ok(dives)
 }
@@ -331,10 +340,11 @@ fn parse_xml(text: &str, path: &Path) -> Result<Node, InputError> {
         ));
     }
     let doc = stack.pop().expect("root");
-    doc.children
-        .into_iter()
-        .next()
-        .ok_or_else(|| InputError::new("the file holds no XML element").in_file(path))
+    doc.children.into_iter().next().ok_or_else(|| {
+        InputError::new("the file holds no XML element")
+            .in_file(path)
+            .at_line(crate::error::last_line(text))
+    })
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -370,7 +380,8 @@ fn time_s(s: &str) -> Option<f64> {
             [m, s] => Some(m * 60.0 + s),
             [h, m, s] => Some(h * 3600.0 + m * 60.0 + s),
             _ => None,
-        };
+        }
+        .filter(|v| v.is_finite());
     }
     num(tok)
 }
@@ -419,6 +430,35 @@ fn environment(surface: Option<f64>, density: Option<f64>, notes: &mut Vec<Strin
         }
     };
     (s, d)
+}
+
+/// A sample's time within the 30-day limit and its depth within the accepted ambient
+/// pressure, refused naming the sample's line and field.
+fn check_sample(
+    cx: &Cx,
+    node: &Node,
+    (t_field, t): (&str, f64),
+    (d_field, d): (&str, f64),
+    surface_pa: f64,
+    density: f64,
+) -> Result<(), InputError> {
+    if t > super::MAX_DURATION_S {
+        return Err(cx.err(node, t_field, super::duration_message(t)));
+    }
+    let p = surface_pa + d.max(0.0) * density * STANDARD_GRAVITY;
+    if p > super::MAX_AMBIENT_PA {
+        return Err(cx.err(
+            node,
+            d_field,
+            format!(
+                "depth {} m is {} Pa absolute, above the accepted {:e} Pa (200 bar, about 2 000 m of sea water)",
+                crate::error::num(d),
+                crate::error::num(p),
+                super::MAX_AMBIENT_PA
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// Sort, merge duplicate times (last wins), clamp negative depths, prepend the surface.
@@ -570,6 +610,14 @@ fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
                     format!("depth '{d}' is not a finite number"),
                 ));
             };
+            check_sample(
+                cx,
+                s,
+                ("sample.time", t),
+                ("sample.depth", d),
+                surface_pa,
+                density_kg_m3,
+            )?;
             raw.push((t, d, s.offset));
         }
         let first_sample = raw.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
@@ -642,6 +690,7 @@ fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
             stated_max_depth_m,
             stated_duration_s: dive.attr("duration").and_then(time_s),
             notes,
+            line: line_at(cx.text, dive.offset),
         });
     }
     Ok(dives)
@@ -793,6 +842,14 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
                     }
                 }
                 if let (Some(t), Some(d)) = (t, d) {
+                    check_sample(
+                        cx,
+                        wp,
+                        ("waypoint.divetime", t),
+                        ("waypoint.depth", d),
+                        surface_pa,
+                        density_kg_m3,
+                    )?;
                     raw.push((t, d, wp.offset));
                 }
             }
@@ -838,6 +895,7 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
             stated_max_depth_m: after("greatestdepth").and_then(num),
             stated_duration_s: after("diveduration").and_then(num),
             notes,
+            line: line_at(cx.text, dive.offset),
         });
     }
     Ok(dives)

@@ -65,16 +65,7 @@ pub fn parse_units(s: &str) -> Result<(TimeUnit, PressureUnit), InputError> {
 
 /// Read a legacy file.
 pub fn read(path: &Path, units: &LegacyUnits) -> Result<PressureHistory, InputError> {
-    let bytes = std::fs::read(path).map_err(|e| {
-        InputError::new(format!("cannot read the profile: {e}; check the path")).in_file(path)
-    })?;
-    let text = String::from_utf8(bytes).map_err(|e| {
-        InputError::new(format!(
-            "not a text file (invalid UTF-8 at byte {}); a legacy profile is lines of `time value`",
-            e.utf8_error().valid_up_to()
-        ))
-        .in_file(path)
-    })?;
+    let text = crate::error::read_text(path, "the profile")?;
     parse(&text, path, units)
 }
 
@@ -91,7 +82,8 @@ pub fn parse(text: &str, path: &Path, units: &LegacyUnits) -> Result<PressureHis
         return Err(InputError::new(
             "the file is empty; a legacy profile has one `time value` pair per line",
         )
-        .in_file(path));
+        .in_file(path)
+        .at_line(1));
     };
     let err = |line: usize, field: &str, msg: String| {
         InputError::new(msg)
@@ -200,8 +192,9 @@ pub fn parse(text: &str, path: &Path, units: &LegacyUnits) -> Result<PressureHis
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "legacy".into());
+    // what is left (a single point) is a problem of the last data line
     PressureHistory::with_gas(label, times, pres, units.gas, units.vapour_pa)
-        .map_err(|e| InputError::new(e).in_file(path))
+        .map_err(|e| InputError::new(e).in_file(path).at_line(last_data + 1))
 }
 
 #[cfg(test)]

@@ -95,7 +95,8 @@ pub fn select_dive(
         return Ok(dives.swap_remove(first - 1));
     }
     let chosen: Vec<_> = dives.drain(first - 1..last).collect();
-    sequence::join(chosen, first).map_err(|m| InputError::new(m).in_file(path).field("dive"))
+    sequence::join_located(chosen, first)
+        .map_err(|(m, line)| InputError::new(m).in_file(path).at_line(line).field("dive"))
 }
 
 /// A logged dive as a pressure history followed by `watch_s` at the surface (on air), with
@@ -108,7 +109,7 @@ pub fn dive_log_history(
 ) -> Result<(PressureHistory, Vec<String>), InputError> {
     let mut notes = dive.notes.clone();
     let mut h = dive.history(vapour_pa)?;
-    let bad = |m: String| InputError::new(format!("dive '{}': {m}", dive.label));
+    let bad = |m: String| InputError::new(format!("dive '{}': {m}", dive.label)).at_line(dive.line);
     let last_p = *h.ambient_pa.last().unwrap_or(&dive.surface_pa);
     let last_depth =
         (last_p - dive.surface_pa) / (dive.density_kg_m3 * crate::units::STANDARD_GRAVITY);

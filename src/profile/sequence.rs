@@ -114,9 +114,17 @@ fn days_from_civil(y: i64, m: i64, d: i64) -> i64 {
 /// start time relative to the first's, the surface intervals between are at depth 0 on air.
 /// Errors name the dive (1-based number `first + k`) and what is missing.
 pub fn join(dives: Vec<ImportedDive>, first: usize) -> Result<ImportedDive, String> {
+    join_located(dives, first).map_err(|(m, _)| m)
+}
+
+/// [`join`], with the error's line in the log (that of the dive it is about).
+pub fn join_located(
+    dives: Vec<ImportedDive>,
+    first: usize,
+) -> Result<ImportedDive, (String, usize)> {
     let mut it = dives.into_iter();
     let Some(mut out) = it.next() else {
-        return Err("no dive to join".into());
+        return Err(("no dive to join".into(), 1));
     };
     let start_of = |d: &ImportedDive, n: usize| {
         d.start
@@ -129,7 +137,7 @@ pub fn join(dives: Vec<ImportedDive>, first: usize) -> Result<ImportedDive, Stri
                 )
             })
     };
-    let t0 = start_of(&out, first)?;
+    let t0 = start_of(&out, first).map_err(|m| (m, out.line))?;
     let first_label = out.label.clone();
     let mut last_label = first_label.clone();
     let mut intervals = Vec::new();
@@ -144,19 +152,25 @@ pub fn join(dives: Vec<ImportedDive>, first: usize) -> Result<ImportedDive, Stri
         let n = first + k + 1;
         let end_depth = out.samples.last().map_or(0.0, |s| s.1);
         if end_depth > 0.0 {
-            return Err(format!(
-                "dive {} ends at {end_depth} m, below the surface: it cannot be followed by dive {n}",
-                n - 1
+            return Err((
+                format!(
+                    "dive {} ends at {end_depth} m, below the surface: it cannot be followed by dive {n}",
+                    n - 1
+                ),
+                d.line,
             ));
         }
-        let offset = start_of(&d, n)? - t0;
+        let offset = start_of(&d, n).map_err(|m| (m, d.line))? - t0;
         let prev_end = out.duration_s();
         if !(offset > prev_end) {
-            return Err(format!(
-                "dive {n} starts ({}) before dive {} ends ({:.0} s after the first dive's start)",
-                d.start.as_deref().unwrap_or(""),
-                n - 1,
-                prev_end
+            return Err((
+                format!(
+                    "dive {n} starts ({}) before dive {} ends ({:.0} s after the first dive's start)",
+                    d.start.as_deref().unwrap_or(""),
+                    n - 1,
+                    prev_end
+                ),
+                d.line,
             ));
         }
         intervals.push(offset - prev_end);

@@ -94,16 +94,14 @@ pub struct TomlProfile {
 
 /// Read and validate a TOML profile file.
 pub fn read(path: &Path) -> Result<TomlProfile, InputError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        InputError::new(format!("cannot read the profile: {e}; check the path")).in_file(path)
-    })?;
+    let text = crate::error::read_text(path, "the profile")?;
     parse(&text, path)
 }
 
 /// Parse and validate TOML profile text; `path` is used in error messages and for the default name.
 pub fn parse(text: &str, path: &Path) -> Result<TomlProfile, InputError> {
     let raw: RawProfile = ::toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
-    validate(raw, text, path)
+    validate(raw, text, path).map_err(|e| crate::error::ensure_line(e, text))
 }
 
 /// 1-based line of a byte offset in `text`.

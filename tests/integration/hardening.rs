@@ -635,60 +635,31 @@ fn legacy_files_and_the_elasticity_command_check_their_numbers() {
 }
 
 /// Every file of the committed corpus `tests/data/hostile/<reader>/` (the hostile-user cases of
-/// issue 11, one file per case) is refused by its reader, quickly, without a panic, naming the
-/// file, and the line where the file name says `.L<line>.`.
+/// issue 11 and the mutants that once failed `mutants`, one file per case) through its reader
+/// with `mutants::read_checked`: no panic, within the time limit, refused (unless the name holds
+/// `.ok.`) naming the file and a line, the line the file name gives as `.L<line>.`.
 #[test]
 fn hostile_corpus_is_refused_by_every_reader() {
-    use decophantom::algorithm::conventions::DECOTENGU;
-    use decophantom::error::InputError;
     let corpus = root().join("tests/data/hostile");
     let mut count = 0;
-    for reader in std::fs::read_dir(&corpus).unwrap().flatten() {
-        let name = reader.file_name().to_string_lossy().into_owned();
-        if !reader.path().is_dir() {
+    for folder in std::fs::read_dir(&corpus).unwrap().flatten() {
+        if !folder.path().is_dir() {
             continue;
         }
-        for f in std::fs::read_dir(reader.path()).unwrap().flatten() {
+        let name = folder.file_name().to_string_lossy().into_owned();
+        let reader = crate::mutants::reader(&name);
+        for f in std::fs::read_dir(folder.path()).unwrap().flatten() {
             let p = f.path();
-            let text = std::fs::read_to_string(&p).unwrap();
-            let t = std::time::Instant::now();
-            let r: Result<(), InputError> = match name.as_str() {
-                "phantom" => parse_phantom(&text, &p).map(|_| ()),
-                "profile" => decophantom::profile::toml::parse(&text, &p).map(|_| ()),
-                "legacy" => decophantom::profile::legacy::read(
-                    &p,
-                    &decophantom::profile::legacy::LegacyUnits::new(
-                        decophantom::units::TimeUnit::Min,
-                        decophantom::units::PressureUnit::Msw,
-                    ),
-                )
-                .map(|_| ()),
-                "waypoints" => decophantom::algorithm::waypoints::read_schedule(
-                    &p,
-                    &DECOTENGU,
-                    decophantom::gas::GasMix::AIR,
-                )
-                .and_then(|s| {
-                    s.to_pressure_history()
-                        .map_err(|m| InputError::new(m).in_file(&p))
-                })
-                .map(|_| ()),
-                "schedule" => {
-                    decophantom::algorithm::Schedule::from_toml_str(&text, &p).map(|_| ())
-                }
-                "algorithm" => decophantom::algorithm::load_algorithm(&p).map(|_| ()),
-                "criteria" => decophantom::risk::config::parse_criteria(&text, &p).map(|_| ()),
-                "divelog" => decophantom::profile::load(&p, &Default::default()).map(|_| ()),
-                "measurements" => decophantom::fit::data::read_measurements(&p).map(|_| ()),
-                other => panic!("no reader for corpus folder '{other}'"),
-            };
-            let e = match r {
-                Ok(()) => panic!("{} was accepted", p.display()),
-                Err(e) => e,
-            };
-            assert!(t.elapsed().as_secs() < 5, "{}", p.display());
-            assert!(e.file.is_some(), "{}: {e}", p.display());
+            let bytes = std::fs::read(&p).unwrap();
             let fname = p.file_name().unwrap().to_string_lossy().into_owned();
+            let r = crate::mutants::read_checked(reader, &p, &bytes)
+                .unwrap_or_else(|m| panic!("{}: {m}", p.display()));
+            let Some(e) = r else {
+                assert!(fname.contains(".ok."), "{} was accepted", p.display());
+                count += 1;
+                continue;
+            };
+            assert!(!fname.contains(".ok."), "{}: refused: {e}", p.display());
             if let Some(l) = fname
                 .split('.')
                 .find_map(|part| part.strip_prefix('L').and_then(|n| n.parse().ok()))
@@ -698,5 +669,135 @@ fn hostile_corpus_is_refused_by_every_reader() {
             count += 1;
         }
     }
-    assert!(count >= 30, "{count}");
+    assert!(count >= 50, "{count}");
+}
+
+/// A duration beyond the 30-day limit (or a depth beyond the accepted pressure) in a dive log,
+/// a waypoint CSV, a legacy file or a measurements CSV is refused naming the file, the line of
+/// the sample or row, and the field.
+#[test]
+fn durations_and_depths_in_logs_and_csvs_name_file_line_and_field() {
+    use decophantom::algorithm::waypoints::parse_waypoints_csv;
+    use decophantom::profile::divelog::parse;
+    let csv = |text: &str| {
+        parse_waypoints_csv(
+            text,
+            Path::new("w.csv"),
+            &decophantom::algorithm::conventions::DECOTENGU,
+            decophantom::gas::GasMix::AIR,
+        )
+        .unwrap_err()
+    };
+    let where_ = |e: &decophantom::error::InputError| {
+        (
+            e.file.clone().unwrap().to_string_lossy().into_owned(),
+            e.line,
+            e.field.clone(),
+        )
+    };
+    // 43 201 min is one minute past 30 days; 1e20 min; 1001 m
+    for (text, line, field) in [
+        ("time_min,depth_m\n0,0\n1,10\n43201,0\n", 4, "time_min"),
+        (
+            "time_min,depth_m\n0,0\n1,10\n1e20,10\n1.1e20,0\n",
+            4,
+            "time_min",
+        ),
+        ("time_min,depth_m\n0,0\n1,1001\n2,0\n", 3, "depth_m"),
+    ] {
+        let e = csv(text);
+        assert_eq!(
+            where_(&e),
+            ("w.csv".into(), Some(line), Some(field.into())),
+            "{e}"
+        );
+    }
+    assert!(csv("time_min,depth_m\n0,0\n1,10\n43201,0\n")
+        .message
+        .contains("30 days"));
+    // exactly 30 days is accepted
+    assert!(parse_waypoints_csv(
+        "time_min,depth_m\n0,0\n1,10\n43200,0\n",
+        Path::new("w.csv"),
+        &decophantom::algorithm::conventions::DECOTENGU,
+        decophantom::gas::GasMix::AIR,
+    )
+    .is_ok());
+    let ssrf = |last: &str| {
+        format!(
+            "<divelog program='subsurface' version='3'><dives>\n<dive number='1'>\n<divecomputer>\n<sample time='0:00 min' depth='0 m' />\n<sample time='2:00 min' depth='20 m' />\n{last}\n</divecomputer>\n</dive>\n</dives></divelog>\n"
+        )
+    };
+    for (last, field) in [
+        ("<sample time='43201:00 min' depth='0 m' />", "sample.time"),
+        ("<sample time='1e20' depth='0 m' />", "sample.time"),
+        ("<sample time='3:00 min' depth='1e9 m' />", "sample.depth"),
+    ] {
+        let e = parse(&ssrf(last), Path::new("d.xml")).unwrap_err();
+        assert_eq!(
+            where_(&e),
+            ("d.xml".into(), Some(6), Some(field.into())),
+            "{e}"
+        );
+    }
+    let uddf = "<uddf><profiledata><repetitiongroup><dive>\n<samples>\n<waypoint><divetime>0</divetime><depth>0</depth></waypoint>\n<waypoint><divetime>3e6</divetime><depth>0</depth></waypoint>\n</samples></dive></repetitiongroup></profiledata></uddf>\n";
+    let e = parse(uddf, Path::new("d.uddf")).unwrap_err();
+    assert_eq!(
+        where_(&e),
+        ("d.uddf".into(), Some(4), Some("waypoint.divetime".into())),
+        "{e}"
+    );
+    // a dive that fits but whose watch time at the surface does not: the dive's line
+    let e = parse(
+        &ssrf("<sample time='43199:00 min' depth='0 m' />"),
+        Path::new("d.xml"),
+    )
+    .map(|d| decophantom::profile::dive_log_history(&d[0], 0.0, 3600.0))
+    .unwrap()
+    .unwrap_err();
+    assert!(e.message.contains("30 days") && e.line == Some(2), "{e}");
+    // measurements: a time past 30 days names its row
+    let e = decophantom::fit::data::parse_measurements(
+        "experiment,bubble,time_s,radius_m\na,0,0,1e-4\na,0,2592001,1e-4\n",
+        Path::new("m.csv"),
+    )
+    .unwrap_err();
+    assert_eq!(
+        where_(&e),
+        ("m.csv".into(), Some(3), Some("time_s".into())),
+        "{e}"
+    );
+}
+
+/// A legacy two-column file read as a schedule (`check --schedule dive.txt`) names the file's
+/// own line and column when the schedule is refused.
+#[test]
+fn legacy_schedules_name_the_files_own_line() {
+    let dir = tempdir("hard-legacy-schedule");
+    // never surfaces: the last line (3) is at 10 m
+    let p = write(&dir, "d.txt", "0 0\n1 10\n20 10\n");
+    let e = decophantom::algorithm::waypoints::read_legacy_schedule(
+        &p,
+        &decophantom::algorithm::conventions::DECOTENGU,
+        decophantom::gas::GasMix::AIR,
+    )
+    .unwrap_err();
+    assert_eq!(
+        (e.line, e.field.as_deref()),
+        (Some(3), Some("value")),
+        "{e}"
+    );
+    // 1001 m on line 2
+    let p = write(&dir, "e.txt", "0 0\n1 1001\n2 0\n");
+    let e = decophantom::algorithm::waypoints::read_legacy_schedule(
+        &p,
+        &decophantom::algorithm::conventions::DECOTENGU,
+        decophantom::gas::GasMix::AIR,
+    )
+    .unwrap_err();
+    assert_eq!(
+        (e.line, e.field.as_deref()),
+        (Some(2), Some("value")),
+        "{e}"
+    );
 }
