@@ -364,6 +364,7 @@ impl RunState {
         sim.nuclei = nuclei;
         sim.time = self.time;
         sim.fields = self.fields;
+        sim.tension_bound = None;
         sim.bubbles = self.bubbles;
         sim.inflow = self.inflow;
         sim.initial_total = self.initial_total;

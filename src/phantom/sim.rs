@@ -260,6 +260,9 @@ pub struct Simulation<'a> {
     pub(super) displaced_gas: f64,
     /// Sub-grid nuclei of the nucleation model ([`Self::nucleate`]).
     pub(super) nuclei: NucleusPool,
+    /// An upper bound of the gel tension anywhere in the gel so far, Pa (`None`: not known,
+    /// computed from the fields when next needed): [`Self::tension_bound`].
+    pub(super) tension_bound: Option<f64>,
 }
 
 fn fibonacci_sphere(n: usize) -> Vec<[f64; 3]> {
@@ -381,6 +384,7 @@ impl<'a> Simulation<'a> {
             displaced: Vec::new(),
             displaced_gas: 0.0,
             nuclei: NucleusPool::default(),
+            tension_bound: None,
         };
         // bubbles placed large enough take their cells out of the gel before the balance
         // reference is taken (the gel was never there)
@@ -407,6 +411,7 @@ impl<'a> Simulation<'a> {
 
     /// Mutable concentration field (for tests that set an initial state).
     pub fn field_mut(&mut self, g: usize) -> &mut [f64] {
+        self.tension_bound = None;
         &mut self.fields[g]
     }
 
@@ -641,7 +646,7 @@ impl<'a> Simulation<'a> {
                 f64::INFINITY
             };
             self.coalesce(t1, p1, &mut log.events)?;
-            self.nucleate(p1, &mut tensions, &mut fluxes, &mut log.events)?;
+            self.nucleate(profile, t, p1, &mut tensions, &mut fluxes, &mut log.events)?;
             self.displace(p1);
             self.check_health()?;
             self.observe(profile, p1, &tensions, observer, &mut log, false)?;
@@ -1464,6 +1469,54 @@ impl Simulation<'_> {
         .map_err(|e| input(&e.field, e.message))
     }
 
+    /// An upper bound of the gel tension (Σ_g C_g·R_u·T/L_g + p_fixed) anywhere in the gel up to
+    /// `t1`, Pa, kept up to date over the step from `t0`: by the discrete maximum principle of
+    /// both diffusion schemes (tested in `diffusion`) the gel's tension never exceeds the
+    /// largest of its initial value, the open faces' and the perfusion's value (the inspired
+    /// inert gas plus p_fixed, at the step's ends and the profile's breakpoints in it) and the
+    /// bubbles' gas pressure (Σ n·R_u·T/V + p_fixed), the sources the exchange draws from.
+    /// [`Self::nucleate`] skips the nuclei while it stays 10 % below their lowest threshold
+    /// (the margin covers a bubble's pressure changing within a step).
+    fn tension_bound(&mut self, profile: &PressureHistory, t0: f64, t1: f64) -> f64 {
+        let fixed = self.params.bubble_fixed_gases;
+        let mut b = match self.tension_bound {
+            Some(b) => b,
+            None => {
+                let k: Vec<f64> = self.ostwald.iter().map(|l| self.rt / l).collect();
+                (0..self.grid.len())
+                    .filter(|&c| self.grid.inside(c))
+                    .map(|c| {
+                        self.fields
+                            .iter()
+                            .zip(&k)
+                            .map(|(f, kg)| f[c] * kg)
+                            .sum::<f64>()
+                    })
+                    .fold(0.0, f64::max)
+                    + fixed
+            }
+        };
+        let inspired = |t: f64| -> f64 {
+            self.gases
+                .iter()
+                .map(|g| profile.inspired_partial_pressure(*g, t))
+                .sum::<f64>()
+                + fixed
+        };
+        b = b.max(inspired(t0)).max(inspired(t1));
+        let first = profile.times_s.partition_point(|&x| x <= t0);
+        for &tb in profile.times_s[first..].iter().take_while(|&&x| x < t1) {
+            b = b.max(inspired(tb));
+        }
+        let ng = self.gases.len();
+        for bubble in self.bubbles.iter().filter(|x| x.active()) {
+            let n: f64 = bubble.moles[..ng].iter().sum();
+            b = b.max(n * self.rt / bubble.volume() + fixed);
+        }
+        self.tension_bound = Some(b);
+        b
+    }
+
     /// The nuclei of the run and their state (empty under the `fixed` model).
     pub fn nuclei(&self) -> &NucleusPool {
         &self.nuclei
@@ -1490,6 +1543,8 @@ impl Simulation<'_> {
     /// `tensions` and `fluxes` (the time loop's per-bubble buffers) grow with the bubbles.
     fn nucleate(
         &mut self,
+        profile: &PressureHistory,
+        t0: f64,
         p1: f64,
         tensions: &mut Vec<f64>,
         fluxes: &mut Vec<Vec<f64>>,
@@ -1510,6 +1565,15 @@ impl Simulation<'_> {
             }
         }
         pool.release(|b| matches!(self.bubbles[b].fate, BubbleFate::Dissolved(_)));
+        // no nucleus can activate while even the bound of the gel tension stays below the
+        // lowest threshold (bare nuclei only: with skins every step records the crushing)
+        if !pool.has_skins() {
+            let bound = self.tension_bound(profile, t0, p1);
+            if bound - p1 < 0.9 * pool.lowest_threshold() {
+                self.nuclei = pool;
+                return Ok(());
+            }
+        }
         let k: Vec<f64> = self.ostwald.iter().map(|l| self.rt / l).collect();
         let fixed = self.params.bubble_fixed_gases;
         let ready = pool.ready(|cell| {

@@ -146,9 +146,7 @@ impl CriteriaSet {
 
 /// Read and validate a criteria file.
 pub fn load_criteria(path: &Path) -> Result<CriteriaSet, InputError> {
-    let text = std::fs::read_to_string(path).map_err(|e| {
-        InputError::new(format!("cannot read the criteria file: {e}")).in_file(path)
-    })?;
+    let text = crate::error::read_text(path, "the criteria file")?;
     parse_criteria(&text, path)
 }
 
@@ -242,11 +240,13 @@ pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError
         }
     }
     if raw.criterion.is_empty() {
-        return Err(InputError::new(
-            "no criteria: add at least one [[criterion]] with kind and limit",
-        )
-        .in_file(path)
-        .field("criterion"));
+        // named at the last line of the file, where the entries would go
+        return Err(crate::error::ensure_line(
+            InputError::new("no criteria: add at least one [[criterion]] with kind and limit")
+                .in_file(path)
+                .field("criterion"),
+            text,
+        ));
     }
     let mut criteria: Vec<ConfiguredCriterion> = Vec::new();
     for (n, mut t) in raw.criterion.into_iter().enumerate() {

@@ -264,6 +264,19 @@ impl NucleusPool {
         self.crush[self.run_of[index]]
     }
 
+    /// Whether the nuclei have VPM skins (then every step records the crushing pressures).
+    pub fn has_skins(&self) -> bool {
+        self.crush_gain > 0.0
+    }
+
+    /// The lowest activation threshold before crushing over the pool, Pa (∞ when empty).
+    pub fn lowest_threshold(&self) -> f64 {
+        self.entries
+            .iter()
+            .map(|e| e.threshold)
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// The largest crushing pressure of each occupied cell, Pa, in the pool's cell order (the
     /// state a checkpoint keeps).
     pub fn crushing(&self) -> &[f64] {
