@@ -4,7 +4,8 @@
 //! dive (at most ~9e5 Pa: critical radius 2γ/s ≥ 0.16 µm) activates none of them
 //! (expected e^(−16)·10 000 ≈ 1e-3): the bench measures what the pool costs every step (one
 //! tension per occupied cell, a threshold compare per nucleus), not the bubbles it would make,
-//! which cost as any bubble does. `cargo bench --bench nucleation` (about 5 minutes).
+//! which cost as any bubble does. `cargo bench --bench nucleation` (about 15 minutes: 10 runs
+//! of ~40 s per case).
 
 use criterion::{criterion_group, criterion_main, Criterion};
 use decophantom::app::simulate::simulate;
