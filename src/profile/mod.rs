@@ -95,7 +95,7 @@ pub fn select_dive(
         return Ok(dives.swap_remove(first - 1));
     }
     let chosen: Vec<_> = dives.drain(first - 1..last).collect();
-    sequence::join_located(chosen, first)
+    sequence::join(chosen, first)
         .map_err(|(m, line)| InputError::new(m).in_file(path).at_line(line).field("dive"))
 }
 

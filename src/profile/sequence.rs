@@ -112,16 +112,9 @@ fn days_from_civil(y: i64, m: i64, d: i64) -> i64 {
 
 /// Join consecutive dives (in log order) into one: each dive's samples start at its logged
 /// start time relative to the first's, the surface intervals between are at depth 0 on air.
-/// Errors name the dive (1-based number `first + k`) and what is missing.
-pub fn join(dives: Vec<ImportedDive>, first: usize) -> Result<ImportedDive, String> {
-    join_located(dives, first).map_err(|(m, _)| m)
-}
-
-/// [`join`], with the error's line in the log (that of the dive it is about).
-pub fn join_located(
-    dives: Vec<ImportedDive>,
-    first: usize,
-) -> Result<ImportedDive, (String, usize)> {
+/// Errors name the dive (1-based number `first + k`), what is missing, and the dive's line in
+/// the log.
+pub fn join(dives: Vec<ImportedDive>, first: usize) -> Result<ImportedDive, (String, usize)> {
     let mut it = dives.into_iter();
     let Some(mut out) = it.next() else {
         return Err(("no dive to join".into(), 1));

@@ -165,6 +165,8 @@ pub struct NucleusPool {
     crush_gain: f64,
     /// γ, N/m.
     surface_tension: f64,
+    /// The lowest [`PoolEntry::threshold`], Pa (∞ when empty); thresholds are fixed at set-up.
+    lowest: f64,
 }
 
 impl NucleusPool {
@@ -233,7 +235,12 @@ impl NucleusPool {
                 start = i;
             }
         }
+        let lowest = entries
+            .iter()
+            .map(|e| e.threshold)
+            .fold(f64::INFINITY, f64::min);
         Ok(NucleusPool {
+            lowest,
             entries,
             crush: vec![0.0; runs.len()],
             runs,
@@ -271,10 +278,11 @@ impl NucleusPool {
 
     /// The lowest activation threshold before crushing over the pool, Pa (∞ when empty).
     pub fn lowest_threshold(&self) -> f64 {
-        self.entries
-            .iter()
-            .map(|e| e.threshold)
-            .fold(f64::INFINITY, f64::min)
+        if self.entries.is_empty() {
+            f64::INFINITY
+        } else {
+            self.lowest
+        }
     }
 
     /// The largest crushing pressure of each occupied cell, Pa, in the pool's cell order (the
