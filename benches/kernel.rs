@@ -41,9 +41,18 @@ fn kernels(c: &mut Criterion) {
         });
         group.bench_with_input(BenchmarkId::new("implicit_step", &label), &g, |b, g| {
             let mut u = u0.clone();
-            let mut scratch = vec![0.0; g.len()];
-            b.iter(|| diffusion::implicit_step(g, &mut u, &mut scratch, D, 20.0, 0.5))
+            let mut solver = diffusion::ImplicitSolver::new();
+            b.iter(|| solver.step(g, &mut u, D, 20.0, 0.5))
         });
+        group.bench_with_input(
+            BenchmarkId::new("implicit_step_generic", &label),
+            &g,
+            |b, g| {
+                let mut u = u0.clone();
+                let mut scratch = vec![0.0; g.len()];
+                b.iter(|| diffusion::implicit_step(g, &mut u, &mut scratch, D, 20.0, 0.5))
+            },
+        );
     }
     group.finish();
 }

@@ -111,6 +111,17 @@ pub struct Grid {
     excluded: std::collections::HashSet<u32>,
     /// The codes the mask gave each cell that exclusion has changed, to restore them.
     base_codes: std::collections::HashMap<u32, [u8; 3]>,
+    /// Identity of the current face codes: a fresh number from a process-wide counter at
+    /// construction and at every change ([`Grid::set_excluded`]), so a solver's cached line
+    /// plan ([`super::diffusion::ImplicitSolver`]) knows when to rebuild.
+    codes_id: u64,
+}
+
+/// A number never handed out before in this process (the grids' `codes_id`).
+fn fresh_codes_id() -> u64 {
+    use std::sync::atomic::{AtomicU64, Ordering};
+    static NEXT: AtomicU64 = AtomicU64::new(1);
+    NEXT.fetch_add(1, Ordering::Relaxed)
 }
 
 /// Most cells a grid may have (0.8 GB per gas field).
@@ -239,6 +250,7 @@ impl Grid {
             }
         }
         let mut grid = Grid {
+            codes_id: fresh_codes_id(),
             excluded: Default::default(),
             base_codes: Default::default(),
             interior_spans: vec![(0u32, 0u32); n[1] * n[2]],
@@ -284,6 +296,7 @@ impl Grid {
         }
         touched.sort_unstable();
         touched.dedup();
+        self.codes_id = fresh_codes_id();
         for &idx in &touched {
             let base = self.base_of(idx);
             self.base_codes.entry(idx as u32).or_insert(base);
@@ -369,6 +382,12 @@ impl Grid {
             }
             None => (0, 0),
         }
+    }
+
+    /// Identity of the current face codes: equal ids mean equal codes (a new id at every
+    /// change; a clone keeps its original's id until either changes).
+    pub fn codes_id(&self) -> u64 {
+        self.codes_id
     }
 
     /// Total number of cells (inside and outside).

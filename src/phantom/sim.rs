@@ -243,6 +243,8 @@ pub struct Simulation<'a> {
     explicit_limit: Vec<f64>,
     pub(super) fields: Vec<Vec<f64>>,
     scratch: Vec<f64>,
+    /// The implicit step's line plan and factor table ([`diffusion::ImplicitSolver`]).
+    implicit: diffusion::ImplicitSolver,
     /// Bubbles (all ever created; check `fate`).
     pub bubbles: Vec<Bubble>,
     rt: f64,
@@ -367,6 +369,7 @@ impl<'a> Simulation<'a> {
         let mut sim = Simulation {
             params,
             scratch: vec![0.0; grid.len()],
+            implicit: diffusion::ImplicitSolver::new(),
             grid,
             gases,
             diffusivity,
@@ -1120,14 +1123,8 @@ impl<'a> Simulation<'a> {
             let d = self.diffusivity[g];
             let inflow = if implicit {
                 let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t + dt) / self.rt;
-                diffusion::implicit_step(
-                    &self.grid,
-                    &mut self.fields[g],
-                    &mut self.scratch,
-                    d,
-                    dt,
-                    cb,
-                )
+                self.implicit
+                    .step(&self.grid, &mut self.fields[g], d, dt, cb)
             } else {
                 let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t) / self.rt;
                 let inflow = diffusion::explicit_step(
