@@ -218,7 +218,7 @@ impl Evaluations {
     /// After a failure: remove the journal if it holds no finished simulation (it is no use to
     /// a restart), else keep it.
     pub fn abandon(&self) {
-        let empty = self.kept.lock().map_or(false, |k| k.is_empty());
+        let empty = self.kept.lock().is_ok_and(|k| k.is_empty());
         if empty {
             self.finish();
         }
