@@ -135,7 +135,7 @@ pub struct FitArgs {
     /// Parameter to fit: a phantom TOML path, optionally with bounds NAME=LO..HI; repeatable.
     #[arg(long = "param")]
     pub params: Vec<String>,
-    /// Output folder (replaced whole).
+    /// Output folder (replaced whole); finished simulations are kept in OUT.partial/ until then, and a restart of the same fit reads them back.
     #[arg(long)]
     pub out: std::path::PathBuf,
 }
@@ -173,7 +173,7 @@ pub struct DiscoverArgs {
     /// experiments.toml.
     #[arg(long)]
     pub experiments: std::path::PathBuf,
-    /// Output folder (replaced whole).
+    /// Output folder (replaced whole); finished simulations are kept in OUT.partial/ until then, and a restart of the same search reads them back.
     #[arg(long)]
     pub out: std::path::PathBuf,
     /// Family-wise significance level (Bonferroni over each round's candidates).

@@ -2,10 +2,14 @@
 //! those the data need. Wiring only: the work is in [`crate::discover`].
 
 use crate::discover::report::discover_outputs;
-use crate::discover::search::{discover, DiscoverOptions, Discovery};
+use crate::discover::search::{discover_with, fingerprint, DiscoverOptions, Discovery};
 use crate::error::{Error, InputError};
-use crate::fit::data::{check_against, read_experiments, read_measurements};
+use crate::fit::data::{
+    check_against, read_experiments, read_measurements, Experiments, Measurements,
+};
+use crate::fit::journal::Evaluations;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// What `discover` needs.
 #[derive(Debug, Clone)]
@@ -31,6 +35,35 @@ pub fn run(
     req: &DiscoverRequest,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Discovery, Error> {
+    let (d, experiments, data) = discover_journaled(req, progress)?;
+    let inputs = [req.measured.as_path(), req.experiments.as_path()];
+    let base_runs = d.baseline.model.run(&experiments, &d.baseline.values)?;
+    let final_runs = d.final_fit.model.run(&experiments, &d.final_fit.values)?;
+    let set = discover_outputs(
+        &d,
+        &base_runs,
+        &final_runs,
+        &experiments,
+        &data,
+        &req.command,
+    )?;
+    set.commit_with_inputs(&req.out, &inputs)?;
+    if let Some(ev) = &d.final_fit.model.evaluations {
+        ev.finish();
+    }
+    Ok(d)
+}
+
+/// The search of `req`, its journal `OUT.partial/` open beside the output folder
+/// ([`crate::fit::journal`]): every simulation of every fit is kept there as it finishes, and
+/// those an earlier, unfinished search of the same work left there are read back instead of
+/// run; a journal of other work is refused (exit 2). Nothing is written to the output folder;
+/// the journal stays open (in the fitted models' `evaluations`) for the caller to finish once
+/// the output is written. Also returns the experiments and measurements read.
+pub fn discover_journaled(
+    req: &DiscoverRequest,
+    progress: &(dyn Fn(usize, usize) + Sync),
+) -> Result<(Discovery, Experiments, Measurements), Error> {
     if !(req.alpha > 0.0 && req.alpha < 1.0) {
         return Err(
             InputError::new(format!("must be in (0, 1) (got {})", req.alpha))
@@ -51,19 +84,21 @@ pub fn run(
         only: req.only.clone(),
         ..DiscoverOptions::default()
     };
-    let d = discover(&experiments, &data, &opts, progress)?;
-    let base_runs = d.baseline.model.run(&experiments, &d.baseline.values)?;
-    let final_runs = d.final_fit.model.run(&experiments, &d.final_fit.values)?;
-    let set = discover_outputs(
-        &d,
-        &base_runs,
-        &final_runs,
+    let fp = fingerprint(&experiments, &data, &opts);
+    let evaluations = Arc::new(Evaluations::open(&req.out, &fp, "discovery")?);
+    match discover_with(
         &experiments,
         &data,
-        &req.command,
-    )?;
-    set.commit_with_inputs(&req.out, &inputs)?;
-    Ok(d)
+        &opts,
+        progress,
+        Some(evaluations.clone()),
+    ) {
+        Ok(d) => Ok((d, experiments, data)),
+        Err(e) => {
+            evaluations.abandon();
+            Err(e)
+        }
+    }
 }
 
 /// A short text summary.
@@ -107,5 +142,8 @@ pub fn summary_text(d: &Discovery) -> String {
         sig(d.final_fit.rmse * 1e6, 4),
         sig(d.numerical.rms * 1e6, 3)
     ));
+    if let Some(ev) = &d.final_fit.model.evaluations {
+        s.push_str(&ev.resumed_text("discovery"));
+    }
     s
 }

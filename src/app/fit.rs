@@ -2,12 +2,16 @@
 //! at once. Wiring only: the work is in [`crate::fit`].
 
 use crate::error::{Error, InputError};
-use crate::fit::data::{check_against, read_experiments, read_measurements};
+use crate::fit::data::{
+    check_against, read_experiments, read_measurements, Experiments, Measurements,
+};
+use crate::fit::journal::Evaluations;
 use crate::fit::lsq::LsqOptions;
 use crate::fit::model::{fit, Fitted, Model};
 use crate::fit::paths::{self, ParamSpec};
 use crate::fit::report::fit_outputs;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 /// What `fit` needs.
 #[derive(Debug, Clone)]
@@ -24,8 +28,36 @@ pub struct FitRequest {
     pub command: String,
 }
 
-/// Fit and write `fit.toml`, `report.md`, `report.html` and the overlays.
+/// Fit and write `fit.toml`, `report.md`, `report.html` and the overlays; the journal
+/// ([`fit_journaled`]) is removed once they are written.
 pub fn run(req: &FitRequest) -> Result<Fitted, Error> {
+    let (fitted, experiments, data) = fit_journaled(req)?;
+    let model = &fitted.model;
+    let start_runs = model.run(&experiments, &model.start())?;
+    let fitted_runs = model.run(&experiments, &fitted.values)?;
+    let set = fit_outputs(
+        &fitted,
+        &start_runs,
+        &fitted_runs,
+        &experiments,
+        &data,
+        &req.command,
+    )?;
+    let inputs = [req.measured.as_path(), req.experiments.as_path()];
+    set.commit_with_inputs(&req.out, &inputs)?;
+    if let Some(ev) = &model.evaluations {
+        ev.finish();
+    }
+    Ok(fitted)
+}
+
+/// The fit of `req`, its journal `OUT.partial/` open beside the output folder
+/// ([`crate::fit::journal`]): every simulation is kept there as it finishes, and those an
+/// earlier, unfinished fit of the same work left there are read back instead of run; a journal
+/// of other work is refused (exit 2). Nothing is written to the output folder; the journal
+/// stays open (in the fitted model's [`Model::evaluations`]) for the caller to finish once the
+/// output is written. Also returns the experiments and measurements read.
+pub fn fit_journaled(req: &FitRequest) -> Result<(Fitted, Experiments, Measurements), Error> {
     // the output folder is checked before any fitting (and again at the commit)
     let inputs = [req.measured.as_path(), req.experiments.as_path()];
     crate::report::output::check_target(&req.out, &inputs)?;
@@ -68,25 +100,24 @@ pub fn run(req: &FitRequest) -> Result<Fitted, Error> {
         .into());
     }
     let weights = data.weights();
-    let fitted = fit(
-        &model,
-        &experiments,
-        &data,
-        &weights,
-        &LsqOptions::default(),
-    )?;
-    let start_runs = model.run(&experiments, &model.start())?;
-    let fitted_runs = model.run(&experiments, &fitted.values)?;
-    let set = fit_outputs(
-        &fitted,
-        &start_runs,
-        &fitted_runs,
-        &experiments,
-        &data,
-        &req.command,
-    )?;
-    set.commit_with_inputs(&req.out, &inputs)?;
-    Ok(fitted)
+    let opts = LsqOptions::default();
+    let fingerprint = crate::fit::journal::fingerprint(
+        "fit",
+        &[
+            crate::fit::journal::work_text(&experiments, &data),
+            format!("free {:?}", model.free),
+            format!("{opts:?}"),
+        ],
+    );
+    let evaluations = Arc::new(Evaluations::open(&req.out, &fingerprint, "fit")?);
+    let model = model.with_evaluations(Some(evaluations.clone()));
+    match fit(&model, &experiments, &data, &weights, &opts) {
+        Ok(fitted) => Ok((fitted, experiments, data)),
+        Err(e) => {
+            evaluations.abandon();
+            Err(e)
+        }
+    }
 }
 
 /// A short text summary of a fit.
@@ -111,5 +142,8 @@ pub fn summary_text(f: &Fitted) -> String {
         sig(f.aicc, 5),
         f.lsq.termination
     ));
+    if let Some(ev) = &f.model.evaluations {
+        s.push_str(&ev.resumed_text("fit"));
+    }
     s
 }

@@ -261,7 +261,11 @@ fn try_candidate(
     for (s, v) in free.iter_mut().zip(&base_values) {
         s.start = *v;
     }
-    let mut model = Model { docs, free };
+    let mut model = Model {
+        docs,
+        free,
+        evaluations: current.model.evaluations.clone(),
+    };
     // start: the best of the null and a scan (of the first parameter, and of the second with it)
     if let Some(first) = prepared.params.first() {
         let y = observed(data);
@@ -349,7 +353,39 @@ pub fn discover(
     opts: &DiscoverOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Discovery, Error> {
-    let base = Model::baseline(experiments)?;
+    discover_with(experiments, data, opts, progress, None)
+}
+
+/// The first line of the journal of a search ([`crate::fit::journal`]): the measurements, the
+/// experiments, the settings and the candidates.
+pub fn fingerprint(
+    experiments: &Experiments,
+    data: &Measurements,
+    opts: &DiscoverOptions,
+) -> String {
+    let docs: Vec<toml::Table> = experiments.list.iter().map(|e| e.phantom.clone()).collect();
+    let names: Vec<String> = all_candidates(&docs).iter().map(|c| c.name()).collect();
+    crate::fit::journal::fingerprint(
+        "discover",
+        &[
+            crate::fit::journal::work_text(experiments, data),
+            format!("{opts:?}"),
+            format!("candidates {names:?}"),
+        ],
+    )
+}
+
+/// [`discover`] with every simulation of every fit kept in (and read back from) `evaluations`
+/// ([`crate::fit::journal`]): a search is deterministic, so a restart of the same search with
+/// the journal of an unfinished one replays it and runs only the simulations not yet there.
+pub fn discover_with(
+    experiments: &Experiments,
+    data: &Measurements,
+    opts: &DiscoverOptions,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    evaluations: Option<std::sync::Arc<crate::fit::journal::Evaluations>>,
+) -> Result<Discovery, Error> {
+    let base = Model::baseline(experiments)?.with_evaluations(evaluations);
     let n = data.len();
     let sd_given = data.has_sd();
     let unit = data.weights();

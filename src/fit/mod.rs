@@ -6,6 +6,7 @@
 
 pub mod data;
 pub mod growth;
+pub mod journal;
 pub mod lsq;
 pub mod model;
 pub mod paths;

@@ -7,6 +7,7 @@
 //! phantom that has the path, or in every phantom if none has it (a setting at its default).
 
 use super::data::{build_params, Experiments, Measurements};
+use super::journal::{self, Evaluations};
 use super::lsq::{infer_with, minimize, Inference, LsqOptions, LsqResult};
 use super::paths::{self, ParamSpec};
 use super::stats::aicc;
@@ -15,6 +16,7 @@ use crate::error::Error;
 use crate::phantom::params::Numerics;
 use crate::phantom::sim::{Event, Frame};
 use rayon::prelude::*;
+use std::sync::Arc;
 
 /// Phantom documents (one per experiment, in the experiments file's order) and free parameters.
 #[derive(Debug, Clone)]
@@ -23,6 +25,10 @@ pub struct Model {
     pub docs: Vec<toml::Table>,
     /// Free parameters.
     pub free: Vec<ParamSpec>,
+    /// Where [`Model::predict`] keeps every simulation it runs and finds those already run
+    /// (the journal of a `fit` or `discover` into an output folder), or none. Shared by the
+    /// models derived from this one.
+    pub evaluations: Option<Arc<Evaluations>>,
 }
 
 /// Write `value` at `path` in every document that has it, or in all if none has it.
@@ -106,7 +112,17 @@ impl Model {
             };
             free.push(ParamSpec::parse(p, base)?);
         }
-        Ok(Model { docs, free })
+        Ok(Model {
+            docs,
+            free,
+            evaluations: None,
+        })
+    }
+
+    /// This model with its simulations kept in (and read back from) `evaluations`.
+    pub fn with_evaluations(mut self, evaluations: Option<Arc<Evaluations>>) -> Model {
+        self.evaluations = evaluations;
+        self
     }
 
     /// Documents with the free parameters at `values` (and frames recorded every step).
@@ -142,16 +158,79 @@ impl Model {
             .collect()
     }
 
-    /// Simulated radius at every observation (measurement order) at `values`.
+    /// Simulated radius at every observation (measurement order) at `values`: every
+    /// experiment's simulation in parallel, or, with [`Model::evaluations`], read back from
+    /// there when it was run before (the same bits), else run and kept there.
     pub fn predict(
         &self,
         experiments: &Experiments,
         data: &Measurements,
         values: &[f64],
     ) -> Result<Vec<f64>, Error> {
-        let runs = self.run(experiments, values)?;
-        Ok(sample(experiments, data, &runs))
+        let docs = self
+            .docs_at(values)
+            .map_err(|m| Error::Input(crate::error::InputError::new(m)))?;
+        let per: Vec<Vec<f64>> = experiments
+            .list
+            .par_iter()
+            .zip(docs.par_iter())
+            .enumerate()
+            .map(|(k, (e, d))| {
+                let kept = self
+                    .evaluations
+                    .as_ref()
+                    .and_then(|ev| journal::key(k, d).map(|key| (ev, key)));
+                if let Some((ev, key)) = kept {
+                    if let Some(s) = ev.get(key, observations_of(experiments, data, k)) {
+                        return Ok(s);
+                    }
+                }
+                let params = build_params(d, &e.phantom_path)?;
+                let run = run_one(&params, &e.profile)?;
+                let s = sample_experiment(experiments, data, k, &run);
+                if let Some((ev, key)) = kept {
+                    ev.record(key, &s)?;
+                }
+                Ok(s)
+            })
+            .collect::<Result<_, Error>>()?;
+        // back into measurement order
+        let mut next = vec![0usize; per.len()];
+        let mut out = Vec::with_capacity(data.len());
+        for s in &data.series {
+            let k = experiments.index_of(&s.experiment);
+            out.extend_from_slice(&per[k][next[k]..next[k] + s.points.len()]);
+            next[k] += s.points.len();
+        }
+        Ok(out)
     }
+}
+
+/// Number of observations of experiment `k`.
+fn observations_of(experiments: &Experiments, data: &Measurements, k: usize) -> usize {
+    data.series
+        .iter()
+        .filter(|s| experiments.index_of(&s.experiment) == k)
+        .map(|s| s.points.len())
+        .sum()
+}
+
+/// The simulated radius at every observation of experiment `k` (measurement order) from its run.
+fn sample_experiment(
+    experiments: &Experiments,
+    data: &Measurements,
+    k: usize,
+    run: &SimRun,
+) -> Vec<f64> {
+    data.series
+        .iter()
+        .filter(|s| experiments.index_of(&s.experiment) == k)
+        .flat_map(|s| {
+            s.points
+                .iter()
+                .map(|p| radius_at(&run.frames, &run.summary.events, s.bubble, p.time))
+        })
+        .collect()
 }
 
 /// Grids up to this many cells run on one thread: a fit's parallelism is across simulations

@@ -107,6 +107,7 @@ pub fn model_with(experiments: &Experiments, effects: &[EffectSetting]) -> Resul
     Ok(Model {
         docs,
         free: Vec::new(),
+        evaluations: None,
     })
 }
 

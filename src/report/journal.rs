@@ -1,5 +1,6 @@
-//! Journals of work made of many runs (`sensitivity`, `evaluate`): a folder `OUT.partial/`
-//! beside the output folder, kept until the output folder is committed.
+//! Journals of work made of many runs (`sensitivity`, `evaluate`; the simulations of `fit` and
+//! `discover`, [`crate::fit::journal`]): a folder `OUT.partial/` beside the output folder, kept
+//! until the output folder is committed.
 //!
 //! The journal's first file starts with the work's fingerprint line and is its commit log: a
 //! run counts as done once its line is there. Whatever else the run leaves (lines in the
@@ -41,7 +42,7 @@ impl Journal {
     /// What an earlier, unfinished run of the same work left in the journal of `out`: the text
     /// of each of the files `names` (the first without its fingerprint line; a missing file is
     /// empty), or `None` without a journal. A journal whose first line is not `fingerprint`
-    /// belongs to other work (`what`: "study", "evaluation") and is refused.
+    /// belongs to other work (`what`: "study", "evaluation", "fit", "discovery") and is refused.
     pub fn previous(
         out: &Path,
         fingerprint: &str,

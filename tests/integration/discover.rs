@@ -627,3 +627,190 @@ fn fit_and_discover_commands_write_their_reports_and_refuse_bad_data() {
         assert!(!never.exists(), "case {i}: output written");
     }
 }
+
+/// The lab of the journal tests: the two experiments on a 400 µm grid (512 cells), data with a
+/// hidden surface permeability sampled every 20 s. Returns (experiments file, measurements file).
+fn journal_lab(name: &str) -> (PathBuf, PathBuf, PathBuf) {
+    let dir = tempdir(name);
+    let e = lab(&dir, "air", 3.2e-3, 400e-6, false);
+    let ex = read_experiments(&e).unwrap();
+    let csv = synthesize(
+        &ex,
+        &[EffectSetting::parse("surface-permeability=30").unwrap()],
+        NOISE,
+        20.0,
+        3,
+    )
+    .unwrap();
+    let m = dir.join("m.csv");
+    std::fs::write(&m, csv).unwrap();
+    (dir, e, m)
+}
+
+/// Cut the journal of `out` as a kill would leave it: its first `keep` simulations (of the
+/// lines in it), then half of the next line. Returns the keys of the lines kept and the number
+/// of simulations the journal held.
+fn cut_journal(out: &Path, keep_fraction: f64) -> (std::collections::BTreeSet<String>, usize) {
+    let file = decophantom::report::journal::dir_of(out).join(decophantom::fit::journal::FILE);
+    let text = std::fs::read_to_string(&file).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[0].starts_with("# decophantom "), "{}", lines[0]);
+    let n = lines.len() - 1;
+    let keep = ((n as f64 * keep_fraction) as usize).clamp(1, n - 1);
+    let mut cut = String::new();
+    for l in &lines[..=keep] {
+        cut.push_str(l);
+        cut.push('\n');
+    }
+    let next = lines[keep + 1];
+    cut.push_str(&next[..next.len() / 2]);
+    std::fs::write(&file, cut).unwrap();
+    let keys = lines[1..=keep]
+        .iter()
+        .map(|l| l.split(' ').next().unwrap().to_string())
+        .collect();
+    (keys, n)
+}
+
+/// "K model simulations read back from the journal of an unfinished WHAT, M run" → (K, M).
+fn read_back(stdout: &str, what: &str) -> (usize, usize) {
+    let tail = format!(" model simulations read back from the journal of an unfinished {what}, ");
+    let line = stdout
+        .lines()
+        .find(|l| l.contains(&tail))
+        .unwrap_or_else(|| panic!("no read-back line in {stdout}"));
+    let (k, rest) = line.split_once(&tail).unwrap();
+    (
+        k.trim().parse().unwrap(),
+        rest.trim_end_matches(" run").parse().unwrap(),
+    )
+}
+
+/// Every file of `a` is in `b` with the same bytes.
+fn assert_same_folder(a: &Path, b: &Path) {
+    let mut compared = 0;
+    for e in std::fs::read_dir(a).unwrap() {
+        let name = e.unwrap().file_name();
+        let x = std::fs::read(a.join(&name)).unwrap();
+        let y = std::fs::read(b.join(&name)).unwrap();
+        assert!(x == y, "{name:?} differs after the restart");
+        compared += 1;
+    }
+    assert_eq!(compared, std::fs::read_dir(b).unwrap().count());
+    assert!(compared >= 4, "{compared} files");
+}
+
+/// Run `args` (a `fit` or `discover` command line ending in `--out OUT`) whole, keep its
+/// output as the reference, leave the journal of an unfinished run of the same work in OUT's
+/// place (`journaled`: the library's journaled fit or search, the journal not finished), cut it
+/// as a kill would, and run `args` again: the same files, byte for byte, the simulations of the
+/// journal read back; then a journal of other work is refused.
+fn restart_gives_the_same_output(
+    dir: &Path,
+    args: &[&str],
+    what: &str,
+    journaled: &dyn Fn(&Path) -> std::sync::Arc<decophantom::fit::journal::Evaluations>,
+) {
+    let out = dir.join("out");
+    let reference = dir.join("reference");
+    let mut full: Vec<&str> = args.to_vec();
+    full.extend(["--out", out.to_str().unwrap()]);
+    let o = cmd(&full);
+    ok(&o);
+    assert!(!String::from_utf8_lossy(&o.stdout).contains("read back"));
+    assert!(!decophantom::report::journal::dir_of(&out).exists());
+    std::fs::rename(&out, &reference).unwrap();
+    // an unfinished run into the same folder: every simulation journaled, no output written
+    let ev = journaled(&out);
+    assert_eq!(ev.read_back(), 0);
+    let simulated = ev.simulated();
+    let jdir = ev.dir().unwrap();
+    assert_eq!(jdir, dir.join("out.partial"));
+    assert!(!out.exists());
+    drop(ev);
+    let (kept, lines) = cut_journal(&out, 0.5);
+    assert_eq!(lines, simulated);
+    let o = cmd(&full);
+    ok(&o);
+    let (k, m) = read_back(&String::from_utf8_lossy(&o.stdout), what);
+    eprintln!("{what}: {k} of {lines} simulations read back, {m} run");
+    // every simulation kept is one the replay needs; only the others were run again
+    assert_eq!(k, kept.len());
+    assert!(k > 0 && m > 0 && m < simulated, "{k} read back, {m} run");
+    assert_same_folder(&reference, &out);
+    assert!(!jdir.exists());
+    // a journal of other work is refused, not mixed in, naming --out
+    let other = dir.join("other");
+    let ojdir = decophantom::report::journal::dir_of(&other);
+    std::fs::create_dir_all(&ojdir).unwrap();
+    std::fs::write(
+        ojdir.join(decophantom::fit::journal::FILE),
+        format!("# decophantom 0.1.0 {} 0\n", args[0]),
+    )
+    .unwrap();
+    let mut full: Vec<&str> = args.to_vec();
+    full.extend(["--out", other.to_str().unwrap()]);
+    let o = cmd(&full);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!("journal of a different {what}")) && err.contains("--out"),
+        "{err}"
+    );
+    assert!(!other.exists());
+}
+
+#[test]
+fn fit_journal_keeps_finished_simulations_and_skips_them_on_restart() {
+    let (dir, e, m) = journal_lab("fit-journal");
+    let param = "scale:gases.*.diffusivity=0.01..10";
+    let args = [
+        "fit",
+        "--measured",
+        m.to_str().unwrap(),
+        "--experiments",
+        e.to_str().unwrap(),
+        "--param",
+        param,
+    ];
+    restart_gives_the_same_output(&dir, &args, "fit", &|out| {
+        let req = decophantom::app::fit::FitRequest {
+            measured: m.clone(),
+            experiments: e.clone(),
+            params: vec![param.into()],
+            out: out.to_path_buf(),
+            command: String::new(),
+        };
+        let (f, _, _) = decophantom::app::fit::fit_journaled(&req).unwrap();
+        f.model.evaluations.clone().unwrap()
+    });
+}
+
+#[test]
+fn discover_journal_keeps_finished_simulations_and_skips_them_on_restart() {
+    let (dir, e, m) = journal_lab("discover-journal");
+    let args = [
+        "discover",
+        "--measured",
+        m.to_str().unwrap(),
+        "--experiments",
+        e.to_str().unwrap(),
+        "--only",
+        "surface-permeability",
+        "--max-effects",
+        "1",
+    ];
+    restart_gives_the_same_output(&dir, &args, "discovery", &|out| {
+        let req = decophantom::app::discover::DiscoverRequest {
+            measured: m.clone(),
+            experiments: e.clone(),
+            out: out.to_path_buf(),
+            alpha: 0.01,
+            max_effects: 1,
+            only: vec!["surface-permeability".into()],
+            command: String::new(),
+        };
+        let (d, _, _) = decophantom::app::discover::discover_journaled(&req, &|_, _| {}).unwrap();
+        d.final_fit.model.evaluations.clone().unwrap()
+    });
+}
