@@ -123,6 +123,13 @@ struct SyncPtr(*mut f64);
 unsafe impl Send for SyncPtr {}
 unsafe impl Sync for SyncPtr {}
 
+impl SyncPtr {
+    /// The pointer (a method, so that a closure captures the whole `Send` wrapper).
+    fn get(self) -> *mut f64 {
+        self.0
+    }
+}
+
 /// Solve (I − r·A_d) u* = u (+ boundary terms) along direction `dir` in place; `cp` is scratch
 /// of the grid's length. Lines are independent tridiagonal systems; a line segment begins
 /// wherever a cell's minus side is not an interior face.
@@ -460,13 +467,12 @@ fn sweep_planned(grid: &Grid, dir: usize, index: &[u16], table: &[Factor], u: &m
     let up = SyncPtr(u.as_mut_ptr());
     let len = u.len();
     items.par_iter().for_each(|&(b, lo, hi)| {
-        let up = up;
         let base = b * block_stride;
         // SAFETY: the work items cover disjoint sets of lines and each touches only its own
         // cells (as in `sweep`); every index is below `len` (checked in debug builds), and
         // the table indices were built for this grid's size.
         unsafe {
-            let u = std::slice::from_raw_parts_mut(up.0, len);
+            let u = std::slice::from_raw_parts_mut(up.get(), len);
             let cell = |a: usize, i: usize| base + a * along_stride + i * inner_stride;
             // forward elimination; the first row of a line has no previous row
             for i in lo..hi {
