@@ -59,6 +59,11 @@ pub fn refine(doc: &mut toml::Table) -> Result<(), String> {
         let v = paths::get(doc, p).unwrap_or(def);
         paths::set(doc, p, v / 2.0)?;
     }
+    // backward Euler's local error goes as dt²: half the step is a quarter of the error
+    let tol = paths::get(doc, "numerics.field_tolerance").unwrap_or(d.field_tolerance);
+    if tol.is_finite() {
+        paths::set(doc, "numerics.field_tolerance", tol / 4.0)?;
+    }
     Ok(())
 }
 

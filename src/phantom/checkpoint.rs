@@ -60,7 +60,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 /// Version of the file format written; files of other versions are refused.
-pub const FORMAT_VERSION: u32 = 1;
+pub const FORMAT_VERSION: u32 = 2;
 /// The first eight bytes of every checkpoint file.
 pub const MAGIC: &[u8; 8] = b"DCPHCKPT";
 /// Name of the checkpoint file in its folder.
@@ -256,6 +256,9 @@ pub struct RunState {
     /// skins; all 0 without).
     crushing: Vec<f64>,
     steps_state: Vec<StepExchange>,
+    /// The field error estimate's history: per gas the last step's change, and its length.
+    last_change: Vec<Vec<f64>>,
+    last_dt: f64,
     looping: LoopState,
 }
 
@@ -274,6 +277,8 @@ impl RunState {
             nuclei: sim.nuclei.entries().iter().map(|e| e.bubble).collect(),
             crushing: sim.nuclei.crushing().to_vec(),
             steps_state: sim.steps_state.clone(),
+            last_change: sim.last_change.clone(),
+            last_dt: sim.last_dt,
             looping,
         }
     }
@@ -371,6 +376,18 @@ impl RunState {
         sim.displaced_gas = self.displaced_gas;
         sim.displaced = self.displaced;
         sim.steps_state = self.steps_state;
+        if !self.last_change.is_empty()
+            && (self.last_change.len() != sim.fields.len()
+                || self.last_change.iter().any(|f| f.len() != cells))
+        {
+            return Err(format!(
+                "it holds a field-error history of {} fields; this run has {} of {cells} cells",
+                self.last_change.len(),
+                sim.fields.len()
+            ));
+        }
+        sim.last_change = self.last_change;
+        sim.last_dt = self.last_dt;
         Ok((sim, self.looping))
     }
 }
@@ -547,6 +564,11 @@ impl Enc {
             self.f64s(&st.flux);
             self.u8(st.open as u8);
         }
+        self.usize(s.last_change.len());
+        for f in &s.last_change {
+            self.f64s(f);
+        }
+        self.f64(s.last_dt);
         let lp = &s.looping;
         let log = &lp.log;
         self.f64(log.max_radius.0);
@@ -564,6 +586,7 @@ impl Enc {
         self.f64(log.next_record);
         self.f64(lp.dt_prev);
         self.f64(lp.bubble_dt);
+        self.f64(lp.field_dt);
         self.f64s(&lp.tensions);
         self.usize(lp.fluxes.len());
         for f in &lp.fluxes {
@@ -595,7 +618,8 @@ fn seal(mut e: Enc) -> Vec<u8> {
 
 /// The bytes of a checkpoint of `state` (with the `frames` recorded up to it) for `inputs`.
 pub fn encode(inputs: &Inputs, state: &RunState, frames: &[Frame]) -> Vec<u8> {
-    let cells: usize = state.fields.iter().map(|f| f.len()).sum();
+    let cells: usize = state.fields.iter().map(|f| f.len()).sum::<usize>()
+        + state.last_change.iter().map(|f| f.len()).sum::<usize>();
     let mut e = open_frame(MAGIC, cells * 8 + frames.len() * 128 + 4096);
     e.usize(inputs.sections.len());
     for s in &inputs.sections {
@@ -838,6 +862,9 @@ impl Dec<'_> {
                 open: self.bool()?,
             });
         }
+        let n = self.len(8)?;
+        let last_change = (0..n).map(|_| self.f64s()).collect::<Res<Vec<_>>>()?;
+        let last_dt = self.f64()?;
         let max_radius = (self.f64()?, self.f64()?, self.usize()?);
         let peak_volume = (self.f64()?, self.f64()?);
         let min_concentration = self.f64()?;
@@ -847,6 +874,7 @@ impl Dec<'_> {
         let next_record = self.f64()?;
         let dt_prev = self.f64()?;
         let bubble_dt = self.f64()?;
+        let field_dt = self.f64()?;
         let tensions = self.f64s()?;
         let n = self.len(8)?;
         let fluxes = (0..n).map(|_| self.f64s()).collect::<Res<Vec<_>>>()?;
@@ -862,6 +890,8 @@ impl Dec<'_> {
             nuclei,
             crushing,
             steps_state,
+            last_change,
+            last_dt,
             looping: LoopState {
                 log: RunLog {
                     max_radius,
@@ -874,6 +904,7 @@ impl Dec<'_> {
                 },
                 dt_prev,
                 bubble_dt,
+                field_dt,
                 tensions,
                 fluxes,
             },

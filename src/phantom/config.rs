@@ -102,6 +102,7 @@ struct RawNumerics {
     max_pressure_change: Option<f64>,
     max_content_change: Option<f64>,
     bubble_tolerance: Option<f64>,
+    field_tolerance: Option<f64>,
     kernel_min_cells: Option<f64>,
     coupling_gap_cells: Option<f64>,
     record_interval_s: Option<f64>,
@@ -554,6 +555,17 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
             1.0,
             "(relative change)",
         )?,
+        field_tolerance: match n.field_tolerance {
+            None => d.field_tolerance,
+            Some(x) if x == f64::INFINITY => x,
+            Some(x) => in_range(
+                "numerics.field_tolerance",
+                positive("numerics.field_tolerance", x)?,
+                1e-9,
+                1.0,
+                "(fraction of the ambient pressure)",
+            )?,
+        },
         kernel_min_cells: in_range(
             "numerics.kernel_min_cells",
             positive(

@@ -505,6 +505,66 @@ fn sweep_planned(grid: &Grid, dir: usize, index: &[u16], table: &[Factor], u: &m
     });
 }
 
+/// The field-error pass of a step ([`super::sim`]'s `diffuse`): with `after` the field at
+/// the end of the step and `before_to_error` at its start, stores each inside cell's change
+/// δ = after − before in `change` (which held the last step's change δ'), overwrites
+/// `before_to_error` with the raw error vector δ − ratio·δ' (0 outside), and returns its
+/// largest magnitude (ratio = this step over the last). A max over per-plane maxima:
+/// independent of the number of threads.
+pub fn change_and_error(
+    grid: &Grid,
+    after: &[f64],
+    before_to_error: &mut [f64],
+    change: &mut [f64],
+    ratio: f64,
+) -> f64 {
+    let plane = grid.n[0] * grid.n[1];
+    let inside = &grid.codes[0];
+    change
+        .par_chunks_mut(plane)
+        .zip(before_to_error.par_chunks_mut(plane))
+        .enumerate()
+        .map(|(k, (slab, err))| {
+            let lo = k * plane;
+            let mut worst: f64 = 0.0;
+            for (q, (last, e)) in slab.iter_mut().zip(err.iter_mut()).enumerate() {
+                let idx = lo + q;
+                if inside[idx] & INSIDE_BIT == 0 {
+                    *last = 0.0;
+                    *e = 0.0;
+                    continue;
+                }
+                let delta = after[idx] - *e;
+                let x = delta - ratio * *last;
+                worst = worst.max(x.abs());
+                *e = x;
+                *last = delta;
+            }
+            worst
+        })
+        .reduce(|| 0.0, f64::max)
+}
+
+/// Root mean square of `field` over the inside cells. Per-plane sums added in plane order:
+/// independent of the thread count.
+pub fn rms_inside(grid: &Grid, field: &[f64]) -> f64 {
+    let plane = grid.n[0] * grid.n[1];
+    let inside = &grid.codes[0];
+    let per_plane: Vec<f64> = field
+        .par_chunks(plane)
+        .enumerate()
+        .map(|(k, slab)| {
+            let codes = &inside[k * plane..(k + 1) * plane];
+            slab.iter()
+                .zip(codes)
+                .filter(|(_, c)| *c & INSIDE_BIT != 0)
+                .map(|(x, _)| x * x)
+                .sum::<f64>()
+        })
+        .collect();
+    (per_plane.iter().sum::<f64>() / grid.n_inside.max(1) as f64).sqrt()
+}
+
 /// Weights of the exact solution of the perfusion term over one step, for
 /// [`perfusion_step`]: with the blood value C_b(t) linear over the step (C_b0 → C_b1),
 /// dC/dt = −k·(C − C_b(t)) integrates exactly to

@@ -49,7 +49,8 @@ pub enum BubblePlacement {
 /// positivity limit, locally-one-dimensional backward Euler otherwise.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Numerics {
-    /// Largest time step, s. Default 20.
+    /// Largest time step, s: a safety cap; the steps follow the error estimates of the field
+    /// (`field_tolerance`) and the bubbles (`bubble_tolerance`) and the other limits. Default 600.
     pub max_step: f64,
     /// Largest change of ambient pressure per step as a fraction of ambient. Default 0.01.
     pub max_pressure_change: f64,
@@ -67,6 +68,13 @@ pub struct Numerics {
     /// dissolution time −0.26 %; at 0.007: −0.25 %, −0.38 %; Euler exchange without the
     /// control: −1.9 % and −1.2 %).
     pub bubble_tolerance: f64,
+    /// Error tolerance of the gel's diffusion per step, as a fraction of the ambient
+    /// pressure: the estimated local error of the gas tension in any cell
+    /// (`Simulation::diffuse`: the variable-step estimate of backward Euler's error from the
+    /// last two steps' changes) is kept near this; the next step is 0.9·dt·√(tol/estimate)
+    /// (steps are not rejected). Infinite switches the estimate off (steps then follow
+    /// `max_step` and the other limits alone). Default 2e-4.
+    pub field_tolerance: f64,
     /// Radius of the bubble's sink kernel in the 3-D grid: max(R, this × h). Default 1.0.
     pub kernel_min_cells: f64,
     /// Gap between the kernel (or the surface layer) and the coupling sphere ρ at which the
@@ -107,6 +115,7 @@ impl Default for Numerics {
             max_pressure_change: 0.01,
             max_content_change: 0.03,
             bubble_tolerance: 0.004,
+            field_tolerance: f64::INFINITY,
             kernel_min_cells: 1.0,
             coupling_gap_cells: 1.0,
             record_interval: 1.0,

@@ -248,9 +248,14 @@ fn durations_beyond_thirty_days_are_refused() {
 #[test]
 fn runs_estimated_at_hours_need_force() {
     let dir = tempdir("hard-cost");
-    let big = good_phantom()
-        .replace("[2e-3, 2e-3, 2e-3]", "[10e-3, 10e-3, 10e-3]")
-        .replace("grid_step_m = 2e-4", "grid_step_m = 5e-5");
+    // steps capped at 20 s: the estimate counts duration / max_step (a month at 20 s on
+    // 8 M cells is hours by SECONDS_PER_CELL_STEP)
+    let big = format!(
+        "{}[numerics]\nmax_step_s = 20.0\n",
+        good_phantom()
+            .replace("[2e-3, 2e-3, 2e-3]", "[10e-3, 10e-3, 10e-3]")
+            .replace("grid_step_m = 2e-4", "grid_step_m = 5e-5")
+    );
     let ph = write(&dir, "big.toml", &big);
     let month = write(
         &dir,
