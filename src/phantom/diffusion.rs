@@ -280,7 +280,8 @@ const MIN_RUN: usize = 8;
 /// its last row) the plus end.
 ///
 /// The indices are stored in the layout the kernel walks (see the module doc): for y and z the
-/// grid's own order; for x transposed per z-plane (cell (i, j, k) at k·nx·ny + i·ny + j). In
+/// grid's own order; for x transposed per z-plane (cell (i, j, k) at (k·nx + i)·s + j, s = ny padded by
+/// [`x_row_stride`]). In
 /// that layout every direction's data is a sequence of rows (x: per plane, one row per i, of
 /// ny cells; y: per plane, one row per j, of nx cells; z: one row per k, of nx·ny cells), and
 /// `runs` cuts each row into stretches of equal index (broadcast factors) and mixed stretches.
@@ -351,8 +352,9 @@ impl LinePlan {
                 out[idx] = (1 + (start_open * 3 + end) * max_len + k) as u16;
             }
         }
-        // x: transposed per plane
-        let mut xt = vec![0u16; len];
+        // x: transposed per plane (rows of ny cells, `xstride` apart)
+        let xstride = x_row_stride(ny);
+        let mut xt = vec![0u16; nz * plane];
         for b in 0..nz {
             let (src, dst) = (&index[0][b * plane..], &mut xt[b * plane..]);
             for j in 0..ny {
@@ -361,13 +363,18 @@ impl LinePlan {
                 }
             }
         }
-        index[0] = xt;
         let row_lens = [ny, nx, plane];
         let mut runs: [Vec<Run>; 3] = Default::default();
         let mut row_start: [Vec<u32>; 3] = Default::default();
-        for dir in 0..3 {
+        (runs[0], row_start[0]) = build_runs(&xt, ny);
+        for dir in 1..3 {
             (runs[dir], row_start[dir]) = build_runs(&index[dir], row_lens[dir]);
         }
+        let mut padded = vec![0u16; nz * nx * xstride];
+        for (dst, src) in padded.chunks_mut(xstride).zip(xt.chunks(ny)) {
+            dst[..ny].copy_from_slice(src);
+        }
+        index[0] = padded;
         let xopen_start = (0..=nz)
             .map(|b| grid.open_cells[0].partition_point(|&(idx, _)| (idx as usize) < b * plane))
             .collect();
@@ -379,6 +386,17 @@ impl LinePlan {
             row_start,
             xopen_start,
         })
+    }
+}
+
+/// Row stride of the x sweep's transposed plane (nx rows of ny cells): ny, padded when its
+/// byte length is a multiple of 128 so that the transposes' scattered accesses do not fall
+/// into a few cache sets (a 128-cell row is 1 KiB: all columns would share 4 of L1's sets).
+fn x_row_stride(ny: usize) -> usize {
+    if ny % 16 == 0 {
+        ny + 8
+    } else {
+        ny
     }
 }
 
@@ -754,22 +772,95 @@ unsafe fn fwd<const OM: bool, const OP: bool, const LINK: bool>(
     }
 }
 
-/// Copy the `rows × cols` matrix at `src` (row-major) transposed into `dst` (`cols × rows`).
+/// Copy the `rows × cols` matrix at `src` (row `r` at `src + r·ss`) transposed into `dst`
+/// (row `c` at `dst + c·ds`). With `by_dst` the outer loop walks the destination's rows (its
+/// writes stream, the reads scatter), else the source's.
 ///
 /// # Safety
-/// `src` and `dst` are valid for `rows·cols` elements and do not overlap.
+/// `src` and `dst` are valid for the rows and do not overlap.
 #[inline(always)]
-unsafe fn transpose(src: *const f64, dst: *mut f64, rows: usize, cols: usize) {
+unsafe fn transpose(
+    src: *const f64,
+    ss: usize,
+    dst: *mut f64,
+    ds: usize,
+    rows: usize,
+    cols: usize,
+    by_dst: bool,
+) {
     const B: usize = 8;
-    for r0 in (0..rows).step_by(B) {
-        let r1 = (r0 + B).min(rows);
-        for c0 in (0..cols).step_by(B) {
-            let c1 = (c0 + B).min(cols);
-            for r in r0..r1 {
-                for c in c0..c1 {
-                    *dst.add(c * rows + r) = *src.add(r * cols + c);
-                }
+    let block = |r0: usize, c0: usize| {
+        for r in r0..(r0 + B).min(rows) {
+            for c in c0..(c0 + B).min(cols) {
+                *dst.add(c * ds + r) = *src.add(r * ss + c);
             }
+        }
+    };
+    if by_dst {
+        for c0 in (0..cols).step_by(B) {
+            for r0 in (0..rows).step_by(B) {
+                block(r0, c0);
+            }
+        }
+    } else {
+        for r0 in (0..rows).step_by(B) {
+            for c0 in (0..cols).step_by(B) {
+                block(r0, c0);
+            }
+        }
+    }
+}
+
+/// [`transpose`] with 4×4 blocks transposed in AVX registers (the edges element by element).
+///
+/// # Safety
+/// As [`transpose`]; the CPU has AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn transpose_avx(
+    src: *const f64,
+    ss: usize,
+    dst: *mut f64,
+    ds: usize,
+    rows: usize,
+    cols: usize,
+    by_dst: bool,
+) {
+    use std::arch::x86_64::*;
+    let (r4, c4) = (rows / 4 * 4, cols / 4 * 4);
+    let block = |r0: usize, c0: usize| {
+        let s = src.add(r0 * ss + c0);
+        let a0 = _mm256_loadu_pd(s);
+        let a1 = _mm256_loadu_pd(s.add(ss));
+        let a2 = _mm256_loadu_pd(s.add(2 * ss));
+        let a3 = _mm256_loadu_pd(s.add(3 * ss));
+        let t0 = _mm256_unpacklo_pd(a0, a1);
+        let t1 = _mm256_unpackhi_pd(a0, a1);
+        let t2 = _mm256_unpacklo_pd(a2, a3);
+        let t3 = _mm256_unpackhi_pd(a2, a3);
+        let d = dst.add(c0 * ds + r0);
+        _mm256_storeu_pd(d, _mm256_permute2f128_pd(t0, t2, 0x20));
+        _mm256_storeu_pd(d.add(ds), _mm256_permute2f128_pd(t1, t3, 0x20));
+        _mm256_storeu_pd(d.add(2 * ds), _mm256_permute2f128_pd(t0, t2, 0x31));
+        _mm256_storeu_pd(d.add(3 * ds), _mm256_permute2f128_pd(t1, t3, 0x31));
+    };
+    if by_dst {
+        for c0 in (0..c4).step_by(4) {
+            for r0 in (0..r4).step_by(4) {
+                block(r0, c0);
+            }
+        }
+    } else {
+        for r0 in (0..r4).step_by(4) {
+            for c0 in (0..c4).step_by(4) {
+                block(r0, c0);
+            }
+        }
+    }
+    for r in 0..rows {
+        let c_from = if r < r4 { c4 } else { 0 };
+        for c in c_from..cols {
+            *dst.add(c * ds + r) = *src.add(r * ss + c);
         }
     }
 }
@@ -795,15 +886,26 @@ unsafe fn xy_plane(
     xvals: *mut f64,
     t: *mut f64,
     b: usize,
+    simd: bool,
 ) {
     let [nx, ny, _] = grid.n;
     let plane = nx * ny;
     let up = u.add(b * plane);
-    transpose(up, t, ny, nx);
+    let xs = x_row_stride(ny);
+    let transpose = |src: *const f64, ss, dst: *mut f64, ds, rows, cols, by_dst| {
+        #[cfg(target_arch = "x86_64")]
+        if simd {
+            return transpose_avx(src, ss, dst, ds, rows, cols, by_dst);
+        }
+        let _ = simd;
+        transpose(src, ss, dst, ds, rows, cols, by_dst)
+    };
+    // the scattered side of both transposes is the padded copy
+    transpose(up, nx, t, xs, ny, nx, false);
     solve_rows(
         t,
-        plan.index[0].as_ptr().add(b * plane),
-        ny,
+        plan.index[0].as_ptr().add(b * nx * xs),
+        xs,
         nx,
         0,
         ny,
@@ -812,7 +914,7 @@ unsafe fn xy_plane(
         b * nx,
         table,
     );
-    transpose(t, up, nx, ny);
+    transpose(t, xs, up, nx, nx, ny, true);
     for q in plan.xopen_start[b]..plan.xopen_start[b + 1] {
         *xvals.add(q) = *u.add(grid.open_cells[0].get_unchecked(q).0 as usize);
     }
@@ -876,7 +978,7 @@ macro_rules! isa_variants {
 }
 
 isa_variants!(xy_plane, xy_plane_avx2, xy_plane_avx512,
-    (grid: &Grid, plan: &LinePlan, table: &[Factor], u: *mut f64, xvals: *mut f64, t: *mut f64, b: usize));
+    (grid: &Grid, plan: &LinePlan, table: &[Factor], u: *mut f64, xvals: *mut f64, t: *mut f64, b: usize, simd: bool));
 isa_variants!(z_chunk, z_chunk_avx2, z_chunk_avx512,
     (grid: &Grid, plan: &LinePlan, table: &[Factor], u: *mut f64, lo: usize, hi: usize));
 
@@ -890,25 +992,26 @@ fn sweep_xy(
     isa: Isa,
 ) {
     let [nx, ny, nz] = grid.n;
-    let plane = nx * ny;
     let up = SyncPtr(u.as_mut_ptr());
     let xp = SyncPtr(xvals.as_mut_ptr());
     let run = |b: usize| {
         PLANE.with(|t| {
             let mut t = t.borrow_mut();
-            if t.len() < plane {
-                t.resize(plane, 0.0);
+            if t.len() < nx * x_row_stride(ny) {
+                t.resize(nx * x_row_stride(ny), 0.0);
             }
             let tp = t.as_mut_ptr();
             // SAFETY: each plane is handled by one call; `t` is this thread's own; the
             // plan was built for this grid (checked by codes_id); the ISA was detected.
             unsafe {
                 match isa {
-                    Isa::Portable => xy_plane(grid, plan, table, up.get(), xp.get(), tp, b),
+                    Isa::Portable => xy_plane(grid, plan, table, up.get(), xp.get(), tp, b, false),
                     #[cfg(target_arch = "x86_64")]
-                    Isa::Avx2 => xy_plane_avx2(grid, plan, table, up.get(), xp.get(), tp, b),
+                    Isa::Avx2 => xy_plane_avx2(grid, plan, table, up.get(), xp.get(), tp, b, true),
                     #[cfg(target_arch = "x86_64")]
-                    Isa::Avx512 => xy_plane_avx512(grid, plan, table, up.get(), xp.get(), tp, b),
+                    Isa::Avx512 => {
+                        xy_plane_avx512(grid, plan, table, up.get(), xp.get(), tp, b, true)
+                    }
                 }
             }
         })
@@ -1237,6 +1340,124 @@ mod planned_tests {
                 .collect();
             g.set_excluded(&cells, true);
             assert_same_bits(&g);
+        }
+    }
+}
+
+#[cfg(test)]
+mod timing {
+    use super::super::grid::{Face, Shape};
+    use super::*;
+    use std::time::Instant;
+
+    fn min_time(reps: usize, mut f: impl FnMut()) -> f64 {
+        let mut best = f64::INFINITY;
+        for _ in 0..reps {
+            let t = Instant::now();
+            f();
+            best = best.min(t.elapsed().as_secs_f64());
+        }
+        best
+    }
+
+    /// Per-phase throughput, best of many repetitions (robust to a busy machine):
+    /// `cargo test --release --lib timing -- --ignored --nocapture`
+    #[test]
+    #[ignore]
+    fn kernel_timing() {
+        let boxed = |n: [usize; 3]| {
+            let size = [n[0] as f64 * 1e-4, n[1] as f64 * 1e-4, n[2] as f64 * 1e-4];
+            let open = [
+                Face::XMinus,
+                Face::XPlus,
+                Face::YMinus,
+                Face::YPlus,
+                Face::Top,
+            ];
+            Grid::new(Shape::Box { size }, 1e-4, &open).unwrap()
+        };
+        let cyl = Grid::new(
+            Shape::Cylinder {
+                diameter: 11e-3,
+                depth: 5e-3,
+            },
+            86.5e-6,
+            &[Face::Top, Face::Side],
+        )
+        .unwrap();
+        let grids = [
+            ("128x128x32", boxed([128, 128, 32])),
+            ("128x128x128", boxed([128, 128, 128])),
+            ("60x60x60", boxed([60, 60, 60])),
+            ("cyl", cyl),
+        ];
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        for (name, g) in &grids {
+            let mut u: Vec<f64> = (0..g.len()).map(|i| 1.0 + (i % 17) as f64 * 0.01).collect();
+            let reps = (200_000_000 / g.len()).clamp(10, 400);
+            let m = g.len() as f64 * 1e-6;
+            let isas = Isa::available();
+            let mut solvers: Vec<ImplicitSolver> =
+                isas.iter().map(|_| ImplicitSolver::new()).collect();
+            let mut best = vec![[f64::INFINITY; 4]; isas.len()];
+            for _round in 0..5 {
+                for (q, &isa) in isas.iter().enumerate() {
+                    let s = &mut solvers[q];
+                    s.step_with(g, &mut u, 2.5e-9, 20.0, 0.5, isa);
+                    let full = min_time(reps / 5 + 2, || {
+                        s.step_with(g, &mut u, 2.5e-9, 20.0, 0.5, isa);
+                    });
+                    let full1 = one.install(|| {
+                        min_time(reps / 5 + 2, || {
+                            s.step_with(g, &mut u, 2.5e-9, 20.0, 0.5, isa);
+                        })
+                    });
+                    let plan = s.plan.clone().unwrap();
+                    let table = s.table.clone();
+                    let mut xv = s.xvals.clone();
+                    let xy = min_time(reps / 5 + 2, || {
+                        sweep_xy(g, &plan, &table, &mut u, &mut xv, isa)
+                    });
+                    let z = min_time(reps / 5 + 2, || sweep_z(g, &plan, &table, &mut u, isa));
+                    for (bst, t) in best[q].iter_mut().zip([full, full1, xy, z]) {
+                        *bst = bst.min(t);
+                    }
+                }
+            }
+            for (q, isa) in isas.iter().enumerate() {
+                let [full, full1, xy, z] = best[q];
+                println!(
+                    "{name:12} {isa:?}: step {:.3} ms = {:.0} M/s (1 thread {:.0} M/s); xy {:.0} M/s, z {:.0} M/s",
+                    full * 1e3,
+                    m / full,
+                    m / full1,
+                    m / xy,
+                    m / z
+                );
+            }
+            let mut sc = vec![0.0; g.len()];
+            let gen = min_time(reps.min(50), || {
+                implicit_step(g, &mut u, &mut sc, 2.5e-9, 20.0, 0.5);
+            });
+            let mut a = vec![0.0; g.len()];
+            let b = u.clone();
+            let triad = min_time(reps, || {
+                a.par_chunks_mut(4096)
+                    .zip(b.par_chunks(4096).zip(u.par_chunks(4096)))
+                    .for_each(|(a, (b, c))| {
+                        for ((x, y), z) in a.iter_mut().zip(b).zip(c) {
+                            *x = y + 0.5 * z;
+                        }
+                    });
+            });
+            println!(
+                "{name:12} generic {:.0} M/s; triad {:.1} GB/s (32 B/element)",
+                m / gen,
+                g.len() as f64 * 32.0 / triad * 1e-9
+            );
         }
     }
 }
