@@ -268,6 +268,14 @@ struct Run {
 /// [`Run::idx`] of a stretch whose cells have different table rows (looked up per cell).
 const GATHER: u32 = u32::MAX;
 
+/// [`Run::idx`] of a stretch of different table rows that are all middle rows of their
+/// segments (linked to the previous row, no open face): only the pivot and the
+/// back-substitution weight differ, and only those are looked up per cell.
+const GATHER_MID: u32 = u32::MAX - 1;
+
+/// Shortest stretch of middle rows that gets its own [`GATHER_MID`] run.
+const MIN_MID_RUN: usize = 4;
+
 /// Shortest stretch of equal table rows that gets its own broadcast run; shorter stretches
 /// join the neighbouring per-cell (gather) run.
 const MIN_RUN: usize = 8;
@@ -366,9 +374,9 @@ impl LinePlan {
         let row_lens = [ny, nx, plane];
         let mut runs: [Vec<Run>; 3] = Default::default();
         let mut row_start: [Vec<u32>; 3] = Default::default();
-        (runs[0], row_start[0]) = build_runs(&xt, ny);
+        (runs[0], row_start[0]) = build_runs(&xt, ny, max_len);
         for dir in 1..3 {
-            (runs[dir], row_start[dir]) = build_runs(&index[dir], row_lens[dir]);
+            (runs[dir], row_start[dir]) = build_runs(&index[dir], row_lens[dir], max_len);
         }
         let mut padded = vec![0u16; nz * nx * xstride];
         for (dst, src) in padded.chunks_mut(xstride).zip(xt.chunks(ny)) {
@@ -393,7 +401,7 @@ impl LinePlan {
 /// byte length is a multiple of 128 so that the transposes' scattered accesses do not fall
 /// into a few cache sets (a 128-cell row is 1 KiB: all columns would share 4 of L1's sets).
 fn x_row_stride(ny: usize) -> usize {
-    if ny % 16 == 0 {
+    if ny.is_multiple_of(16) {
         ny + 8
     } else {
         ny
@@ -402,8 +410,53 @@ fn x_row_stride(ny: usize) -> usize {
 
 /// Cut each row of `index` (rows of `row_len` cells, one after the other) into runs: maximal
 /// stretches of at least [`MIN_RUN`] equal indices become broadcast runs (none for index 0,
-/// cells outside, which keep their values), the cells between them per-cell runs.
-fn build_runs(index: &[u16], row_len: usize) -> (Vec<Run>, Vec<u32>) {
+/// cells outside, which keep their values), the cells between them per-cell runs
+/// ([`GATHER_MID`] where they are all middle rows, else [`GATHER`]).
+fn build_runs(index: &[u16], row_len: usize, max_len: usize) -> (Vec<Run>, Vec<u32>) {
+    // a middle row: linked to the previous one (position k > 0), interior plus side
+    let mid = |v: u16| {
+        v != 0 && {
+            let q = v as usize - 1;
+            q % max_len > 0 && (q / max_len) % 3 == MIDDLE
+        }
+    };
+    let flush = |runs: &mut Vec<Run>, row: &[u16], g: usize, e: usize| {
+        let mut s = g;
+        let mut pending = g;
+        while s < e {
+            if !mid(row[s]) {
+                s += 1;
+                continue;
+            }
+            let mut t = s + 1;
+            while t < e && mid(row[t]) {
+                t += 1;
+            }
+            if t - s >= MIN_MID_RUN {
+                if pending < s {
+                    runs.push(Run {
+                        start: pending as u32,
+                        end: s as u32,
+                        idx: GATHER,
+                    });
+                }
+                runs.push(Run {
+                    start: s as u32,
+                    end: t as u32,
+                    idx: GATHER_MID,
+                });
+                pending = t;
+            }
+            s = t;
+        }
+        if pending < e {
+            runs.push(Run {
+                start: pending as u32,
+                end: e as u32,
+                idx: GATHER,
+            });
+        }
+    };
     let mut runs = Vec::new();
     let mut row_start = vec![0u32];
     for row in index.chunks(row_len) {
@@ -417,11 +470,7 @@ fn build_runs(index: &[u16], row_len: usize) -> (Vec<Run>, Vec<u32>) {
             }
             if e - s >= MIN_RUN {
                 if let Some(g) = pending.take() {
-                    runs.push(Run {
-                        start: g as u32,
-                        end: s as u32,
-                        idx: GATHER,
-                    });
+                    flush(&mut runs, row, g, s);
                 }
                 if v != 0 {
                     runs.push(Run {
@@ -436,11 +485,7 @@ fn build_runs(index: &[u16], row_len: usize) -> (Vec<Run>, Vec<u32>) {
             s = e;
         }
         if let Some(g) = pending {
-            runs.push(Run {
-                start: g as u32,
-                end: row.len() as u32,
-                idx: GATHER,
-            });
+            flush(&mut runs, row, g, row.len());
         }
         row_start.push(runs.len() as u32);
     }
@@ -532,6 +577,28 @@ fn fill_table(table: &mut Vec<Factor>, max_len: usize, r: f64, cb: f64) {
     }
 }
 
+/// The factor table and, for the per-cell runs of middle rows, its pivots and
+/// back-substitution weights as dense arrays.
+#[derive(Debug, Clone, Default)]
+struct Tables {
+    factors: Vec<Factor>,
+    inv: Vec<f64>,
+    cneg: Vec<f64>,
+    /// r = D·dt/h² (the link of every middle row).
+    r: f64,
+}
+
+impl Tables {
+    fn fill(&mut self, max_len: usize, r: f64, cb: f64) {
+        fill_table(&mut self.factors, max_len, r, cb);
+        self.inv.clear();
+        self.inv.extend(self.factors.iter().map(|f| f.inv));
+        self.cneg.clear();
+        self.cneg.extend(self.factors.iter().map(|f| f.cneg));
+        self.r = r;
+    }
+}
+
 /// The instruction sets the kernel is compiled for; [`Isa::detect`] picks the best the CPU
 /// has, once per step. All give the same bits (the same operations per cell, vectorised
 /// across independent lines only).
@@ -589,7 +656,7 @@ pub struct ImplicitSolver {
     plan: Option<LinePlan>,
     /// Set when the grid's segments are too long for the table: the generic sweep is used.
     generic: Option<u64>,
-    table: Vec<Factor>,
+    table: Tables,
     scratch: Vec<f64>,
     /// The x-open cells' values after the x sweep (as `grid.open_cells[0]`), for the inflow.
     xvals: Vec<f64>,
@@ -624,7 +691,7 @@ impl ImplicitSolver {
             }
             return inflow;
         };
-        fill_table(&mut self.table, plan.max_len, r, cb);
+        self.table.fill(plan.max_len, r, cb);
         self.xvals.resize(grid.open_cells[0].len(), 0.0);
         sweep_xy(grid, plan, &self.table, u, &mut self.xvals, isa);
         // the x inflow from the values right after the x sweep, summed in cell order
@@ -661,8 +728,10 @@ unsafe fn solve_rows(
     runs: &[Run],
     row_start: &[u32],
     row0: usize,
-    table: &[Factor],
+    tables: &Tables,
 ) {
+    let table = &tables.factors[..];
+    let (inv, cneg, r) = (&tables.inv[..], &tables.cneg[..], tables.r);
     let row_runs = |a: usize| -> &[Run] {
         let rr = &runs[row_start[row0 + a] as usize..row_start[row0 + a + 1] as usize];
         // the first run that reaches past `lo`
@@ -688,7 +757,13 @@ unsafe fn solve_rows(
             if s >= hi {
                 break;
             }
-            if run.idx == GATHER {
+            if run.idx == GATHER_MID {
+                // a > 0: a middle row has a previous row
+                for i in s..e {
+                    let rhs = *cur.add(i) + r * *prev.add(i);
+                    *cur.add(i) = rhs * *inv.get_unchecked(*ix.add(i) as usize);
+                }
+            } else if run.idx == GATHER {
                 if a == 0 {
                     for i in s..e {
                         let f = table.get_unchecked(*ix.add(i) as usize);
@@ -730,7 +805,11 @@ unsafe fn solve_rows(
             if s >= hi {
                 break;
             }
-            if run.idx == GATHER {
+            if run.idx == GATHER_MID {
+                for i in s..e {
+                    *cur.add(i) -= *cneg.get_unchecked(*ix.add(i) as usize) * *next.add(i);
+                }
+            } else if run.idx == GATHER {
                 for i in s..e {
                     let f = table.get_unchecked(*ix.add(i) as usize);
                     *cur.add(i) -= f.cneg * *next.add(i);
@@ -878,10 +957,11 @@ thread_local! {
 /// `u` is the grid's field, `xvals` as `grid.open_cells[0]`, `t` has a plane's length; no
 /// other thread touches plane `b` or its entries of `xvals`.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 unsafe fn xy_plane(
     grid: &Grid,
     plan: &LinePlan,
-    table: &[Factor],
+    table: &Tables,
     u: *mut f64,
     xvals: *mut f64,
     t: *mut f64,
@@ -937,14 +1017,7 @@ unsafe fn xy_plane(
 /// # Safety
 /// `u` is the grid's field; no other thread touches these columns.
 #[inline(always)]
-unsafe fn z_chunk(
-    grid: &Grid,
-    plan: &LinePlan,
-    table: &[Factor],
-    u: *mut f64,
-    lo: usize,
-    hi: usize,
-) {
+unsafe fn z_chunk(grid: &Grid, plan: &LinePlan, table: &Tables, u: *mut f64, lo: usize, hi: usize) {
     let [nx, ny, nz] = grid.n;
     solve_rows(
         u,
@@ -966,11 +1039,13 @@ macro_rules! isa_variants {
     ($name:ident, $avx2:ident, $avx512:ident, ($($arg:ident: $ty:ty),*)) => {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2")]
+        #[allow(clippy::too_many_arguments)]
         unsafe fn $avx2($($arg: $ty),*) {
             $name($($arg),*)
         }
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx512f")]
+        #[allow(clippy::too_many_arguments)]
         unsafe fn $avx512($($arg: $ty),*) {
             $name($($arg),*)
         }
@@ -978,15 +1053,15 @@ macro_rules! isa_variants {
 }
 
 isa_variants!(xy_plane, xy_plane_avx2, xy_plane_avx512,
-    (grid: &Grid, plan: &LinePlan, table: &[Factor], u: *mut f64, xvals: *mut f64, t: *mut f64, b: usize, simd: bool));
+    (grid: &Grid, plan: &LinePlan, table: &Tables, u: *mut f64, xvals: *mut f64, t: *mut f64, b: usize, simd: bool));
 isa_variants!(z_chunk, z_chunk_avx2, z_chunk_avx512,
-    (grid: &Grid, plan: &LinePlan, table: &[Factor], u: *mut f64, lo: usize, hi: usize));
+    (grid: &Grid, plan: &LinePlan, table: &Tables, u: *mut f64, lo: usize, hi: usize));
 
 /// The x and y sweeps, plane by plane (planes in parallel).
 fn sweep_xy(
     grid: &Grid,
     plan: &LinePlan,
-    table: &[Factor],
+    table: &Tables,
     u: &mut [f64],
     xvals: &mut [f64],
     isa: Isa,
@@ -1021,7 +1096,7 @@ fn sweep_xy(
 
 /// The z sweep, columns in chunks (in parallel) small enough that a chunk's nz planes stay
 /// in the core's L2 cache between the forward and the backward pass.
-fn sweep_z(grid: &Grid, plan: &LinePlan, table: &[Factor], u: &mut [f64], isa: Isa) {
+fn sweep_z(grid: &Grid, plan: &LinePlan, table: &Tables, u: &mut [f64], isa: Isa) {
     let [nx, ny, nz] = grid.n;
     let plane = nx * ny;
     const L2_BUDGET: usize = 256 * 1024;
