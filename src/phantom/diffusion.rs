@@ -417,7 +417,7 @@ fn build_runs(index: &[u16], row_len: usize, max_len: usize) -> (Vec<Run>, Vec<u
     let mid = |v: u16| {
         v != 0 && {
             let q = v as usize - 1;
-            q % max_len > 0 && (q / max_len) % 3 == MIDDLE
+            !q.is_multiple_of(max_len) && (q / max_len) % 3 == MIDDLE
         }
     };
     let flush = |runs: &mut Vec<Run>, row: &[u16], g: usize, e: usize| {
