@@ -13,6 +13,32 @@
 //!
 //! Both return the amount that entered through open faces during the step (mol per unit of
 //! `cell_volume`, i.e. multiply by h³ for mol), for the gas balance.
+//!
+//! # The implicit kernel ([`ImplicitSolver`])
+//!
+//! Each line segment's Thomas factors depend only on its length class, its ends and the
+//! position in it, so a `LinePlan` (rebuilt when [`Grid::codes_id`] changes) gives every
+//! cell, per direction, a u16 index into a small factor table (rebuilt per step from r and
+//! C_b). Lines are solved many at a time in lock-step along the contiguous index, vectorised
+//! across lines (independent systems: the same operations per cell as the generic sweep, in
+//! the same order, hence the same bits, for any thread count):
+//! - **x and y, per z-plane** (planes in parallel; a 128×128 plane is 128 KiB and stays in
+//!   L2): the plane is transposed into a per-thread copy whose rows are x positions (row
+//!   stride ny, padded by `x_row_stride` against cache-set conflicts), so the x lines run
+//!   across contiguous rows; forward elimination row by row, back substitution in reverse,
+//!   transpose back, keep the x-open cells' values (the x inflow is summed afterwards in cell
+//!   order, as the generic sweep does), then the y lines the same way on the plane itself.
+//! - **z**, in column chunks (in parallel) sized so a chunk's nz planes stay in L2 between
+//!   the forward and backward pass.
+//!
+//! Every row (x: a plane's x position, y: a plane's y position, z: a whole plane) is cut at
+//! plan time into `Run`s along its contiguous index: stretches of one table row (in a box,
+//! whole rows; in a cylinder, the z rows' inside cells) use broadcast factors and exactly the
+//! generic sweep's terms; stretches of middle rows (linked, no open face) look up only the
+//! pivot and the back-substitution weight per cell; the rest looks up the full factor row
+//! per cell; cells outside are skipped. The inner loops are compiled three times (baseline,
+//! AVX2, AVX-512F via `#[target_feature]`, no FMA: Rust never contracts) and the best the
+//! CPU has is picked at run time; all variants are tested against the generic sweep.
 
 use super::grid::{Grid, INSIDE_BIT, SIDE_INTERIOR, SIDE_OPEN, SIDE_SEALED};
 use rayon::prelude::*;
