@@ -13,6 +13,32 @@
 //!
 //! Both return the amount that entered through open faces during the step (mol per unit of
 //! `cell_volume`, i.e. multiply by h³ for mol), for the gas balance.
+//!
+//! # The implicit kernel ([`ImplicitSolver`])
+//!
+//! Each line segment's Thomas factors depend only on its length class, its ends and the
+//! position in it, so a `LinePlan` (rebuilt when [`Grid::codes_id`] changes) gives every
+//! cell, per direction, a u16 index into a small factor table (rebuilt per step from r and
+//! C_b). Lines are solved many at a time in lock-step along the contiguous index, vectorised
+//! across lines (independent systems: the same operations per cell as the generic sweep, in
+//! the same order, hence the same bits, for any thread count):
+//! - **x and y, per z-plane** (planes in parallel; a 128×128 plane is 128 KiB and stays in
+//!   L2): the plane is transposed into a per-thread copy whose rows are x positions (row
+//!   stride ny, padded by `x_row_stride` against cache-set conflicts), so the x lines run
+//!   across contiguous rows; forward elimination row by row, back substitution in reverse,
+//!   transpose back, keep the x-open cells' values (the x inflow is summed afterwards in cell
+//!   order, as the generic sweep does), then the y lines the same way on the plane itself.
+//! - **z**, in column chunks (in parallel) sized so a chunk's nz planes stay in L2 between
+//!   the forward and backward pass.
+//!
+//! Every row (x: a plane's x position, y: a plane's y position, z: a whole plane) is cut at
+//! plan time into `Run`s along its contiguous index: stretches of one table row (in a box,
+//! whole rows; in a cylinder, the z rows' inside cells) use broadcast factors and exactly the
+//! generic sweep's terms; stretches of middle rows (linked, no open face) look up only the
+//! pivot and the back-substitution weight per cell; the rest looks up the full factor row
+//! per cell; cells outside are skipped. The inner loops are compiled three times (baseline,
+//! AVX2, AVX-512F via `#[target_feature]`, no FMA: Rust never contracts) and the best the
+//! CPU has is picked at run time; all variants are tested against the generic sweep.
 
 use super::grid::{Grid, INSIDE_BIT, SIDE_INTERIOR, SIDE_OPEN, SIDE_SEALED};
 use rayon::prelude::*;
@@ -255,28 +281,67 @@ const MIDDLE: usize = 0;
 const LAST_SEALED: usize = 1;
 const LAST_OPEN: usize = 2;
 
+/// A stretch `[start, end)` of one row's cells (positions along the row's contiguous,
+/// vectorised index) solved with the factors of table row `idx` for all of them, or with each
+/// cell's own table row ([`GATHER`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+struct Run {
+    start: u32,
+    end: u32,
+    idx: u32,
+}
+
+/// [`Run::idx`] of a stretch whose cells have different table rows (looked up per cell).
+const GATHER: u32 = u32::MAX;
+
+/// [`Run::idx`] of a stretch of different table rows that are all middle rows of their
+/// segments (linked to the previous row, no open face): only the pivot and the
+/// back-substitution weight differ, and only those are looked up per cell.
+const GATHER_MID: u32 = u32::MAX - 1;
+
+/// Shortest stretch of middle rows that gets its own [`GATHER_MID`] run.
+const MIN_MID_RUN: usize = 4;
+
+/// Shortest stretch of equal table rows that gets its own broadcast run; shorter stretches
+/// join the neighbouring per-cell (gather) run.
+const MIN_RUN: usize = 8;
+
 /// Each cell's place in the tridiagonal systems of the three sweeps, which depends on the face
 /// codes only: per direction, the index of its row in the factor table
 /// (1 + ((start_open·3 + end_kind)·max_len + position in the segment); 0 for a cell outside).
 /// Two cells with the same index have the same matrix row and the same Thomas factors: the
 /// factors of a segment's first k rows depend only on k, the segment's minus end, and (for
 /// its last row) the plus end.
+///
+/// The indices are stored in the layout the kernel walks (see the module doc): for y and z the
+/// grid's own order; for x transposed per z-plane (cell (i, j, k) at (k·nx + i)·s + j, s = ny padded by
+/// [`x_row_stride`]). In
+/// that layout every direction's data is a sequence of rows (x: per plane, one row per i, of
+/// ny cells; y: per plane, one row per j, of nx cells; z: one row per k, of nx·ny cells), and
+/// `runs` cuts each row into stretches of equal index (broadcast factors) and mixed stretches.
 #[derive(Debug, Clone)]
 struct LinePlan {
     /// [`Grid::codes_id`] of the codes the plan was built from.
     codes_id: u64,
     /// Longest segment in any direction (the table's stride).
     max_len: usize,
-    /// Per direction, per cell: the factor-table index.
+    /// Per direction, per cell (in the kernel's layout): the factor-table index.
     index: [Vec<u16>; 3],
+    /// Per direction, the runs of all rows, row after row.
+    runs: [Vec<Run>; 3],
+    /// Per direction, where each row's runs begin in `runs` (one more entry than rows).
+    row_start: [Vec<u32>; 3],
+    /// Per z-plane, where its cells begin in `grid.open_cells[0]` (nz + 1 entries).
+    xopen_start: Vec<usize>,
 }
 
 impl LinePlan {
     /// The plan of `grid`'s current codes, or `None` when a segment is longer than
     /// [`MAX_TABLE_SEGMENT`].
     fn build(grid: &Grid) -> Option<LinePlan> {
-        let [nx, ny, _] = grid.n;
-        let strides = [1usize, nx, nx * ny];
+        let [nx, ny, nz] = grid.n;
+        let plane = nx * ny;
+        let strides = [1usize, nx, plane];
         let len = grid.len();
         // pass 1: position of every cell in its segment (cells in index order: the minus
         // neighbour idx − stride always comes first) and the longest segment
@@ -321,13 +386,144 @@ impl LinePlan {
                 out[idx] = (1 + (start_open * 3 + end) * max_len + k) as u16;
             }
         }
+        // x: transposed per plane (rows of ny cells, `xstride` apart)
+        let xstride = x_row_stride(ny);
+        let mut xt = vec![0u16; nz * plane];
+        for b in 0..nz {
+            let (src, dst) = (&index[0][b * plane..], &mut xt[b * plane..]);
+            for j in 0..ny {
+                for i in 0..nx {
+                    dst[i * ny + j] = src[j * nx + i];
+                }
+            }
+        }
+        let row_lens = [ny, nx, plane];
+        let mut runs: [Vec<Run>; 3] = Default::default();
+        let mut row_start: [Vec<u32>; 3] = Default::default();
+        (runs[0], row_start[0]) = build_runs(&xt, ny, max_len);
+        for dir in 1..3 {
+            (runs[dir], row_start[dir]) = build_runs(&index[dir], row_lens[dir], max_len);
+        }
+        let mut padded = vec![0u16; nz * nx * xstride];
+        for (dst, src) in padded.chunks_mut(xstride).zip(xt.chunks(ny)) {
+            dst[..ny].copy_from_slice(src);
+        }
+        index[0] = padded;
+        let xopen_start = (0..=nz)
+            .map(|b| grid.open_cells[0].partition_point(|&(idx, _)| (idx as usize) < b * plane))
+            .collect();
         Some(LinePlan {
             codes_id: grid.codes_id(),
             max_len,
             index,
+            runs,
+            row_start,
+            xopen_start,
         })
     }
 }
+
+/// Row stride of the x sweep's transposed plane (nx rows of ny cells): ny, padded when its
+/// byte length is a multiple of 128 so that the transposes' scattered accesses do not fall
+/// into a few cache sets (a 128-cell row is 1 KiB: all columns would share 4 of L1's sets).
+fn x_row_stride(ny: usize) -> usize {
+    if ny.is_multiple_of(16) {
+        ny + 8
+    } else {
+        ny
+    }
+}
+
+/// Cut each row of `index` (rows of `row_len` cells, one after the other) into runs: maximal
+/// stretches of at least [`MIN_RUN`] equal indices become broadcast runs (none for index 0,
+/// cells outside, which keep their values), the cells between them per-cell runs
+/// ([`GATHER_MID`] where they are all middle rows, else [`GATHER`]).
+fn build_runs(index: &[u16], row_len: usize, max_len: usize) -> (Vec<Run>, Vec<u32>) {
+    // a middle row: linked to the previous one (position k > 0), interior plus side
+    let mid = |v: u16| {
+        v != 0 && {
+            let q = v as usize - 1;
+            !q.is_multiple_of(max_len) && (q / max_len) % 3 == MIDDLE
+        }
+    };
+    let flush = |runs: &mut Vec<Run>, row: &[u16], g: usize, e: usize| {
+        let mut s = g;
+        let mut pending = g;
+        while s < e {
+            if !mid(row[s]) {
+                s += 1;
+                continue;
+            }
+            let mut t = s + 1;
+            while t < e && mid(row[t]) {
+                t += 1;
+            }
+            if t - s >= MIN_MID_RUN {
+                if pending < s {
+                    runs.push(Run {
+                        start: pending as u32,
+                        end: s as u32,
+                        idx: GATHER,
+                    });
+                }
+                runs.push(Run {
+                    start: s as u32,
+                    end: t as u32,
+                    idx: GATHER_MID,
+                });
+                pending = t;
+            }
+            s = t;
+        }
+        if pending < e {
+            runs.push(Run {
+                start: pending as u32,
+                end: e as u32,
+                idx: GATHER,
+            });
+        }
+    };
+    let mut runs = Vec::new();
+    let mut row_start = vec![0u32];
+    for row in index.chunks(row_len) {
+        let mut pending: Option<usize> = None;
+        let mut s = 0;
+        while s < row.len() {
+            let v = row[s];
+            let mut e = s + 1;
+            while e < row.len() && row[e] == v {
+                e += 1;
+            }
+            if e - s >= MIN_RUN {
+                if let Some(g) = pending.take() {
+                    flush(&mut runs, row, g, s);
+                }
+                if v != 0 {
+                    runs.push(Run {
+                        start: s as u32,
+                        end: e as u32,
+                        idx: u32::from(v),
+                    });
+                }
+            } else if pending.is_none() {
+                pending = Some(s);
+            }
+            s = e;
+        }
+        if let Some(g) = pending {
+            flush(&mut runs, row, g, row.len());
+        }
+        row_start.push(runs.len() as u32);
+    }
+    (runs, row_start)
+}
+
+/// [`Factor::flags`]: the row adds the open minus face's term.
+const OPEN_MINUS: u8 = 1;
+/// [`Factor::flags`]: the row adds the open plus face's term.
+const OPEN_PLUS: u8 = 2;
+/// [`Factor::flags`]: the row is linked to the previous one.
+const LINKED: u8 = 4;
 
 /// One row of a segment's Thomas factors for step ratio r = D·dt/h² and boundary value C_b.
 #[derive(Debug, Clone, Copy, Default)]
@@ -342,6 +538,9 @@ struct Factor {
     open_minus: f64,
     /// 2·r·C_b when the plus side is an open face, else 0.
     open_plus: f64,
+    /// Which of the three terms the generic sweep adds for this row ([`OPEN_MINUS`],
+    /// [`OPEN_PLUS`], [`LINKED`]): a broadcast run adds exactly those.
+    flags: u8,
 }
 
 /// Fill `table` with the factors of every row kind of `plan` for ratio `r` and boundary value
@@ -381,29 +580,112 @@ fn fill_table(table: &mut Vec<Factor>, max_len: usize, r: f64, cb: f64) {
                 };
                 let inv = 1.0 / denom;
                 let cm = if p == SIDE_INTERIOR { -r } else { 0.0 };
+                let mut flags = 0;
+                if m == SIDE_OPEN {
+                    flags |= OPEN_MINUS;
+                }
+                if p == SIDE_OPEN {
+                    flags |= OPEN_PLUS;
+                }
+                if k > 0 {
+                    flags |= LINKED;
+                }
                 table[base + k] = Factor {
                     inv,
                     cneg: cm * inv,
                     link: if k > 0 { r } else { 0.0 },
                     open_minus: if m == SIDE_OPEN { k2 } else { 0.0 },
                     open_plus: if p == SIDE_OPEN { k2 } else { 0.0 },
+                    flags,
                 };
             }
         }
     }
 }
 
+/// The factor table and, for the per-cell runs of middle rows, its pivots and
+/// back-substitution weights as dense arrays.
+#[derive(Debug, Clone, Default)]
+struct Tables {
+    factors: Vec<Factor>,
+    inv: Vec<f64>,
+    cneg: Vec<f64>,
+    /// r = D·dt/h² (the link of every middle row).
+    r: f64,
+}
+
+impl Tables {
+    fn fill(&mut self, max_len: usize, r: f64, cb: f64) {
+        fill_table(&mut self.factors, max_len, r, cb);
+        self.inv.clear();
+        self.inv.extend(self.factors.iter().map(|f| f.inv));
+        self.cneg.clear();
+        self.cneg.extend(self.factors.iter().map(|f| f.cneg));
+        self.r = r;
+    }
+}
+
+/// The instruction sets the kernel is compiled for; [`Isa::detect`] picks the best the CPU
+/// has, once per step. All give the same bits (the same operations per cell, vectorised
+/// across independent lines only).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Isa {
+    /// The build's baseline (SSE2 on x86_64).
+    Portable,
+    /// AVX2 (256-bit vectors).
+    #[cfg(target_arch = "x86_64")]
+    Avx2,
+    /// AVX-512F (512-bit vectors).
+    #[cfg(target_arch = "x86_64")]
+    Avx512,
+}
+
+impl Isa {
+    fn detect() -> Isa {
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                return Isa::Avx512;
+            }
+            if std::arch::is_x86_feature_detected!("avx2") {
+                return Isa::Avx2;
+            }
+        }
+        Isa::Portable
+    }
+
+    /// Every variant this CPU can run (for the tests).
+    #[cfg(test)]
+    fn available() -> Vec<Isa> {
+        #[allow(unused_mut)]
+        let mut v = vec![Isa::Portable];
+        #[cfg(target_arch = "x86_64")]
+        {
+            if std::arch::is_x86_feature_detected!("avx2") {
+                v.push(Isa::Avx2);
+            }
+            if std::arch::is_x86_feature_detected!("avx512f") {
+                v.push(Isa::Avx512);
+            }
+        }
+        v
+    }
+}
+
 /// The locally-one-dimensional backward-Euler step with each line's Thomas factors taken
 /// from a small table instead of being recomputed per cell: the face codes are read once per
-/// rebuild (when [`Grid::codes_id`] changes), the inner loops have no branches and no
-/// divisions. Gives the same bits as [`implicit_step`], which it replaces in the time loop.
+/// rebuild (when [`Grid::codes_id`] changes), the inner loops have no divisions, and runs of
+/// equal factors use broadcast constants. Gives the same bits as [`implicit_step`], which it
+/// replaces in the time loop.
 #[derive(Debug, Clone, Default)]
 pub struct ImplicitSolver {
     plan: Option<LinePlan>,
     /// Set when the grid's segments are too long for the table: the generic sweep is used.
     generic: Option<u64>,
-    table: Vec<Factor>,
+    table: Tables,
     scratch: Vec<f64>,
+    /// The x-open cells' values after the x sweep (as `grid.open_cells[0]`), for the inflow.
+    xvals: Vec<f64>,
 }
 
 impl ImplicitSolver {
@@ -415,6 +697,11 @@ impl ImplicitSolver {
     /// One LOD backward-Euler step of `u` in place (x, y, z sweeps), r = D·dt/h², open faces
     /// at `cb`. Returns the boundary inflow, as [`implicit_step`].
     pub fn step(&mut self, grid: &Grid, u: &mut [f64], d: f64, dt: f64, cb: f64) -> f64 {
+        self.step_with(grid, u, d, dt, cb, Isa::detect())
+    }
+
+    fn step_with(&mut self, grid: &Grid, u: &mut [f64], d: f64, dt: f64, cb: f64, isa: Isa) -> f64 {
+        assert_eq!(u.len(), grid.len());
         let id = grid.codes_id();
         let stale = self.plan.as_ref().is_none_or(|p| p.codes_id != id);
         if stale && self.generic != Some(id) {
@@ -430,76 +717,431 @@ impl ImplicitSolver {
             }
             return inflow;
         };
-        fill_table(&mut self.table, plan.max_len, r, cb);
-        let mut inflow = 0.0;
-        for dir in 0..3 {
-            sweep_planned(grid, dir, &plan.index[dir], &self.table, u);
-            inflow += open_face_inflow(grid, dir, u, r, cb);
+        self.table.fill(plan.max_len, r, cb);
+        self.xvals.resize(grid.open_cells[0].len(), 0.0);
+        sweep_xy(grid, plan, &self.table, u, &mut self.xvals, isa);
+        // the x inflow from the values right after the x sweep, summed in cell order
+        let mut fx = 0.0;
+        for (&(_, cnt), &x) in grid.open_cells[0].iter().zip(&self.xvals) {
+            fx += r * 2.0 * cnt as f64 * (cb - x);
         }
+        let mut inflow = 0.0;
+        inflow += fx;
+        inflow += open_face_inflow(grid, 1, u, r, cb);
+        sweep_z(grid, plan, &self.table, u, isa);
+        inflow += open_face_inflow(grid, 2, u, r, cb);
         inflow
     }
 }
 
-/// One direction's tridiagonal solves with the planned factors (see [`sweep`] for the layout
-/// of the work items: lines are solved many at a time in lock-step).
-fn sweep_planned(grid: &Grid, dir: usize, index: &[u16], table: &[Factor], u: &mut [f64]) {
+/// Solve the lines of a stack of rows in place: row a (0 ≤ a < `n_along`) holds cells
+/// `buf[a·stride + i]`, lines run across the rows (along a), and the cells `lo ≤ i < hi` of
+/// every row are solved in lock-step; `index` is laid out as `buf`, `runs`/`row_start` give
+/// each row's runs (row a is `row0 + a`).
+///
+/// # Safety
+/// `buf` and `index` are valid for `(n_along − 1)·stride + hi` elements, the runs lie within
+/// the rows, and every table index is below `table.len()`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+unsafe fn solve_rows(
+    buf: *mut f64,
+    index: *const u16,
+    stride: usize,
+    n_along: usize,
+    lo: usize,
+    hi: usize,
+    runs: &[Run],
+    row_start: &[u32],
+    row0: usize,
+    tables: &Tables,
+) {
+    let table = &tables.factors[..];
+    let (inv, cneg, r) = (&tables.inv[..], &tables.cneg[..], tables.r);
+    let row_runs = |a: usize| -> &[Run] {
+        let rr = &runs[row_start[row0 + a] as usize..row_start[row0 + a + 1] as usize];
+        // the first run that reaches past `lo`
+        let first = if lo == 0 {
+            0
+        } else {
+            rr.partition_point(|r| r.end as usize <= lo)
+        };
+        &rr[first..]
+    };
+    // forward elimination
+    for a in 0..n_along {
+        let cur = buf.add(a * stride);
+        let prev = if a > 0 {
+            buf.add((a - 1) * stride)
+        } else {
+            cur
+        };
+        let ix = index.add(a * stride);
+        for run in row_runs(a) {
+            let s = (run.start as usize).max(lo);
+            let e = (run.end as usize).min(hi);
+            if s >= hi {
+                break;
+            }
+            if run.idx == GATHER_MID {
+                // a > 0: a middle row has a previous row
+                for i in s..e {
+                    let rhs = *cur.add(i) + r * *prev.add(i);
+                    *cur.add(i) = rhs * *inv.get_unchecked(*ix.add(i) as usize);
+                }
+            } else if run.idx == GATHER {
+                if a == 0 {
+                    for i in s..e {
+                        let f = table.get_unchecked(*ix.add(i) as usize);
+                        let rhs = *cur.add(i) + f.open_minus + f.open_plus;
+                        *cur.add(i) = rhs * f.inv;
+                    }
+                } else {
+                    for i in s..e {
+                        let f = table.get_unchecked(*ix.add(i) as usize);
+                        let rhs = *cur.add(i) + f.open_minus + f.open_plus + f.link * *prev.add(i);
+                        *cur.add(i) = rhs * f.inv;
+                    }
+                }
+            } else {
+                let f = *table.get_unchecked(run.idx as usize);
+                let (c, p) = (cur.add(s), prev.add(s));
+                let n = e - s;
+                match f.flags {
+                    0 => fwd::<false, false, false>(c, p, n, &f),
+                    OPEN_MINUS => fwd::<true, false, false>(c, p, n, &f),
+                    OPEN_PLUS => fwd::<false, true, false>(c, p, n, &f),
+                    3 => fwd::<true, true, false>(c, p, n, &f),
+                    LINKED => fwd::<false, false, true>(c, p, n, &f),
+                    5 => fwd::<true, false, true>(c, p, n, &f),
+                    6 => fwd::<false, true, true>(c, p, n, &f),
+                    _ => fwd::<true, true, true>(c, p, n, &f),
+                }
+            }
+        }
+    }
+    // back substitution
+    for a in (0..n_along.saturating_sub(1)).rev() {
+        let cur = buf.add(a * stride);
+        let next = buf.add((a + 1) * stride);
+        let ix = index.add(a * stride);
+        for run in row_runs(a) {
+            let s = (run.start as usize).max(lo);
+            let e = (run.end as usize).min(hi);
+            if s >= hi {
+                break;
+            }
+            if run.idx == GATHER_MID {
+                for i in s..e {
+                    *cur.add(i) -= *cneg.get_unchecked(*ix.add(i) as usize) * *next.add(i);
+                }
+            } else if run.idx == GATHER {
+                for i in s..e {
+                    let f = table.get_unchecked(*ix.add(i) as usize);
+                    *cur.add(i) -= f.cneg * *next.add(i);
+                }
+            } else {
+                let cneg = table.get_unchecked(run.idx as usize).cneg;
+                if cneg != 0.0 {
+                    for i in s..e {
+                        *cur.add(i) -= cneg * *next.add(i);
+                    }
+                }
+            }
+        }
+    }
+}
+
+/// The forward elimination of a broadcast run of `n` cells: the generic sweep's operations,
+/// with the terms the row has.
+#[inline(always)]
+unsafe fn fwd<const OM: bool, const OP: bool, const LINK: bool>(
+    cur: *mut f64,
+    prev: *const f64,
+    n: usize,
+    f: &Factor,
+) {
+    let (om, op, link, inv) = (f.open_minus, f.open_plus, f.link, f.inv);
+    for i in 0..n {
+        let mut rhs = *cur.add(i);
+        if OM {
+            rhs += om;
+        }
+        if OP {
+            rhs += op;
+        }
+        if LINK {
+            rhs += link * *prev.add(i);
+        }
+        *cur.add(i) = rhs * inv;
+    }
+}
+
+/// Copy the `rows × cols` matrix at `src` (row `r` at `src + r·ss`) transposed into `dst`
+/// (row `c` at `dst + c·ds`). With `by_dst` the outer loop walks the destination's rows (its
+/// writes stream, the reads scatter), else the source's.
+///
+/// # Safety
+/// `src` and `dst` are valid for the rows and do not overlap.
+#[inline(always)]
+unsafe fn transpose(
+    src: *const f64,
+    ss: usize,
+    dst: *mut f64,
+    ds: usize,
+    rows: usize,
+    cols: usize,
+    by_dst: bool,
+) {
+    const B: usize = 8;
+    let block = |r0: usize, c0: usize| {
+        for r in r0..(r0 + B).min(rows) {
+            for c in c0..(c0 + B).min(cols) {
+                *dst.add(c * ds + r) = *src.add(r * ss + c);
+            }
+        }
+    };
+    if by_dst {
+        for c0 in (0..cols).step_by(B) {
+            for r0 in (0..rows).step_by(B) {
+                block(r0, c0);
+            }
+        }
+    } else {
+        for r0 in (0..rows).step_by(B) {
+            for c0 in (0..cols).step_by(B) {
+                block(r0, c0);
+            }
+        }
+    }
+}
+
+/// [`transpose`] with 4×4 blocks transposed in AVX registers (the edges element by element).
+///
+/// # Safety
+/// As [`transpose`]; the CPU has AVX.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx")]
+unsafe fn transpose_avx(
+    src: *const f64,
+    ss: usize,
+    dst: *mut f64,
+    ds: usize,
+    rows: usize,
+    cols: usize,
+    by_dst: bool,
+) {
+    use std::arch::x86_64::*;
+    let (r4, c4) = (rows / 4 * 4, cols / 4 * 4);
+    let block = |r0: usize, c0: usize| {
+        let s = src.add(r0 * ss + c0);
+        let a0 = _mm256_loadu_pd(s);
+        let a1 = _mm256_loadu_pd(s.add(ss));
+        let a2 = _mm256_loadu_pd(s.add(2 * ss));
+        let a3 = _mm256_loadu_pd(s.add(3 * ss));
+        let t0 = _mm256_unpacklo_pd(a0, a1);
+        let t1 = _mm256_unpackhi_pd(a0, a1);
+        let t2 = _mm256_unpacklo_pd(a2, a3);
+        let t3 = _mm256_unpackhi_pd(a2, a3);
+        let d = dst.add(c0 * ds + r0);
+        _mm256_storeu_pd(d, _mm256_permute2f128_pd(t0, t2, 0x20));
+        _mm256_storeu_pd(d.add(ds), _mm256_permute2f128_pd(t1, t3, 0x20));
+        _mm256_storeu_pd(d.add(2 * ds), _mm256_permute2f128_pd(t0, t2, 0x31));
+        _mm256_storeu_pd(d.add(3 * ds), _mm256_permute2f128_pd(t1, t3, 0x31));
+    };
+    if by_dst {
+        for c0 in (0..c4).step_by(4) {
+            for r0 in (0..r4).step_by(4) {
+                block(r0, c0);
+            }
+        }
+    } else {
+        for r0 in (0..r4).step_by(4) {
+            for c0 in (0..c4).step_by(4) {
+                block(r0, c0);
+            }
+        }
+    }
+    for r in 0..rows {
+        let c_from = if r < r4 { c4 } else { 0 };
+        for c in c_from..cols {
+            *dst.add(c * ds + r) = *src.add(r * ss + c);
+        }
+    }
+}
+
+thread_local! {
+    /// Per thread, one z-plane transposed (the x sweep's working copy).
+    static PLANE: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// The x and y sweeps of one z-plane `b` (the plane stays in the core's cache): transpose it
+/// into `t` so the x lines run across rows, solve, transpose back, keep the x-open cells'
+/// values, solve the y lines.
+///
+/// # Safety
+/// `u` is the grid's field, `xvals` as `grid.open_cells[0]`, `t` has a plane's length; no
+/// other thread touches plane `b` or its entries of `xvals`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+unsafe fn xy_plane(
+    grid: &Grid,
+    plan: &LinePlan,
+    table: &Tables,
+    u: *mut f64,
+    xvals: *mut f64,
+    t: *mut f64,
+    b: usize,
+    simd: bool,
+) {
+    let [nx, ny, _] = grid.n;
+    let plane = nx * ny;
+    let up = u.add(b * plane);
+    let xs = x_row_stride(ny);
+    let transpose = |src: *const f64, ss, dst: *mut f64, ds, rows, cols, by_dst| {
+        #[cfg(target_arch = "x86_64")]
+        if simd {
+            return transpose_avx(src, ss, dst, ds, rows, cols, by_dst);
+        }
+        let _ = simd;
+        transpose(src, ss, dst, ds, rows, cols, by_dst)
+    };
+    // the scattered side of both transposes is the padded copy
+    transpose(up, nx, t, xs, ny, nx, false);
+    solve_rows(
+        t,
+        plan.index[0].as_ptr().add(b * nx * xs),
+        xs,
+        nx,
+        0,
+        ny,
+        &plan.runs[0],
+        &plan.row_start[0],
+        b * nx,
+        table,
+    );
+    transpose(t, xs, up, nx, nx, ny, true);
+    for q in plan.xopen_start[b]..plan.xopen_start[b + 1] {
+        *xvals.add(q) = *u.add(grid.open_cells[0].get_unchecked(q).0 as usize);
+    }
+    solve_rows(
+        up,
+        plan.index[1].as_ptr().add(b * plane),
+        nx,
+        ny,
+        0,
+        nx,
+        &plan.runs[1],
+        &plan.row_start[1],
+        b * ny,
+        table,
+    );
+}
+
+/// The z sweep of the columns `lo..hi` (plane indices).
+///
+/// # Safety
+/// `u` is the grid's field; no other thread touches these columns.
+#[inline(always)]
+unsafe fn z_chunk(grid: &Grid, plan: &LinePlan, table: &Tables, u: *mut f64, lo: usize, hi: usize) {
+    let [nx, ny, nz] = grid.n;
+    solve_rows(
+        u,
+        plan.index[2].as_ptr(),
+        nx * ny,
+        nz,
+        lo,
+        hi,
+        &plan.runs[2],
+        &plan.row_start[2],
+        0,
+        table,
+    );
+}
+
+/// Instantiate a kernel for an instruction set: `#[target_feature]` lets the compiler
+/// vectorise the inlined body with that set's registers (no FMA: Rust never contracts).
+macro_rules! isa_variants {
+    ($name:ident, $avx2:ident, $avx512:ident, ($($arg:ident: $ty:ty),*)) => {
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx2")]
+        #[allow(clippy::too_many_arguments)]
+        unsafe fn $avx2($($arg: $ty),*) {
+            $name($($arg),*)
+        }
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx512f")]
+        #[allow(clippy::too_many_arguments)]
+        unsafe fn $avx512($($arg: $ty),*) {
+            $name($($arg),*)
+        }
+    };
+}
+
+isa_variants!(xy_plane, xy_plane_avx2, xy_plane_avx512,
+    (grid: &Grid, plan: &LinePlan, table: &Tables, u: *mut f64, xvals: *mut f64, t: *mut f64, b: usize, simd: bool));
+isa_variants!(z_chunk, z_chunk_avx2, z_chunk_avx512,
+    (grid: &Grid, plan: &LinePlan, table: &Tables, u: *mut f64, lo: usize, hi: usize));
+
+/// The x and y sweeps, plane by plane (planes in parallel).
+fn sweep_xy(
+    grid: &Grid,
+    plan: &LinePlan,
+    table: &Tables,
+    u: &mut [f64],
+    xvals: &mut [f64],
+    isa: Isa,
+) {
+    let [nx, ny, nz] = grid.n;
+    let up = SyncPtr(u.as_mut_ptr());
+    let xp = SyncPtr(xvals.as_mut_ptr());
+    let run = |b: usize| {
+        PLANE.with(|t| {
+            let mut t = t.borrow_mut();
+            if t.len() < nx * x_row_stride(ny) {
+                t.resize(nx * x_row_stride(ny), 0.0);
+            }
+            let tp = t.as_mut_ptr();
+            // SAFETY: each plane is handled by one call; `t` is this thread's own; the
+            // plan was built for this grid (checked by codes_id); the ISA was detected.
+            unsafe {
+                match isa {
+                    Isa::Portable => xy_plane(grid, plan, table, up.get(), xp.get(), tp, b, false),
+                    #[cfg(target_arch = "x86_64")]
+                    Isa::Avx2 => xy_plane_avx2(grid, plan, table, up.get(), xp.get(), tp, b, true),
+                    #[cfg(target_arch = "x86_64")]
+                    Isa::Avx512 => {
+                        xy_plane_avx512(grid, plan, table, up.get(), xp.get(), tp, b, true)
+                    }
+                }
+            }
+        })
+    };
+    (0..nz).into_par_iter().for_each(run);
+}
+
+/// The z sweep, columns in chunks (in parallel) small enough that a chunk's nz planes stay
+/// in the core's L2 cache between the forward and the backward pass.
+fn sweep_z(grid: &Grid, plan: &LinePlan, table: &Tables, u: &mut [f64], isa: Isa) {
     let [nx, ny, nz] = grid.n;
     let plane = nx * ny;
-    let (n_blocks, n_along, n_inner, block_stride, along_stride, inner_stride) = match dir {
-        0 => (nz, nx, ny, plane, 1, nx),
-        1 => (nz, ny, nx, plane, nx, 1),
-        _ => (1, nz, plane, 0, plane, 1),
-    };
+    const L2_BUDGET: usize = 256 * 1024;
     let threads = rayon::current_num_threads().max(1);
-    let chunks_per_block = if n_blocks >= 4 * threads {
-        1
-    } else {
-        (4 * threads).div_ceil(n_blocks)
-    };
-    let chunk = n_inner.div_ceil(chunks_per_block).max(1);
-    let items: Vec<(usize, usize, usize)> = (0..n_blocks)
-        .flat_map(|b| {
-            (0..n_inner)
-                .step_by(chunk)
-                .map(move |lo| (b, lo, (lo + chunk).min(n_inner)))
-        })
-        .collect();
+    let by_cache = (L2_BUDGET / (8 * nz)).max(64);
+    let by_threads = plane.div_ceil(4 * threads);
+    let chunk = by_cache.min(by_threads).max(8).next_multiple_of(8);
     let up = SyncPtr(u.as_mut_ptr());
-    let len = u.len();
-    items.par_iter().for_each(|&(b, lo, hi)| {
-        let base = b * block_stride;
-        // SAFETY: the work items cover disjoint sets of lines and each touches only its own
-        // cells (as in `sweep`); every index is below `len` (checked in debug builds), and
-        // the table indices were built for this grid's size.
+    let n_chunks = plane.div_ceil(chunk);
+    (0..n_chunks).into_par_iter().for_each(|c| {
+        let (lo, hi) = (c * chunk, ((c + 1) * chunk).min(plane));
+        // SAFETY: chunks are disjoint column sets; the plan matches the grid.
         unsafe {
-            let u = std::slice::from_raw_parts_mut(up.get(), len);
-            let cell = |a: usize, i: usize| base + a * along_stride + i * inner_stride;
-            // forward elimination; the first row of a line has no previous row
-            for i in lo..hi {
-                let idx = cell(0, i);
-                let e = *table.get_unchecked(*index.get_unchecked(idx) as usize);
-                let rhs = *u.get_unchecked(idx) + e.open_minus + e.open_plus;
-                *u.get_unchecked_mut(idx) = rhs * e.inv;
-            }
-            for a in 1..n_along {
-                for i in lo..hi {
-                    let idx = cell(a, i);
-                    debug_assert!(idx < len);
-                    let e = *table.get_unchecked(*index.get_unchecked(idx) as usize);
-                    let rhs = *u.get_unchecked(idx)
-                        + e.open_minus
-                        + e.open_plus
-                        + e.link * *u.get_unchecked(idx - along_stride);
-                    *u.get_unchecked_mut(idx) = rhs * e.inv;
-                }
-            }
-            // back substitution
-            for a in (0..n_along.saturating_sub(1)).rev() {
-                for i in lo..hi {
-                    let idx = cell(a, i);
-                    let e = table.get_unchecked(*index.get_unchecked(idx) as usize);
-                    *u.get_unchecked_mut(idx) -= e.cneg * *u.get_unchecked(idx + along_stride);
-                }
+            match isa {
+                Isa::Portable => z_chunk(grid, plan, table, up.get(), lo, hi),
+                #[cfg(target_arch = "x86_64")]
+                Isa::Avx2 => z_chunk_avx2(grid, plan, table, up.get(), lo, hi),
+                #[cfg(target_arch = "x86_64")]
+                Isa::Avx512 => z_chunk_avx512(grid, plan, table, up.get(), lo, hi),
             }
         }
     });
@@ -762,8 +1404,51 @@ mod planned_tests {
     use super::super::grid::{Face, Shape};
     use super::*;
 
-    /// The planned solver against the generic per-cell sweep (an independent elimination of
-    /// the same systems): the same bits on a cylinder with open faces and cells excluded.
+    /// The planned solver (every instruction-set variant this CPU runs) against the generic
+    /// per-cell sweep, an independent elimination of the same systems: the same bits, field
+    /// and inflow, for several steps with one solver.
+    fn assert_same_bits(g: &Grid) {
+        let u0: Vec<f64> = (0..g.len())
+            .map(|i| ((i * 7919 + 13) % 101) as f64 / 100.0)
+            .collect();
+        for isa in Isa::available() {
+            let mut solver = ImplicitSolver::new();
+            let mut a = u0.clone();
+            let mut b = u0.clone();
+            for (d, dt, cb) in [(2.5e-9, 20.0, 1.5), (1e-9, 3.0, 0.2), (8e-9, 600.0, 0.0)] {
+                let mut s = vec![0.0; g.len()];
+                let fa = implicit_step(g, &mut a, &mut s, d, dt, cb);
+                let fb = solver.step_with(g, &mut b, d, dt, cb, isa);
+                for i in 0..g.len() {
+                    assert_eq!(
+                        a[i].to_bits(),
+                        b[i].to_bits(),
+                        "{isa:?}, n = {:?}, cell {i}: {} vs {}",
+                        g.n,
+                        a[i],
+                        b[i]
+                    );
+                }
+                assert_eq!(fa.to_bits(), fb.to_bits(), "{isa:?}, n = {:?}: inflow", g.n);
+            }
+        }
+    }
+
+    fn boxed(n: [usize; 3], open: &[Face]) -> Grid {
+        let size = [n[0] as f64 * 1e-4, n[1] as f64 * 1e-4, n[2] as f64 * 1e-4];
+        Grid::new(Shape::Box { size }, 1e-4, open).unwrap()
+    }
+
+    const ALL_BOX_FACES: [Face; 6] = [
+        Face::XMinus,
+        Face::XPlus,
+        Face::YMinus,
+        Face::YPlus,
+        Face::Bottom,
+        Face::Top,
+    ];
+
+    /// A cylinder with open faces and cells excluded (segments begin and end mid-line).
     #[test]
     fn planned_sweeps_give_the_generic_sweeps_bits() {
         let mut g = Grid::new(
@@ -775,6 +1460,7 @@ mod planned_tests {
             &[Face::Top, Face::Side],
         )
         .unwrap();
+        assert_same_bits(&g);
         let hole: Vec<usize> = (0..g.len())
             .filter(|&i| {
                 let (x, y, z) = (i % g.n[0], (i / g.n[0]) % g.n[1], i / (g.n[0] * g.n[1]));
@@ -782,26 +1468,157 @@ mod planned_tests {
             })
             .collect();
         g.set_excluded(&hole, true);
-        let u0: Vec<f64> = (0..g.len())
-            .map(|i| ((i * 7919 + 13) % 101) as f64 / 100.0)
-            .collect();
-        let mut solver = ImplicitSolver::new();
-        for (d, dt, cb) in [(2.5e-9, 20.0, 1.5), (1e-9, 3.0, 0.2), (8e-9, 600.0, 0.0)] {
-            let mut a = u0.clone();
-            let mut s = vec![0.0; g.len()];
-            let fa = implicit_step(&g, &mut a, &mut s, d, dt, cb);
-            let mut b = u0.clone();
-            let fb = solver.step(&g, &mut b, d, dt, cb);
-            for i in 0..g.len() {
-                assert_eq!(
-                    a[i].to_bits(),
-                    b[i].to_bits(),
-                    "cell {i}: {} vs {}",
-                    a[i],
-                    b[i]
+        assert_same_bits(&g);
+    }
+
+    /// Boxes: all faces open, a thin grid (nz = 3), a non-square plane (the x sweep's
+    /// transpose), rows shorter and longer than a broadcast run, all faces sealed.
+    #[test]
+    fn planned_sweeps_give_the_generic_sweeps_bits_in_boxes() {
+        assert_same_bits(&boxed([20, 20, 9], &ALL_BOX_FACES));
+        assert_same_bits(&boxed([21, 17, 3], &[Face::Top, Face::XMinus]));
+        assert_same_bits(&boxed(
+            [23, 11, 7],
+            &[Face::XPlus, Face::YMinus, Face::Bottom],
+        ));
+        assert_same_bits(&boxed([5, 3, 4], &ALL_BOX_FACES));
+        assert_same_bits(&boxed([3, 3, 3], &ALL_BOX_FACES));
+        assert_same_bits(&boxed([13, 9, 10], &[]));
+    }
+
+    /// Segments of length 1 and 2 everywhere: a lattice of excluded cells inside a box with all
+    /// faces open (the excluded cells never touch an open face).
+    #[test]
+    fn planned_sweeps_give_the_generic_sweeps_bits_with_short_segments() {
+        for n in [[19, 16, 12], [9, 30, 5]] {
+            let mut g = boxed(n, &ALL_BOX_FACES);
+            let cells: Vec<usize> = (0..g.len())
+                .filter(|&i| {
+                    let (x, y, z) = (i % g.n[0], (i / g.n[0]) % g.n[1], i / (g.n[0] * g.n[1]));
+                    !g.has_open_side(i) && (x + 2 * y + z) % 3 == 0 || (y % 4 == 1 && x % 2 == 0)
+                })
+                .filter(|&i| !g.has_open_side(i))
+                .collect();
+            g.set_excluded(&cells, true);
+            assert_same_bits(&g);
+        }
+    }
+}
+
+#[cfg(test)]
+mod timing {
+    use super::super::grid::{Face, Shape};
+    use super::*;
+    use std::time::Instant;
+
+    fn min_time(reps: usize, mut f: impl FnMut()) -> f64 {
+        let mut best = f64::INFINITY;
+        for _ in 0..reps {
+            let t = Instant::now();
+            f();
+            best = best.min(t.elapsed().as_secs_f64());
+        }
+        best
+    }
+
+    /// Per-phase throughput, best of many repetitions (robust to a busy machine):
+    /// `cargo test --release --lib timing -- --ignored --nocapture`
+    #[test]
+    #[ignore]
+    fn kernel_timing() {
+        let boxed = |n: [usize; 3]| {
+            let size = [n[0] as f64 * 1e-4, n[1] as f64 * 1e-4, n[2] as f64 * 1e-4];
+            let open = [
+                Face::XMinus,
+                Face::XPlus,
+                Face::YMinus,
+                Face::YPlus,
+                Face::Top,
+            ];
+            Grid::new(Shape::Box { size }, 1e-4, &open).unwrap()
+        };
+        let cyl = Grid::new(
+            Shape::Cylinder {
+                diameter: 11e-3,
+                depth: 5e-3,
+            },
+            86.5e-6,
+            &[Face::Top, Face::Side],
+        )
+        .unwrap();
+        let grids = [
+            ("128x128x32", boxed([128, 128, 32])),
+            ("128x128x128", boxed([128, 128, 128])),
+            ("60x60x60", boxed([60, 60, 60])),
+            ("cyl", cyl),
+        ];
+        let one = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        for (name, g) in &grids {
+            let mut u: Vec<f64> = (0..g.len()).map(|i| 1.0 + (i % 17) as f64 * 0.01).collect();
+            let reps = (200_000_000 / g.len()).clamp(10, 400);
+            let m = g.len() as f64 * 1e-6;
+            let isas = Isa::available();
+            let mut solvers: Vec<ImplicitSolver> =
+                isas.iter().map(|_| ImplicitSolver::new()).collect();
+            let mut best = vec![[f64::INFINITY; 4]; isas.len()];
+            for _round in 0..5 {
+                for (q, &isa) in isas.iter().enumerate() {
+                    let s = &mut solvers[q];
+                    s.step_with(g, &mut u, 2.5e-9, 20.0, 0.5, isa);
+                    let full = min_time(reps / 5 + 2, || {
+                        s.step_with(g, &mut u, 2.5e-9, 20.0, 0.5, isa);
+                    });
+                    let full1 = one.install(|| {
+                        min_time(reps / 5 + 2, || {
+                            s.step_with(g, &mut u, 2.5e-9, 20.0, 0.5, isa);
+                        })
+                    });
+                    let plan = s.plan.clone().unwrap();
+                    let table = s.table.clone();
+                    let mut xv = s.xvals.clone();
+                    let xy = min_time(reps / 5 + 2, || {
+                        sweep_xy(g, &plan, &table, &mut u, &mut xv, isa)
+                    });
+                    let z = min_time(reps / 5 + 2, || sweep_z(g, &plan, &table, &mut u, isa));
+                    for (bst, t) in best[q].iter_mut().zip([full, full1, xy, z]) {
+                        *bst = bst.min(t);
+                    }
+                }
+            }
+            for (q, isa) in isas.iter().enumerate() {
+                let [full, full1, xy, z] = best[q];
+                println!(
+                    "{name:12} {isa:?}: step {:.3} ms = {:.0} M/s (1 thread {:.0} M/s); xy {:.0} M/s, z {:.0} M/s",
+                    full * 1e3,
+                    m / full,
+                    m / full1,
+                    m / xy,
+                    m / z
                 );
             }
-            assert_eq!(fa.to_bits(), fb.to_bits());
+            let mut sc = vec![0.0; g.len()];
+            let gen = min_time(reps.min(50), || {
+                implicit_step(g, &mut u, &mut sc, 2.5e-9, 20.0, 0.5);
+            });
+            let mut a = vec![0.0; g.len()];
+            let b = u.clone();
+            let triad = min_time(reps, || {
+                a.par_chunks_mut(4096)
+                    .zip(b.par_chunks(4096).zip(u.par_chunks(4096)))
+                    .for_each(|(a, (b, c))| {
+                        for ((x, y), z) in a.iter_mut().zip(b).zip(c) {
+                            *x = y + 0.5 * z;
+                        }
+                    });
+            });
+            println!(
+                "{name:12} generic {:.0} M/s; triad {:.1} GB/s (32 B/element)",
+                m / gen,
+                g.len() as f64 * 32.0 / triad * 1e-9
+            );
         }
     }
 }
