@@ -320,9 +320,9 @@ fn gel_planes<const NG: usize>(
                     let c = f[l][g][q];
                     s[l][g] += c;
                     t += c * k[g];
-                    lo[l] = lo[l].min(c);
+                    lo[l] = min_keep(lo[l], c);
                 }
-                max_t[l] = max_t[l].max(t);
+                max_t[l] = max_keep(max_t[l], t);
             }
         }
         for l in 0..GEL_LANES {
@@ -342,9 +342,9 @@ fn gel_planes<const NG: usize>(
                     let c = f[l][g][q];
                     s[g] += c;
                     t += c * k[g];
-                    lo = lo.min(c);
+                    lo = min_keep(lo, c);
                 }
-                m = m.max(t);
+                m = max_keep(m, t);
             }
             out[l].max_tension = m;
             out[l].min_c = lo;
@@ -352,6 +352,28 @@ fn gel_planes<const NG: usize>(
         }
     }
     out
+}
+
+/// `a.min(b)` for an `a` that is not NaN, without the NaN fix-up: `b` when below `a`, else `a`
+/// (a NaN `b` is ignored, as by `f64::min`; of two equal values, `a`, as x86's lowering of
+/// `f64::min` gives).
+#[inline(always)]
+fn min_keep(a: f64, b: f64) -> f64 {
+    if b < a {
+        b
+    } else {
+        a
+    }
+}
+
+/// `a.max(b)` for an `a` that is not NaN ([`min_keep`]'s mirror).
+#[inline(always)]
+fn max_keep(a: f64, b: f64) -> f64 {
+    if b > a {
+        b
+    } else {
+        a
+    }
 }
 
 fn fibonacci_sphere(n: usize) -> Vec<[f64; 3]> {
