@@ -191,11 +191,13 @@ pub enum GridThreads {
 }
 
 /// Grids of fewer cells than this run serially in a batch ([`GridThreads::Auto`]). Measured
-/// with `cargo bench --bench small_runs` (README, "Performance"): on the 216 000-cell small
-/// cube 8 runs in parallel are ~1.3× faster serial inside than with nested grid-level
-/// parallelism, whose per-step fork/join and thread hand-offs cost more than they share; on
-/// grids of millions of cells a step is long enough for the fork/join not to matter, and
-/// grid-level parallelism keeps both cores busy when fewer runs than threads remain.
+/// (README, "Small runs and memory"; `cargo bench --bench small_runs` and `perf stat`) on a
+/// loaded 2-core machine: 8 runs at once took 2–7 % less CPU serial inside than with nested
+/// grid-level parallelism at 27 000, 216 000 and 10⁶ cells (the per-step fork/join and
+/// hand-offs), within the wall-time noise. Serial inside also keeps a waiting worker from
+/// starting another simulation (memory). Above this, a step is long enough for the fork/join
+/// not to matter, and grid-level parallelism keeps both cores busy when fewer runs than threads
+/// remain.
 pub const SMALL_GRID_CELLS: f64 = 1.0e6;
 
 impl GridThreads {
