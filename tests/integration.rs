@@ -51,6 +51,8 @@ mod report;
 mod reproduce;
 #[path = "integration/robustness.rs"]
 mod robustness;
+#[path = "integration/small_runs.rs"]
+mod small_runs;
 #[path = "integration/sweep.rs"]
 mod sweep;
 #[path = "integration/verification.rs"]

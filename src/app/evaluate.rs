@@ -18,7 +18,7 @@
 //! on air and the same schedule again, so the gel and the bubbles carry over.
 
 use super::plan::plan_dive;
-use super::simulate::{ending_text, simulate, SimRun};
+use super::simulate::{ending_text, simulate_in_batch, SimRun};
 use crate::algorithm::config::parse_algorithm;
 use crate::algorithm::schedule::gas_text;
 use crate::algorithm::{load_algorithm, LoadedAlgorithm, Schedule};
@@ -468,13 +468,14 @@ pub fn run_matrix_journaled(
                     run
                 }
                 None => {
-                    let run =
-                        simulate(params, &candidates[c].history, &mut cb).map_err(|e| match e {
+                    let run = simulate_in_batch(params, &candidates[c].history, &mut cb).map_err(
+                        |e| match e {
                             Error::Solver(m) => {
                                 Error::Solver(format!("{} under {law}: {m}", candidates[c].label))
                             }
                             other => other,
-                        })?;
+                        },
+                    )?;
                     if let Some(jn) = &journal {
                         jn.put(
                             &file,

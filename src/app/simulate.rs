@@ -167,6 +167,110 @@ pub fn simulate_checkpointed(
     })
 }
 
+/// How one simulation's grid loops (the diffusion kernels, the per-record pass over the gel)
+/// use threads (issue 13: small runs are cheap). Every mode gives the same bits (the grid
+/// loops combine their parts in a fixed order, whatever the thread count); only the time
+/// differs.
+///
+/// Runners of many simulations at once (`sweep`/`sensitivity`, `fit`, `discover`, `evaluate`,
+/// `reproduce`) run them in parallel through rayon and use [`GridThreads::batch`] for each:
+/// [`GridThreads::Auto`] unless the environment variable `DECOPHANTOM_GRID_THREADS` says
+/// `serial`, `parallel` or `auto`. A lone `simulate` runs its grid loops on every thread.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum GridThreads {
+    /// [`GridThreads::Serial`] for a grid of fewer than [`SMALL_GRID_CELLS`] cells, else
+    /// [`GridThreads::Parallel`].
+    #[default]
+    Auto,
+    /// Every grid loop on one thread: the run is installed in a one-thread rayon pool, so each
+    /// `par_iter` inside it runs serially, with no fork/join per step. For small runs among
+    /// many running in parallel, where the parallelism is across runs.
+    Serial,
+    /// Grid loops on the current rayon pool (nested in a runner's parallel loop over runs).
+    Parallel,
+}
+
+/// Grids of fewer cells than this run serially in a batch ([`GridThreads::Auto`]). Measured
+/// (README, "Small runs and memory"; `cargo bench --bench small_runs` and `perf stat`) on a
+/// loaded 2-core machine: 8 runs at once took 2–7 % less CPU serial inside than with nested
+/// grid-level parallelism at 27 000, 216 000 and 10⁶ cells (the per-step fork/join and
+/// hand-offs), within the wall-time noise. Serial inside also keeps a waiting worker from
+/// starting another simulation (memory). Above this, a step is long enough for the fork/join
+/// not to matter, and grid-level parallelism keeps both cores busy when fewer runs than threads
+/// remain.
+pub const SMALL_GRID_CELLS: f64 = 1.0e6;
+
+impl GridThreads {
+    /// The mode for one of many simulations run at once: `DECOPHANTOM_GRID_THREADS`
+    /// (`auto`, `serial` or `parallel`; read once) or [`GridThreads::Auto`].
+    pub fn batch() -> GridThreads {
+        static MODE: std::sync::OnceLock<GridThreads> = std::sync::OnceLock::new();
+        *MODE.get_or_init(|| {
+            match std::env::var("DECOPHANTOM_GRID_THREADS")
+                .unwrap_or_default()
+                .trim()
+                .to_ascii_lowercase()
+                .as_str()
+            {
+                "serial" => GridThreads::Serial,
+                "parallel" => GridThreads::Parallel,
+                _ => GridThreads::Auto,
+            }
+        })
+    }
+
+    /// Whether a run of `params` keeps its grid loops on one thread in this mode.
+    pub fn serial_for(self, params: &PhantomParams) -> bool {
+        match self {
+            GridThreads::Serial => true,
+            GridThreads::Parallel => false,
+            GridThreads::Auto => estimated_cells(params) < SMALL_GRID_CELLS,
+        }
+    }
+}
+
+/// Cells of the grid of `params` (its bounding box over the grid step cubed; no grid is built).
+pub fn estimated_cells(params: &PhantomParams) -> f64 {
+    let extent = match params.shape {
+        crate::phantom::grid::Shape::Box { size } => size[0] * size[1] * size[2],
+        crate::phantom::grid::Shape::Cylinder { diameter, depth } => diameter * diameter * depth,
+    };
+    extent / params.grid_step.powi(3)
+}
+
+thread_local! {
+    /// This thread's one-thread pool for [`with_grid_threads`] (built on first use).
+    static ONE_THREAD: Option<rayon::ThreadPool> =
+        rayon::ThreadPoolBuilder::new().num_threads(1).build().ok();
+}
+
+/// Run `f` (a simulation of `params`) with its grid loops as `mode` chooses for it: inside
+/// this thread's one-thread pool when serial, on the current pool otherwise.
+pub fn with_grid_threads<R: Send>(
+    mode: GridThreads,
+    params: &PhantomParams,
+    f: impl FnOnce() -> R + Send,
+) -> R {
+    if !mode.serial_for(params) {
+        return f();
+    }
+    ONE_THREAD.with(|pool| match pool {
+        Some(pool) => pool.install(f),
+        None => f(),
+    })
+}
+
+/// [`simulate`] as one of many simulations run at once ([`GridThreads::batch`]).
+pub fn simulate_in_batch(
+    params: &PhantomParams,
+    profile: &PressureHistory,
+    progress: &mut (dyn FnMut(f64, f64) + Send),
+) -> Result<SimRun, Error> {
+    with_grid_threads(GridThreads::batch(), params, || {
+        simulate(params, profile, progress)
+    })
+}
+
 /// `bubbles.csv`: `time_s,bubble,radius_m,volume_m3,area_m2` then `n_<gas>_mol` per gas; one row per
 /// active bubble per recorded frame.
 pub fn bubbles_csv(frames: &[Frame], gases: &[Gas]) -> String {

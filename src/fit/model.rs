@@ -11,7 +11,7 @@ use super::journal::{self, Evaluations};
 use super::lsq::{infer_with, minimize, Inference, LsqOptions, LsqResult};
 use super::paths::{self, ParamSpec};
 use super::stats::aicc;
-use crate::app::simulate::{simulate, SimRun};
+use crate::app::simulate::SimRun;
 use crate::error::Error;
 use crate::phantom::params::Numerics;
 use crate::phantom::sim::{Event, Frame};
@@ -238,36 +238,13 @@ fn sample_experiment(
         .collect()
 }
 
-/// Grids up to this many cells run on one thread: a fit's parallelism is across simulations
-/// (experiments, Jacobian columns, candidates), and on a small grid the per-step fork/join of
-/// grid-level parallelism costs more than the step itself (measured on a 512-cell cube:
-/// ~60 % of the run was thread wake-ups).
-const SMALL_GRID_CELLS: f64 = 2.0e5;
-
-thread_local! {
-    static ONE_THREAD: Option<rayon::ThreadPool> =
-        rayon::ThreadPoolBuilder::new().num_threads(1).build().ok();
-}
-
-/// One simulation, on a one-thread pool when its grid is small (results are identical across
-/// thread counts).
+/// One simulation as one of many run at once: serial grid loops on a small grid
+/// ([`crate::app::simulate::GridThreads::batch`]; results are identical across thread counts).
 pub fn run_one(
     params: &crate::phantom::params::PhantomParams,
     profile: &crate::profile::PressureHistory,
 ) -> Result<SimRun, Error> {
-    let extent = match params.shape {
-        crate::phantom::grid::Shape::Box { size } => size[0] * size[1] * size[2],
-        crate::phantom::grid::Shape::Cylinder { diameter, depth } => diameter * diameter * depth,
-    };
-    let cells = extent / params.grid_step.powi(3);
-    if cells < SMALL_GRID_CELLS {
-        ONE_THREAD.with(|p| match p {
-            Some(pool) => pool.install(|| simulate(params, profile, &mut |_, _| {})),
-            None => simulate(params, profile, &mut |_, _| {}),
-        })
-    } else {
-        simulate(params, profile, &mut |_, _| {})
-    }
+    crate::app::simulate::simulate_in_batch(params, profile, &mut |_, _| {})
 }
 
 /// The simulated radius at every observation (measurement order) from runs of every experiment.
