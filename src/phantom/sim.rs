@@ -1296,7 +1296,11 @@ impl<'a> Simulation<'a> {
             };
             // the field before the step is in `scratch` either way
             if estimate {
-                let ratio = if self.last_dt > 0.0 { dt / self.last_dt } else { 0.0 };
+                let ratio = if self.last_dt > 0.0 {
+                    dt / self.last_dt
+                } else {
+                    0.0
+                };
                 let raw = diffusion::change_and_error(
                     &self.grid,
                     &self.fields[g],
@@ -1310,7 +1314,8 @@ impl<'a> Simulation<'a> {
                     self.clear_near_fields();
                     let mut e = diffusion::rms_inside(&self.grid, &self.scratch) * to_pa;
                     if e > tol_pa {
-                        self.implicit.step(&self.grid, &mut self.scratch, d, dt, 0.0);
+                        self.implicit
+                            .step(&self.grid, &mut self.scratch, d, dt, 0.0);
                         e = diffusion::rms_inside(&self.grid, &self.scratch) * to_pa;
                     }
                     err = err.max(e);
@@ -1995,7 +2000,9 @@ mod field_error_tests {
     /// `tests/integration/verification.rs`): from the same state, the step's result minus a
     /// reference (the same state advanced by 400 backward-Euler substeps, whose own error is
     /// 400× smaller), RMS over the cells, in Pa. Checked at several steps and stages of the
-    /// decay: the estimate follows the true error within a factor of 2.
+    /// decay, with the filtered estimate the step control uses above the tolerance: it is
+    /// conservative (1.8–3.1× the true error when written) and ranks the cases as the true
+    /// error does.
     #[test]
     fn field_error_estimate_tracks_the_true_local_error_on_the_open_cube() {
         let (n, h, d, l_n2) = (15usize, 1e-4, 1e-9, 0.014);
@@ -2011,16 +2018,11 @@ mod field_error_tests {
         let pure_n2 = GasMix { o2: 0.0, he: 0.0 };
         let (p_start, p_chamber) = (2e5, 1e5);
         let t_end = 1e4;
-        let profile = PressureHistory::with_gas(
-            "hold",
-            vec![0.0, t_end],
-            vec![p_chamber; 2],
-            pure_n2,
-            0.0,
-        )
-        .unwrap();
+        let profile =
+            PressureHistory::with_gas("hold", vec![0.0, t_end], vec![p_chamber; 2], pure_n2, 0.0)
+                .unwrap();
         let l2d = size * size / d; // diffusion time L²/D, 2250 s
-        let mut checked = 0;
+        let mut pairs = Vec::new();
         // (time of the first step, its length, the length of the measured step)
         for (t0, dt1, dt2) in [
             (0.02 * l2d, 2.0, 4.0),
@@ -2041,7 +2043,7 @@ mod field_error_tests {
                 solver.step(&sim.grid, &mut sim.fields[0], d, t0 / sub as f64, cb);
             }
             sim.time = t0;
-            let tol = 1e9; // no filtering: the raw estimate is compared
+            let tol = 0.0; // always filtered
             let (imp1, _) = sim.diffuse(&profile, t0, dt1, tol);
             assert!(imp1);
             let start = sim.fields[0].clone();
@@ -2063,9 +2065,13 @@ mod field_error_tests {
             eprintln!(
                 "t0 = {t0:.0} s, steps {dt1} then {dt2} s: estimate {est:.4e} Pa, true {truth:.4e} Pa, ratio {ratio:.3}"
             );
-            assert!(truth > 0.0 && (0.5..2.0).contains(&ratio), "ratio {ratio}");
-            checked += 1;
+            assert!(truth > 0.0 && (1.0..4.0).contains(&ratio), "ratio {ratio}");
+            pairs.push((truth, est));
         }
-        assert_eq!(checked, 5);
+        assert_eq!(pairs.len(), 5);
+        // the same order by estimate as by true error
+        let mut by_truth = pairs.clone();
+        by_truth.sort_by(|a, b| a.0.total_cmp(&b.0));
+        assert!(by_truth.windows(2).all(|w| w[0].1 < w[1].1), "{by_truth:?}");
     }
 }
