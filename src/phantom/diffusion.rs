@@ -344,38 +344,38 @@ impl LinePlan {
         let strides = [1usize, nx, plane];
         let len = grid.len();
         // pass 1: position of every cell in its segment (cells in index order: the minus
-        // neighbour idx − stride always comes first) and the longest segment
-        let mut pos: [Vec<u32>; 3] = [vec![0; len], vec![0; len], vec![0; len]];
+        // neighbour idx − stride always comes first) and the longest segment, kept in the
+        // index arrays themselves (no temporary of the grid's size)
+        let mut index: [Vec<u16>; 3] = [vec![0; len], vec![0; len], vec![0; len]];
         let mut max_len = 1usize;
         for dir in 0..3 {
             let codes = &grid.codes[dir];
             let stride = strides[dir];
-            let p = &mut pos[dir];
+            let p = &mut index[dir];
             for idx in 0..len {
                 let c = codes[idx];
                 if c & INSIDE_BIT != 0 && c & 3 == SIDE_INTERIOR {
-                    let k = p[idx - stride] + 1;
-                    p[idx] = k;
-                    max_len = max_len.max(k as usize + 1);
+                    let k = p[idx - stride] as usize + 1;
+                    if k + 1 > MAX_TABLE_SEGMENT {
+                        return None;
+                    }
+                    p[idx] = k as u16;
+                    max_len = max_len.max(k + 1);
                 }
             }
         }
-        if max_len > MAX_TABLE_SEGMENT {
-            return None;
-        }
-        // pass 2: the table index; the segment's minus end is read at its first cell
-        let mut index: [Vec<u16>; 3] = [vec![0; len], vec![0; len], vec![0; len]];
+        // pass 2, in place: position → table index; the segment's minus end is read at its
+        // first cell
         for dir in 0..3 {
             let codes = &grid.codes[dir];
             let stride = strides[dir];
-            let p = &pos[dir];
             let out = &mut index[dir];
             for idx in 0..len {
                 let c = codes[idx];
                 if c & INSIDE_BIT == 0 {
                     continue;
                 }
-                let k = p[idx] as usize;
+                let k = out[idx] as usize;
                 let first = codes[idx - k * stride];
                 let start_open = usize::from(first & 3 == SIDE_OPEN);
                 let end = match (c >> 2) & 3 {
