@@ -190,15 +190,15 @@ pub enum GridThreads {
     Parallel,
 }
 
-/// Grids of fewer cells than this run serially in a batch ([`GridThreads::Auto`]). Measured
-/// (README, "Small runs and memory"; `cargo bench --bench small_runs` and `perf stat`) on a
-/// loaded 2-core machine: 8 runs at once took 2–7 % less CPU serial inside than with nested
-/// grid-level parallelism at 27 000, 216 000 and 10⁶ cells (the per-step fork/join and
-/// hand-offs), within the wall-time noise. Serial inside also keeps a waiting worker from
-/// starting another simulation (memory). Above this, a step is long enough for the fork/join
-/// not to matter, and grid-level parallelism keeps both cores busy when fewer runs than threads
-/// remain.
-pub const SMALL_GRID_CELLS: f64 = 1.0e6;
+/// Grids of fewer cells than this run serially in a batch ([`GridThreads::Auto`]): on a tiny
+/// grid the per-step fork/join of grid-level parallelism costs more than the step (a 512-cell
+/// cube: ~60 % of the run was thread wake-ups). Kept small because serial-inside runs go
+/// through `ThreadPool::install`, whose waiting worker steals further runs of the batch into
+/// the same one-thread pool: on a quiet 2-core machine 8 runs of the 216 000-cell
+/// `benches/small-cube` took 3.59 s serial inside against 1.83 s nested (`cargo bench --bench
+/// small_runs`, 25 Nov 2026), i.e. the runs were serialised. Above this, grid-level
+/// parallelism.
+pub const SMALL_GRID_CELLS: f64 = 2.0e5;
 
 impl GridThreads {
     /// The mode for one of many simulations run at once: `DECOPHANTOM_GRID_THREADS`
