@@ -1150,25 +1150,23 @@ fn sweep_z(grid: &Grid, plan: &LinePlan, table: &Tables, u: &mut [f64], isa: Isa
 /// The field-error pass of a step ([`super::sim`]'s `diffuse`): with `after` the field at
 /// the end of the step and `before_to_error` at its start, stores each inside cell's change
 /// δ = after − before in `change` (which held the last step's change δ'), overwrites
-/// `before_to_error` with the raw error vector δ − ratio·δ' (0 outside), and returns its
-/// largest magnitude (ratio = this step over the last). A max over per-plane maxima:
-/// independent of the number of threads.
+/// `before_to_error` with the raw error vector δ − ratio·δ' (0 outside; ratio = this step
+/// over the last).
 pub fn change_and_error(
     grid: &Grid,
     after: &[f64],
     before_to_error: &mut [f64],
     change: &mut [f64],
     ratio: f64,
-) -> f64 {
+) {
     let plane = grid.n[0] * grid.n[1];
     let inside = &grid.codes[0];
     change
         .par_chunks_mut(plane)
         .zip(before_to_error.par_chunks_mut(plane))
         .enumerate()
-        .map(|(k, (slab, err))| {
+        .for_each(|(k, (slab, err))| {
             let lo = k * plane;
-            let mut worst: f64 = 0.0;
             for (q, (last, e)) in slab.iter_mut().zip(err.iter_mut()).enumerate() {
                 let idx = lo + q;
                 if inside[idx] & INSIDE_BIT == 0 {
@@ -1177,14 +1175,10 @@ pub fn change_and_error(
                     continue;
                 }
                 let delta = after[idx] - *e;
-                let x = delta - ratio * *last;
-                worst = worst.max(x.abs());
-                *e = x;
+                *e = delta - ratio * *last;
                 *last = delta;
             }
-            worst
-        })
-        .reduce(|| 0.0, f64::max)
+        });
 }
 
 /// Root mean square of `field` over the inside cells. Per-plane sums added in plane order:
@@ -1501,124 +1495,6 @@ mod planned_tests {
                 .collect();
             g.set_excluded(&cells, true);
             assert_same_bits(&g);
-        }
-    }
-}
-
-#[cfg(test)]
-mod timing {
-    use super::super::grid::{Face, Shape};
-    use super::*;
-    use std::time::Instant;
-
-    fn min_time(reps: usize, mut f: impl FnMut()) -> f64 {
-        let mut best = f64::INFINITY;
-        for _ in 0..reps {
-            let t = Instant::now();
-            f();
-            best = best.min(t.elapsed().as_secs_f64());
-        }
-        best
-    }
-
-    /// Per-phase throughput, best of many repetitions (robust to a busy machine):
-    /// `cargo test --release --lib timing -- --ignored --nocapture`
-    #[test]
-    #[ignore]
-    fn kernel_timing() {
-        let boxed = |n: [usize; 3]| {
-            let size = [n[0] as f64 * 1e-4, n[1] as f64 * 1e-4, n[2] as f64 * 1e-4];
-            let open = [
-                Face::XMinus,
-                Face::XPlus,
-                Face::YMinus,
-                Face::YPlus,
-                Face::Top,
-            ];
-            Grid::new(Shape::Box { size }, 1e-4, &open).unwrap()
-        };
-        let cyl = Grid::new(
-            Shape::Cylinder {
-                diameter: 11e-3,
-                depth: 5e-3,
-            },
-            86.5e-6,
-            &[Face::Top, Face::Side],
-        )
-        .unwrap();
-        let grids = [
-            ("128x128x32", boxed([128, 128, 32])),
-            ("128x128x128", boxed([128, 128, 128])),
-            ("60x60x60", boxed([60, 60, 60])),
-            ("cyl", cyl),
-        ];
-        let one = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        for (name, g) in &grids {
-            let mut u: Vec<f64> = (0..g.len()).map(|i| 1.0 + (i % 17) as f64 * 0.01).collect();
-            let reps = (200_000_000 / g.len()).clamp(10, 400);
-            let m = g.len() as f64 * 1e-6;
-            let isas = Isa::available();
-            let mut solvers: Vec<ImplicitSolver> =
-                isas.iter().map(|_| ImplicitSolver::new()).collect();
-            let mut best = vec![[f64::INFINITY; 4]; isas.len()];
-            for _round in 0..5 {
-                for (q, &isa) in isas.iter().enumerate() {
-                    let s = &mut solvers[q];
-                    s.step_with(g, &mut u, 2.5e-9, 20.0, 0.5, isa);
-                    let full = min_time(reps / 5 + 2, || {
-                        s.step_with(g, &mut u, 2.5e-9, 20.0, 0.5, isa);
-                    });
-                    let full1 = one.install(|| {
-                        min_time(reps / 5 + 2, || {
-                            s.step_with(g, &mut u, 2.5e-9, 20.0, 0.5, isa);
-                        })
-                    });
-                    let plan = s.plan.clone().unwrap();
-                    let table = s.table.clone();
-                    let mut xv = s.xvals.clone();
-                    let xy = min_time(reps / 5 + 2, || {
-                        sweep_xy(g, &plan, &table, &mut u, &mut xv, isa)
-                    });
-                    let z = min_time(reps / 5 + 2, || sweep_z(g, &plan, &table, &mut u, isa));
-                    for (bst, t) in best[q].iter_mut().zip([full, full1, xy, z]) {
-                        *bst = bst.min(t);
-                    }
-                }
-            }
-            for (q, isa) in isas.iter().enumerate() {
-                let [full, full1, xy, z] = best[q];
-                println!(
-                    "{name:12} {isa:?}: step {:.3} ms = {:.0} M/s (1 thread {:.0} M/s); xy {:.0} M/s, z {:.0} M/s",
-                    full * 1e3,
-                    m / full,
-                    m / full1,
-                    m / xy,
-                    m / z
-                );
-            }
-            let mut sc = vec![0.0; g.len()];
-            let gen = min_time(reps.min(50), || {
-                implicit_step(g, &mut u, &mut sc, 2.5e-9, 20.0, 0.5);
-            });
-            let mut a = vec![0.0; g.len()];
-            let b = u.clone();
-            let triad = min_time(reps, || {
-                a.par_chunks_mut(4096)
-                    .zip(b.par_chunks(4096).zip(u.par_chunks(4096)))
-                    .for_each(|(a, (b, c))| {
-                        for ((x, y), z) in a.iter_mut().zip(b).zip(c) {
-                            *x = y + 0.5 * z;
-                        }
-                    });
-            });
-            println!(
-                "{name:12} generic {:.0} M/s; triad {:.1} GB/s (32 B/element)",
-                m / gen,
-                g.len() as f64 * 32.0 / triad * 1e-9
-            );
         }
     }
 }

@@ -1301,7 +1301,7 @@ impl<'a> Simulation<'a> {
                 } else {
                     0.0
                 };
-                let raw = diffusion::change_and_error(
+                diffusion::change_and_error(
                     &self.grid,
                     &self.fields[g],
                     &mut self.scratch,
@@ -1310,7 +1310,6 @@ impl<'a> Simulation<'a> {
                 );
                 if implicit && self.last_dt > 0.0 {
                     let to_pa = dt / (dt + self.last_dt) * self.rt / self.ostwald[g];
-                    let _ = raw;
                     self.clear_near_fields();
                     let mut e = diffusion::rms_inside(&self.grid, &self.scratch) * to_pa;
                     if e > tol_pa {
