@@ -1500,14 +1500,10 @@ mod planned_tests {
         Grid::new(Shape::Box { size }, 1e-4, open).unwrap()
     }
 
-    const ALL_BOX_FACES: [Face; 6] = [
-        Face::XMinus,
-        Face::XPlus,
-        Face::YMinus,
-        Face::YPlus,
-        Face::Bottom,
-        Face::Top,
-    ];
+    /// Every face of a box (the shape's own list).
+    fn all_box_faces() -> &'static [Face] {
+        Shape::Box { size: [1.0; 3] }.faces()
+    }
 
     /// A cylinder with open faces and cells excluded (segments begin and end mid-line).
     #[test]
@@ -1536,14 +1532,14 @@ mod planned_tests {
     /// transpose), rows shorter and longer than a broadcast run, all faces sealed.
     #[test]
     fn planned_sweeps_give_the_generic_sweeps_bits_in_boxes() {
-        assert_same_bits(&boxed([20, 20, 9], &ALL_BOX_FACES));
+        assert_same_bits(&boxed([20, 20, 9], all_box_faces()));
         assert_same_bits(&boxed([21, 17, 3], &[Face::Top, Face::XMinus]));
         assert_same_bits(&boxed(
             [23, 11, 7],
             &[Face::XPlus, Face::YMinus, Face::Bottom],
         ));
-        assert_same_bits(&boxed([5, 3, 4], &ALL_BOX_FACES));
-        assert_same_bits(&boxed([3, 3, 3], &ALL_BOX_FACES));
+        assert_same_bits(&boxed([5, 3, 4], all_box_faces()));
+        assert_same_bits(&boxed([3, 3, 3], all_box_faces()));
         assert_same_bits(&boxed([13, 9, 10], &[]));
     }
 
@@ -1552,7 +1548,7 @@ mod planned_tests {
     #[test]
     fn planned_sweeps_give_the_generic_sweeps_bits_with_short_segments() {
         for n in [[19, 16, 12], [9, 30, 5]] {
-            let mut g = boxed(n, &ALL_BOX_FACES);
+            let mut g = boxed(n, all_box_faces());
             let cells: Vec<usize> = (0..g.len())
                 .filter(|&i| {
                     let (x, y, z) = (i % g.n[0], (i / g.n[0]) % g.n[1], i / (g.n[0] * g.n[1]));

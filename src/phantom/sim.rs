@@ -314,50 +314,29 @@ fn gel_planes<const NG: usize>(
         let z = (kz + l.min(lanes - 1)) * plane;
         std::array::from_fn(|g| &fields[g][z..z + plane])
     });
-    if lanes == GEL_LANES {
-        let mut max_t = [f64::NEG_INFINITY; GEL_LANES];
-        let mut lo = [f64::INFINITY; GEL_LANES];
-        let mut s = [[0.0; NG]; GEL_LANES];
-        for q in 0..plane {
-            for l in 0..GEL_LANES {
-                if codes[l][q] & super::grid::INSIDE_BIT == 0 {
-                    continue;
-                }
-                let mut t = 0.0;
-                for g in 0..NG {
-                    let c = f[l][g][q];
-                    s[l][g] += c;
-                    t += c * k[g];
-                    lo[l] = min_keep(lo[l], c);
-                }
-                max_t[l] = max_keep(max_t[l], t);
-            }
-        }
+    let mut max_t = [f64::NEG_INFINITY; GEL_LANES];
+    let mut lo = [f64::INFINITY; GEL_LANES];
+    let mut s = [[0.0; NG]; GEL_LANES];
+    for q in 0..plane {
         for l in 0..GEL_LANES {
-            out[l].max_tension = max_t[l];
-            out[l].min_c = lo[l];
-            out[l].sums[..NG].copy_from_slice(&s[l]);
-        }
-    } else {
-        for l in 0..lanes {
-            let (mut m, mut lo, mut s) = (f64::NEG_INFINITY, f64::INFINITY, [0.0; NG]);
-            for q in 0..plane {
-                if codes[l][q] & super::grid::INSIDE_BIT == 0 {
-                    continue;
-                }
-                let mut t = 0.0;
-                for g in 0..NG {
-                    let c = f[l][g][q];
-                    s[g] += c;
-                    t += c * k[g];
-                    lo = min_keep(lo, c);
-                }
-                m = max_keep(m, t);
+            if codes[l][q] & super::grid::INSIDE_BIT == 0 {
+                continue;
             }
-            out[l].max_tension = m;
-            out[l].min_c = lo;
-            out[l].sums[..NG].copy_from_slice(&s);
+            let mut t = 0.0;
+            for g in 0..NG {
+                let c = f[l][g][q];
+                s[l][g] += c;
+                t += c * k[g];
+                lo[l] = min_keep(lo[l], c);
+            }
+            max_t[l] = max_keep(max_t[l], t);
         }
+    }
+    // planes past `lanes` repeat the last one (see `codes`, `f`): computed, not returned
+    for l in 0..lanes {
+        out[l].max_tension = max_t[l];
+        out[l].min_c = lo[l];
+        out[l].sums[..NG].copy_from_slice(&s[l]);
     }
     out
 }
