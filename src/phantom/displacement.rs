@@ -118,9 +118,12 @@ pub fn remap(
                     let s = if d > 0.0 { rb / d } else { 1.0 };
                     let from = [centre[0] + x * s, centre[1] + y * s, centre[2] + z * s];
                     let mut values = [0.0; Gas::ALL.len()];
-                    for ((v, f), w) in values.iter_mut().zip(fields).zip(wall) {
-                        *v = interpolate(grid, f, from, *w, f[idx]);
+                    let mut here = [0.0; Gas::ALL.len()];
+                    for (h, f) in here.iter_mut().zip(fields) {
+                        *h = f[idx];
                     }
+                    let ng = fields.len();
+                    interpolate_gases(grid, fields, from, wall, &here[..ng], &mut values[..ng]);
                     out.push((idx, values));
                 }
             }
@@ -129,20 +132,31 @@ pub fn remap(
         .collect()
 }
 
-/// Trilinear interpolation of `field` at `p` in which cells taken out of the gel count at the
-/// wall value `wall` (the gel at a bubble's surface is at Henry equilibrium with it: dropping
-/// those corners instead would extrapolate the field from farther out, and every displacement
-/// would then pull the wall layer toward the far field — measured: dissolution of a bubble of
-/// R0 = 4h 1.6 % early). Corners outside the phantom are dropped and the weights renormalised;
-/// `fallback` if none is left.
-pub fn interpolate(grid: &Grid, field: &[f64], p: [f64; 3], wall: f64, fallback: f64) -> f64 {
-    grid.interpolate_by(p, fallback, |idx| {
+/// Trilinear interpolation of each of `fields` at `p` into `out` (one per field), in which
+/// cells taken out of the gel count at the field's wall value `wall[g]` (the gel at a bubble's
+/// surface is at Henry equilibrium with it: dropping those corners instead would extrapolate
+/// the field from farther out, and every displacement would then pull the wall layer toward
+/// the far field — measured: dissolution of a bubble of R0 = 4h 1.6 % early). Corners outside
+/// the phantom are dropped and the weights renormalised; `fallback[g]` if none is left.
+pub fn interpolate_gases(
+    grid: &Grid,
+    fields: &[Vec<f64>],
+    p: [f64; 3],
+    wall: &[f64],
+    fallback: &[f64],
+    out: &mut [f64],
+) {
+    grid.interpolate_many(p, fallback, out, |idx, v| {
         if grid.inside(idx) {
-            Some(field[idx])
+            for (v, f) in v.iter_mut().zip(fields) {
+                *v = f[idx];
+            }
+            true
         } else if grid.is_excluded(idx) {
-            Some(wall)
+            v.copy_from_slice(&wall[..v.len()]);
+            true
         } else {
-            None
+            false
         }
     })
 }

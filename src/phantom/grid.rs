@@ -83,6 +83,10 @@ pub const SIDE_SEALED: u8 = 0;
 pub const SIDE_INTERIOR: u8 = 1;
 /// Face code: an open face held at Henry equilibrium with the chamber gas.
 pub const SIDE_OPEN: u8 = 2;
+/// Most fields [`Grid::interpolate_many`] interpolates at once (one per simulated gas, and a
+/// spare).
+pub const MAX_FIELDS: usize = 4;
+
 /// Bit set in a direction code when the cell is inside the phantom.
 pub const INSIDE_BIT: u8 = 16;
 
@@ -471,6 +475,30 @@ impl Grid {
         fallback: f64,
         value: impl Fn(usize) -> Option<f64>,
     ) -> f64 {
+        let mut out = [0.0];
+        self.interpolate_many(p, &[fallback], &mut out, |idx, v| match value(idx) {
+            Some(x) => {
+                v[0] = x;
+                true
+            }
+            None => false,
+        });
+        out[0]
+    }
+
+    /// [`Self::interpolate_by`] of several fields at once (one value per field, `out.len()` of
+    /// them, at most [`MAX_FIELDS`]): the corners and weights are found once. `value(idx, v)`
+    /// writes the fields' values at cell `idx` into `v` and returns false for a corner to drop.
+    /// Each field's result is the same bits as [`Self::interpolate_by`] of that field alone.
+    pub fn interpolate_many(
+        &self,
+        p: [f64; 3],
+        fallback: &[f64],
+        out: &mut [f64],
+        mut value: impl FnMut(usize, &mut [f64]) -> bool,
+    ) {
+        let nf = out.len();
+        assert!(nf <= MAX_FIELDS && fallback.len() == nf);
         let mut i0 = [0usize; 3];
         let mut t = [0.0f64; 3];
         for a in 0..3 {
@@ -479,7 +507,8 @@ impl Grid {
             i0[a] = base;
             t[a] = f - base as f64;
         }
-        let mut sum = 0.0;
+        let mut sum = [0.0; MAX_FIELDS];
+        let mut v = [0.0; MAX_FIELDS];
         let mut wsum = 0.0;
         for dk in 0..2 {
             let wk = if dk == 0 { 1.0 - t[2] } else { t[2] };
@@ -491,17 +520,17 @@ impl Grid {
                     if w <= 0.0 {
                         continue;
                     }
-                    if let Some(v) = value(self.index(i0[0] + di, i0[1] + dj, i0[2] + dk)) {
-                        sum += w * v;
+                    if value(self.index(i0[0] + di, i0[1] + dj, i0[2] + dk), &mut v[..nf]) {
+                        for (s, x) in sum.iter_mut().zip(&v[..nf]) {
+                            *s += w * x;
+                        }
                         wsum += w;
                     }
                 }
             }
         }
-        if wsum > 1e-12 {
-            sum / wsum
-        } else {
-            fallback
+        for (o, (s, fb)) in out.iter_mut().zip(sum.iter().zip(fallback)) {
+            *o = if wsum > 1e-12 { s / wsum } else { *fb };
         }
     }
 

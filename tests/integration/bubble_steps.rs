@@ -109,3 +109,81 @@ fn default_steps_are_within_0_3_percent_of_16x_smaller_steps() {
         "dissolution {t16} vs resolved {tr}"
     );
 }
+
+/// A chamber dive on a small open box with one nucleus that the compression shuts (R falls
+/// below R_min at once): 0 → 130 psi gauge at 1 psi/s, 10 min at depth, to the surface at
+/// 5 psi/s, 10 min of growth. `scale` multiplies every step limit (the cap too, from 600 s).
+/// Returns the frames (one per step).
+fn shut_nucleus_dive(scale: f64) -> Vec<decophantom::phantom::sim::Frame> {
+    use decophantom::units::PSI_PA;
+    let h = 200e-6;
+    let mut params = PhantomParams::box_phantom([2.4e-3; 3], h);
+    params.open_faces = params.shape.faces().to_vec();
+    params.min_radius = 95e-6;
+    params.bubbles = BubblePlacement::Explicit(vec![([1.2e-3; 3], 100e-6)]);
+    let n = &mut params.numerics;
+    n.record_interval = 0.0;
+    n.max_step = 600.0 * scale;
+    n.max_pressure_change *= scale;
+    n.max_content_change *= scale;
+    n.bubble_tolerance *= scale;
+    let s = 101_325.0;
+    let deep = s + 130.0 * PSI_PA;
+    let profile = PressureHistory::with_gas(
+        "shut nucleus",
+        vec![0.0, 130.0, 730.0, 756.0, 1356.0],
+        vec![s, deep, deep, s, s],
+        GasMix::AIR,
+        0.0,
+    )
+    .unwrap();
+    let mut sim = Simulation::new(&params, &profile).unwrap();
+    let mut rec = Recorder::default();
+    sim.run(&profile, &mut rec).unwrap();
+    rec.frames
+}
+
+/// Issue 13: the pressure-change limit (1 % of ambient per step) is the bubbles' limit. While
+/// the pressure rises and every bubble is shut (R ≤ R_min, no exchange) nothing it guards can
+/// happen, and the compression takes the field's steps instead: here fewer than 40 where the
+/// limit alone needs ln(p_deep/p_surface)/0.01 = 229. The bubble's growth after surfacing is
+/// the same within 0.5 % as a run with every step limit 4× smaller (in which the limit still
+/// holds on the way down while the bubble is open), against the 4×-refined run's own change
+/// from the default steps.
+#[test]
+fn a_compression_with_every_bubble_shut_takes_the_fields_steps() {
+    let coarse = shut_nucleus_dive(1.0);
+    let fine = shut_nucleus_dive(0.25);
+    let down = coarse
+        .iter()
+        .filter(|f| f.time > 0.0 && f.time <= 130.0)
+        .count();
+    let shut_at = coarse
+        .iter()
+        .find(|f| f.bubbles[0].radius <= 95e-6)
+        .map_or(f64::INFINITY, |f| f.time);
+    let shut = coarse
+        .iter()
+        .filter(|f| f.time >= shut_at && f.time <= 730.0)
+        .all(|f| f.bubbles[0].radius <= 95e-6);
+    let r_end = |fr: &[decophantom::phantom::sim::Frame]| fr.last().unwrap().bubbles[0].radius;
+    let peak = |fr: &[decophantom::phantom::sim::Frame]| {
+        fr.iter().map(|f| f.bubbles[0].radius).fold(0.0, f64::max)
+    };
+    eprintln!(
+        "shut at {shut_at:.2} s; compression steps {down}; R at the end {:.3} µm vs {:.3} µm with 4× smaller limits ({:+.3} %)",
+        r_end(&coarse) * 1e6,
+        r_end(&fine) * 1e6,
+        100.0 * (r_end(&coarse) / r_end(&fine) - 1.0)
+    );
+    assert!(
+        shut && shut_at < 10.0,
+        "the nucleus was open at depth: the premise of the test does not hold"
+    );
+    assert!(down < 40, "{down} steps on the way down");
+    assert!(
+        peak(&coarse) > 150e-6,
+        "the bubble did not grow after surfacing"
+    );
+    assert!((r_end(&coarse) / r_end(&fine) - 1.0).abs() < 0.005);
+}
