@@ -383,12 +383,16 @@ fn table_index(c: u8, first: u8, k: usize, max_len: usize) -> u16 {
     (1 + (start_open * 3 + end) * max_len + k) as u16
 }
 
-/// Whether table index `v` is the last cell of a segment of `max_len` cells.
-fn ends_longest(v: u16, max_len: usize) -> bool {
-    v != 0 && {
-        let q = v as usize - 1;
-        q % max_len == max_len - 1 && (q / max_len) % 3 != MIDDLE
-    }
+/// The table indices of the last cells of segments of `max_len` cells.
+fn longest_ends(max_len: usize) -> [u16; 4] {
+    let last =
+        |start_open: usize, end: usize| (1 + (start_open * 3 + end) * max_len + max_len - 1) as u16;
+    [
+        last(0, LAST_SEALED),
+        last(0, LAST_OPEN),
+        last(1, LAST_SEALED),
+        last(1, LAST_OPEN),
+    ]
 }
 
 /// Pass 1 of a plan over `codes` (one z-plane for x and y, the whole grid for z): the position
@@ -562,6 +566,7 @@ impl LinePlan {
         let strides = [1usize, nx, nx * ny];
         let xs = x_row_stride(ny);
         let max_len = self.max_len;
+        let ends = longest_ends(max_len);
         let mut longest = self.n_longest;
         let mut line: Vec<u16> = Vec::new();
         for dir in 0..3 {
@@ -607,8 +612,8 @@ impl LinePlan {
                             table_index(cc, codes[cell(q - k as usize)], k as usize, max_len)
                         };
                         let old = &mut index[at(q)];
-                        longest -= usize::from(ends_longest(*old, max_len));
-                        longest += usize::from(ends_longest(v, max_len));
+                        longest -= usize::from(ends.contains(old));
+                        longest += usize::from(ends.contains(&v));
                         *old = v;
                     }
                 }
