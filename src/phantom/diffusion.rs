@@ -17,7 +17,7 @@
 //! # The implicit kernel ([`ImplicitSolver`])
 //!
 //! Each line segment's Thomas factors depend only on its length class, its ends and the
-//! position in it, so a `LinePlan` (rebuilt when [`Grid::codes_id`] changes) gives every
+//! position in it, so a `LinePlan` (updated when [`Grid::codes_id`] changes) gives every
 //! cell, per direction, a u16 index into a small factor table (rebuilt per step from r and
 //! C_b). Lines are solved many at a time in lock-step along the contiguous index, vectorised
 //! across lines (independent systems: the same operations per cell as the generic sweep, in
@@ -31,9 +31,10 @@
 //! - **z**, in column chunks (in parallel) sized so a chunk's nz planes stay in L2 between
 //!   the forward and backward pass.
 //!
-//! Every row (x: a plane's x position, y: a plane's y position, z: a whole plane) is cut at
-//! plan time into `Run`s along its contiguous index: stretches of one table row (in a box,
-//! whole rows; in a cylinder, the z rows' inside cells) use broadcast factors and exactly the
+//! Every row (x: a plane's x position, y: a plane's y position, z: a whole plane, in pieces
+//! of one y position) is cut at plan time into `Run`s along its contiguous index: stretches
+//! of one table row (in a box, whole rows; in a cylinder, the z rows' inside cells of each y
+//! position) use broadcast factors and exactly the
 //! generic sweep's terms; stretches of middle rows (linked, no open face) look up only the
 //! pivot and the back-substitution weight per cell; the rest looks up the full factor row
 //! per cell; cells outside are skipped. The inner loops are compiled three times (baseline,
@@ -342,17 +343,23 @@ const MIN_RUN: usize = 8;
 /// its last row) the plus end.
 ///
 /// The indices are stored in the layout the kernel walks (see the module doc): for y and z the
-/// grid's own order; for x transposed per z-plane (cell (i, j, k) at (k·nx + i)·s + j, s = ny padded by
-/// [`x_row_stride`]). In
-/// that layout every direction's data is a sequence of rows (x: per plane, one row per i, of
-/// ny cells; y: per plane, one row per j, of nx cells; z: one row per k, of nx·ny cells), and
-/// `runs` cuts each row into stretches of equal index (broadcast factors) and mixed stretches.
-#[derive(Debug, Clone)]
+/// grid's own order; for x transposed per z-plane (cell (i, j, k) at (k·nx + i)·s + j, s = ny
+/// padded by [`x_row_stride`]). In that layout every direction's data is a sequence of rows
+/// (x: per plane, one row per i, of ny cells; y and z: per plane, one row per j, of nx cells),
+/// and `runs` cuts each row into stretches of equal index (broadcast factors) and mixed
+/// stretches. The z sweep walks whole planes: a z row's runs count positions from the start of
+/// its plane, so a plane's runs are its rows' runs one after the other.
+///
+/// When the codes change in a small box ([`Grid::changed_since`]), [`LinePlan::update`]
+/// recomputes only the lines through it and the rows of runs holding them.
+#[derive(Debug, Clone, PartialEq, Eq)]
 struct LinePlan {
     /// [`Grid::codes_id`] of the codes the plan was built from.
     codes_id: u64,
     /// Longest segment in any direction (the table's stride).
     max_len: usize,
+    /// Number of segments (all directions) of `max_len` cells.
+    n_longest: usize,
     /// Per direction, per cell (in the kernel's layout): the factor-table index.
     index: [Vec<u16>; 3],
     /// Per direction, the runs of all rows, row after row.
@@ -363,91 +370,285 @@ struct LinePlan {
     xopen_start: Vec<usize>,
 }
 
+/// The table index of a cell with code `c` at position `k` of a segment whose first cell has
+/// code `first`.
+#[inline(always)]
+fn table_index(c: u8, first: u8, k: usize, max_len: usize) -> u16 {
+    let start_open = usize::from(first & 3 == SIDE_OPEN);
+    let end = match (c >> 2) & 3 {
+        SIDE_INTERIOR => MIDDLE,
+        SIDE_OPEN => LAST_OPEN,
+        _ => LAST_SEALED,
+    };
+    (1 + (start_open * 3 + end) * max_len + k) as u16
+}
+
+/// The table indices of the last cells of segments of `max_len` cells.
+fn longest_ends(max_len: usize) -> [u16; 4] {
+    let last =
+        |start_open: usize, end: usize| (1 + (start_open * 3 + end) * max_len + max_len - 1) as u16;
+    [
+        last(0, LAST_SEALED),
+        last(0, LAST_OPEN),
+        last(1, LAST_SEALED),
+        last(1, LAST_OPEN),
+    ]
+}
+
+/// Pass 1 of a plan over `codes` (one z-plane for x and y, the whole grid for z): the position
+/// of every inside cell in its segment, into `pos` (zero on entry); cells in index order, so
+/// the minus neighbour idx − `stride` always comes first. Returns the longest segment, or
+/// `None` when one is longer than [`MAX_TABLE_SEGMENT`].
+fn positions(codes: &[u8], pos: &mut [u16], stride: usize) -> Option<usize> {
+    let mut max_len = 1usize;
+    for idx in 0..codes.len() {
+        let c = codes[idx];
+        if c & INSIDE_BIT != 0 && c & 3 == SIDE_INTERIOR {
+            let k = pos[idx - stride] as usize + 1;
+            if k + 1 > MAX_TABLE_SEGMENT {
+                return None;
+            }
+            pos[idx] = k as u16;
+            max_len = max_len.max(k + 1);
+        }
+    }
+    Some(max_len)
+}
+
+/// Pass 2 of a plan, in place on the cells `base..base + out.len()`: position → table index
+/// (the segment's minus end is read at its first cell). Returns how many segments of
+/// `max_len` cells end there.
+fn table_indices(
+    codes: &[u8],
+    base: usize,
+    stride: usize,
+    out: &mut [u16],
+    max_len: usize,
+) -> usize {
+    let mut longest = 0;
+    for (q, v) in out.iter_mut().enumerate() {
+        let idx = base + q;
+        let c = codes[idx];
+        if c & INSIDE_BIT == 0 {
+            continue;
+        }
+        let k = *v as usize;
+        *v = table_index(c, codes[idx - k * stride], k, max_len);
+        longest += usize::from(k + 1 == max_len && (c >> 2) & 3 != SIDE_INTERIOR);
+    }
+    longest
+}
+
 impl LinePlan {
     /// The plan of `grid`'s current codes, or `None` when a segment is longer than
-    /// [`MAX_TABLE_SEGMENT`].
+    /// [`MAX_TABLE_SEGMENT`]. Planes (and for z's pass 1, the x and y passes) in parallel.
     fn build(grid: &Grid) -> Option<LinePlan> {
         let [nx, ny, nz] = grid.n;
         let plane = nx * ny;
         let strides = [1usize, nx, plane];
         let len = grid.len();
-        // pass 1: position of every cell in its segment (cells in index order: the minus
-        // neighbour idx − stride always comes first) and the longest segment, kept in the
-        // index arrays themselves (no temporary of the grid's size)
+        // pass 1, kept in the index arrays themselves (no temporary of the grid's size)
         let mut index: [Vec<u16>; 3] = [vec![0; len], vec![0; len], vec![0; len]];
-        let mut max_len = 1usize;
-        for dir in 0..3 {
-            let codes = &grid.codes[dir];
-            let stride = strides[dir];
-            let p = &mut index[dir];
-            for idx in 0..len {
-                let c = codes[idx];
-                if c & INSIDE_BIT != 0 && c & 3 == SIDE_INTERIOR {
-                    let k = p[idx - stride] as usize + 1;
-                    if k + 1 > MAX_TABLE_SEGMENT {
-                        return None;
-                    }
-                    p[idx] = k as u16;
-                    max_len = max_len.max(k + 1);
-                }
-            }
-        }
-        // pass 2, in place: position → table index; the segment's minus end is read at its
-        // first cell
-        for dir in 0..3 {
-            let codes = &grid.codes[dir];
-            let stride = strides[dir];
-            let out = &mut index[dir];
-            for idx in 0..len {
-                let c = codes[idx];
-                if c & INSIDE_BIT == 0 {
-                    continue;
-                }
-                let k = out[idx] as usize;
-                let first = codes[idx - k * stride];
-                let start_open = usize::from(first & 3 == SIDE_OPEN);
-                let end = match (c >> 2) & 3 {
-                    SIDE_INTERIOR => MIDDLE,
-                    SIDE_OPEN => LAST_OPEN,
-                    _ => LAST_SEALED,
-                };
-                out[idx] = (1 + (start_open * 3 + end) * max_len + k) as u16;
-            }
+        let [ix, iy, iz] = &mut index;
+        let (mz, mxy) = rayon::join(
+            || positions(&grid.codes[2], iz, plane),
+            || {
+                let codes = grid.codes[0]
+                    .par_chunks(plane)
+                    .zip(grid.codes[1].par_chunks(plane));
+                ix.par_chunks_mut(plane)
+                    .zip(iy.par_chunks_mut(plane))
+                    .zip(codes)
+                    .map(|((px, py), (cx, cy))| {
+                        Some(positions(cx, px, 1)?.max(positions(cy, py, nx)?))
+                    })
+                    .reduce(|| Some(1), |a, b| Some(a?.max(b?)))
+            },
+        );
+        let max_len = mz?.max(mxy?);
+        // pass 2
+        let mut n_longest = 0;
+        for (dir, out) in index.iter_mut().enumerate() {
+            let (codes, stride) = (&grid.codes[dir], strides[dir]);
+            n_longest += out
+                .par_chunks_mut(plane)
+                .enumerate()
+                .map(|(k, out)| table_indices(codes, k * plane, stride, out, max_len))
+                .sum::<usize>();
         }
         // x: transposed per plane (rows of ny cells, `xstride` apart)
         let xstride = x_row_stride(ny);
-        let mut xt = vec![0u16; nz * plane];
-        for b in 0..nz {
-            let (src, dst) = (&index[0][b * plane..], &mut xt[b * plane..]);
-            for j in 0..ny {
-                for i in 0..nx {
-                    dst[i * ny + j] = src[j * nx + i];
-                }
-            }
-        }
-        let row_lens = [ny, nx, plane];
-        let mut runs: [Vec<Run>; 3] = Default::default();
-        let mut row_start: [Vec<u32>; 3] = Default::default();
-        (runs[0], row_start[0]) = build_runs(&xt, ny, max_len);
-        for dir in 1..3 {
-            (runs[dir], row_start[dir]) = build_runs(&index[dir], row_lens[dir], max_len);
-        }
         let mut padded = vec![0u16; nz * nx * xstride];
-        for (dst, src) in padded.chunks_mut(xstride).zip(xt.chunks(ny)) {
-            dst[..ny].copy_from_slice(src);
-        }
+        padded
+            .par_chunks_mut(nx * xstride)
+            .zip(index[0].par_chunks(plane))
+            .for_each(|(dst, src)| {
+                for j in 0..ny {
+                    for i in 0..nx {
+                        dst[i * xstride + j] = src[j * nx + i];
+                    }
+                }
+            });
         index[0] = padded;
         let xopen_start = (0..=nz)
             .map(|b| grid.open_cells[0].partition_point(|&(idx, _)| (idx as usize) < b * plane))
             .collect();
-        Some(LinePlan {
+        let mut plan = LinePlan {
             codes_id: grid.codes_id(),
             max_len,
+            n_longest,
             index,
-            runs,
-            row_start,
+            runs: Default::default(),
+            row_start: Default::default(),
             xopen_start,
-        })
+        };
+        for dir in 0..3 {
+            let per = plan.rows_per_plane(grid, dir);
+            let parts: Vec<(Vec<Run>, Vec<u32>)> = (0..nz)
+                .into_par_iter()
+                .map(|k| {
+                    let (mut runs, mut ends) = (Vec::new(), Vec::with_capacity(per));
+                    for r in k * per..(k + 1) * per {
+                        let (row, offset) = plan.row(grid, dir, r);
+                        row_runs(row, offset, max_len, &mut runs);
+                        ends.push(runs.len() as u32);
+                    }
+                    (runs, ends)
+                })
+                .collect();
+            let mut runs = Vec::with_capacity(parts.iter().map(|p| p.0.len()).sum());
+            let mut row_start = Vec::with_capacity(nz * per + 1);
+            row_start.push(0);
+            for (r, ends) in parts {
+                let base = runs.len() as u32;
+                row_start.extend(ends.iter().map(|e| e + base));
+                runs.extend(r);
+            }
+            plan.runs[dir] = runs;
+            plan.row_start[dir] = row_start;
+        }
+        Some(plan)
+    }
+
+    /// Rows of direction `dir` per z-plane (x: nx rows of ny cells; y, z: ny rows of nx).
+    fn rows_per_plane(&self, grid: &Grid, dir: usize) -> usize {
+        if dir == 0 {
+            grid.n[0]
+        } else {
+            grid.n[1]
+        }
+    }
+
+    /// Row `r` of direction `dir`'s indices and the position of its first cell in its runs.
+    fn row(&self, grid: &Grid, dir: usize, r: usize) -> (&[u16], u32) {
+        let [nx, ny, _] = grid.n;
+        match dir {
+            0 => {
+                let s = x_row_stride(ny);
+                (&self.index[0][r * s..r * s + ny], 0)
+            }
+            1 => (&self.index[1][r * nx..(r + 1) * nx], 0),
+            _ => (&self.index[2][r * nx..(r + 1) * nx], ((r % ny) * nx) as u32),
+        }
+    }
+
+    /// Bring the plan to `grid`'s codes, which changed only in the box `lo..=hi` (cells, per
+    /// axis) since the plan's: the lines through the box, then the rows of runs holding them,
+    /// are recomputed. Returns false when the table's stride would change (a segment longer
+    /// than `max_len`, or none of `max_len` cells left): the plan is then unusable, build it anew.
+    fn update(&mut self, grid: &Grid, lo: [usize; 3], hi: [usize; 3]) -> bool {
+        let n = grid.n;
+        let [nx, ny, _] = n;
+        if (0..3).any(|a| lo[a] > hi[a]) {
+            self.codes_id = grid.codes_id();
+            return true;
+        }
+        let strides = [1usize, nx, nx * ny];
+        let xs = x_row_stride(ny);
+        let max_len = self.max_len;
+        let ends = longest_ends(max_len);
+        let mut longest = self.n_longest;
+        let mut line: Vec<u16> = Vec::new();
+        for dir in 0..3 {
+            // the axes across the lines of `dir`
+            let (a, b) = match dir {
+                0 => (1, 2),
+                1 => (0, 2),
+                _ => (0, 1),
+            };
+            let (codes, stride, len) = (&grid.codes[dir], strides[dir], n[dir]);
+            for cb in lo[b]..=hi[b] {
+                for ca in lo[a]..=hi[a] {
+                    let mut c = [0usize; 3];
+                    (c[a], c[b]) = (ca, cb);
+                    let first = grid.index(c[0], c[1], c[2]);
+                    let cell = |q: usize| first + q * stride;
+                    // the line's q-th cell in the kernel's layout
+                    let at = |q: usize| {
+                        if dir == 0 {
+                            (cb * nx + q) * xs + ca
+                        } else {
+                            cell(q)
+                        }
+                    };
+                    line.clear();
+                    line.resize(len, 0);
+                    for q in 1..len {
+                        let cc = codes[cell(q)];
+                        if cc & INSIDE_BIT != 0 && cc & 3 == SIDE_INTERIOR {
+                            let k = line[q - 1] as usize + 1;
+                            if k + 1 > max_len {
+                                return false;
+                            }
+                            line[q] = k as u16;
+                        }
+                    }
+                    let index = &mut self.index[dir];
+                    for (q, &k) in line.iter().enumerate() {
+                        let cc = codes[cell(q)];
+                        let v = if cc & INSIDE_BIT == 0 {
+                            0
+                        } else {
+                            table_index(cc, codes[cell(q - k as usize)], k as usize, max_len)
+                        };
+                        let old = &mut index[at(q)];
+                        longest -= usize::from(ends.contains(old));
+                        longest += usize::from(ends.contains(&v));
+                        *old = v;
+                    }
+                }
+            }
+        }
+        if longest == 0 {
+            return false;
+        }
+        self.n_longest = longest;
+        self.rerun(grid, 0, |r| (lo[2]..=hi[2]).contains(&(r / nx)));
+        self.rerun(grid, 1, |r| (lo[2]..=hi[2]).contains(&(r / ny)));
+        self.rerun(grid, 2, |r| (lo[1]..=hi[1]).contains(&(r % ny)));
+        self.codes_id = grid.codes_id();
+        true
+    }
+
+    /// Recompute the runs of direction `dir`'s rows for which `changed` holds; copy the others.
+    fn rerun(&mut self, grid: &Grid, dir: usize, changed: impl Fn(usize) -> bool) {
+        let old = std::mem::take(&mut self.runs[dir]);
+        let old_start = std::mem::take(&mut self.row_start[dir]);
+        let rows = old_start.len() - 1;
+        let mut runs = Vec::with_capacity(old.len() + 64);
+        let mut row_start = Vec::with_capacity(rows + 1);
+        row_start.push(0);
+        for r in 0..rows {
+            if changed(r) {
+                let (row, offset) = self.row(grid, dir, r);
+                row_runs(row, offset, self.max_len, &mut runs);
+            } else {
+                runs.extend_from_slice(&old[old_start[r] as usize..old_start[r + 1] as usize]);
+            }
+            row_start.push(runs.len() as u32);
+        }
+        self.runs[dir] = runs;
+        self.row_start[dir] = row_start;
     }
 }
 
@@ -462,11 +663,11 @@ fn x_row_stride(ny: usize) -> usize {
     }
 }
 
-/// Cut each row of `index` (rows of `row_len` cells, one after the other) into runs: maximal
-/// stretches of at least [`MIN_RUN`] equal indices become broadcast runs (none for index 0,
-/// cells outside, which keep their values), the cells between them per-cell runs
+/// Cut a row of indices into runs, appended to `runs` with positions counted from `offset`:
+/// maximal stretches of at least [`MIN_RUN`] equal indices become broadcast runs (none for
+/// index 0, cells outside, which keep their values), the cells between them per-cell runs
 /// ([`GATHER_MID`] where they are all middle rows, else [`GATHER`]).
-fn build_runs(index: &[u16], row_len: usize, max_len: usize) -> (Vec<Run>, Vec<u32>) {
+fn row_runs(row: &[u16], offset: u32, max_len: usize, runs: &mut Vec<Run>) {
     // a middle row: linked to the previous one (position k > 0), interior plus side
     let mid = |v: u16| {
         v != 0 && {
@@ -474,7 +675,12 @@ fn build_runs(index: &[u16], row_len: usize, max_len: usize) -> (Vec<Run>, Vec<u
             !q.is_multiple_of(max_len) && (q / max_len) % 3 == MIDDLE
         }
     };
-    let flush = |runs: &mut Vec<Run>, row: &[u16], g: usize, e: usize| {
+    let run = |start: usize, end: usize, idx: u32| Run {
+        start: offset + start as u32,
+        end: offset + end as u32,
+        idx,
+    };
+    let flush = |runs: &mut Vec<Run>, g: usize, e: usize| {
         let mut s = g;
         let mut pending = g;
         while s < e {
@@ -488,62 +694,40 @@ fn build_runs(index: &[u16], row_len: usize, max_len: usize) -> (Vec<Run>, Vec<u
             }
             if t - s >= MIN_MID_RUN {
                 if pending < s {
-                    runs.push(Run {
-                        start: pending as u32,
-                        end: s as u32,
-                        idx: GATHER,
-                    });
+                    runs.push(run(pending, s, GATHER));
                 }
-                runs.push(Run {
-                    start: s as u32,
-                    end: t as u32,
-                    idx: GATHER_MID,
-                });
+                runs.push(run(s, t, GATHER_MID));
                 pending = t;
             }
             s = t;
         }
         if pending < e {
-            runs.push(Run {
-                start: pending as u32,
-                end: e as u32,
-                idx: GATHER,
-            });
+            runs.push(run(pending, e, GATHER));
         }
     };
-    let mut runs = Vec::new();
-    let mut row_start = vec![0u32];
-    for row in index.chunks(row_len) {
-        let mut pending: Option<usize> = None;
-        let mut s = 0;
-        while s < row.len() {
-            let v = row[s];
-            let mut e = s + 1;
-            while e < row.len() && row[e] == v {
-                e += 1;
-            }
-            if e - s >= MIN_RUN {
-                if let Some(g) = pending.take() {
-                    flush(&mut runs, row, g, s);
-                }
-                if v != 0 {
-                    runs.push(Run {
-                        start: s as u32,
-                        end: e as u32,
-                        idx: u32::from(v),
-                    });
-                }
-            } else if pending.is_none() {
-                pending = Some(s);
-            }
-            s = e;
+    let mut pending: Option<usize> = None;
+    let mut s = 0;
+    while s < row.len() {
+        let v = row[s];
+        let mut e = s + 1;
+        while e < row.len() && row[e] == v {
+            e += 1;
         }
-        if let Some(g) = pending {
-            flush(&mut runs, row, g, row.len());
+        if e - s >= MIN_RUN {
+            if let Some(g) = pending.take() {
+                flush(runs, g, s);
+            }
+            if v != 0 {
+                runs.push(run(s, e, u32::from(v)));
+            }
+        } else if pending.is_none() {
+            pending = Some(s);
         }
-        row_start.push(runs.len() as u32);
+        s = e;
     }
-    (runs, row_start)
+    if let Some(g) = pending {
+        flush(runs, g, row.len());
+    }
 }
 
 /// [`Factor::flags`]: the row adds the open minus face's term.
@@ -714,6 +898,9 @@ pub struct ImplicitSolver {
     scratch: Vec<f64>,
     /// The x-open cells' values after the x sweep (as `grid.open_cells[0]`), for the inflow.
     xvals: Vec<f64>,
+    /// Plans brought up to date by [`LinePlan::update`] (not built anew).
+    #[cfg(test)]
+    updates: usize,
 }
 
 impl ImplicitSolver {
@@ -733,7 +920,19 @@ impl ImplicitSolver {
         let id = grid.codes_id();
         let stale = self.plan.as_ref().is_none_or(|p| p.codes_id != id);
         if stale && self.generic != Some(id) {
-            self.plan = LinePlan::build(grid);
+            // only the lines through the cells changed since the plan's codes, if the grid's
+            // log reaches back to them
+            let updated = self.plan.as_mut().is_some_and(|plan| {
+                grid.changed_since(plan.codes_id)
+                    .is_some_and(|(lo, hi)| plan.update(grid, lo, hi))
+            });
+            if !updated {
+                self.plan = LinePlan::build(grid);
+            }
+            #[cfg(test)]
+            {
+                self.updates += usize::from(updated);
+            }
             self.generic = if self.plan.is_none() { Some(id) } else { None };
         }
         let r = d * dt / (grid.h * grid.h);
@@ -764,8 +963,8 @@ impl ImplicitSolver {
 
 /// Solve the lines of a stack of rows in place: row a (0 ≤ a < `n_along`) holds cells
 /// `buf[a·stride + i]`, lines run across the rows (along a), and the cells `lo ≤ i < hi` of
-/// every row are solved in lock-step; `index` is laid out as `buf`, `runs`/`row_start` give
-/// each row's runs (row a is `row0 + a`).
+/// every row are solved in lock-step; `index` is laid out as `buf`; `runs`/`row_start` give
+/// the runs of row a in `rows_per` pieces, from piece (`row0` + a)·`rows_per` on.
 ///
 /// # Safety
 /// `buf` and `index` are valid for `(n_along − 1)·stride + hi` elements, the runs lie within
@@ -782,12 +981,14 @@ unsafe fn solve_rows(
     runs: &[Run],
     row_start: &[u32],
     row0: usize,
+    rows_per: usize,
     tables: &Tables,
 ) {
     let table = &tables.factors[..];
     let (inv, cneg, r) = (&tables.inv[..], &tables.cneg[..], tables.r);
     let row_runs = |a: usize| -> &[Run] {
-        let rr = &runs[row_start[row0 + a] as usize..row_start[row0 + a + 1] as usize];
+        let (r0, r1) = ((row0 + a) * rows_per, (row0 + a + 1) * rows_per);
+        let rr = &runs[row_start[r0] as usize..row_start[r1] as usize];
         // the first run that reaches past `lo`
         let first = if lo == 0 {
             0
@@ -1046,6 +1247,7 @@ unsafe fn xy_plane(
         &plan.runs[0],
         &plan.row_start[0],
         b * nx,
+        1,
         table,
     );
     transpose(t, xs, up, nx, nx, ny, true);
@@ -1062,6 +1264,7 @@ unsafe fn xy_plane(
         &plan.runs[1],
         &plan.row_start[1],
         b * ny,
+        1,
         table,
     );
 }
@@ -1083,6 +1286,7 @@ unsafe fn z_chunk(grid: &Grid, plan: &LinePlan, table: &Tables, u: *mut f64, lo:
         &plan.runs[2],
         &plan.row_start[2],
         0,
+        ny,
         table,
     );
 }
@@ -1558,6 +1762,206 @@ mod planned_tests {
                 .collect();
             g.set_excluded(&cells, true);
             assert_same_bits(&g);
+        }
+    }
+
+    /// The Fig. 5 phantom (`profiles/fig5-dive.toml` with `profiles/phantoms/hydrogel.toml`:
+    /// an 11 mm × 5 mm cylinder, h = 86.5 µm, open top and side; 127×127×58 cells).
+    fn fig5_cylinder() -> Grid {
+        let shape = Shape::Cylinder {
+            diameter: 11e-3,
+            depth: 5e-3,
+        };
+        Grid::new(shape, 86.5e-6, &[Face::Top, Face::Side]).unwrap()
+    }
+
+    /// The cells of `g` that a bubble may take (inside the mask, no open side) whose centres lie
+    /// within `radius` cells of the point `c` (in cells).
+    fn ball(g: &Grid, c: [f64; 3], radius: f64) -> Vec<usize> {
+        let (lo, hi) = g.cell_range(c.map(|x| (x + 0.5) * g.h), radius * g.h);
+        let mut cells = Vec::new();
+        for k in lo[2]..=hi[2] {
+            for j in lo[1]..=hi[1] {
+                for i in lo[0]..=hi[0] {
+                    let d2 = [i, j, k]
+                        .iter()
+                        .zip(c)
+                        .map(|(&x, c)| (x as f64 - c).powi(2))
+                        .sum::<f64>();
+                    let idx = g.index(i, j, k);
+                    if d2 <= radius * radius && g.inside_phantom(idx) && !g.has_open_side(idx) {
+                        cells.push(idx);
+                    }
+                }
+            }
+        }
+        cells
+    }
+
+    /// Set `cells` excluded (or not) in `g`, bring `plan` up to date with the grid's change log
+    /// and check it against a fresh build (or build it anew if the update declines). Returns
+    /// whether the update was incremental.
+    fn change(g: &mut Grid, plan: &mut LinePlan, cells: &[usize], excluded: bool) -> bool {
+        g.set_excluded(cells, excluded);
+        catch_up(g, plan)
+    }
+
+    /// Bring `plan` up to date with `g` through the change log, as [`change`].
+    fn catch_up(g: &Grid, plan: &mut LinePlan) -> bool {
+        let (lo, hi) = g
+            .changed_since(plan.codes_id)
+            .expect("the log reaches back");
+        let fresh = LinePlan::build(g).unwrap();
+        let updated = plan.update(g, lo, hi);
+        if updated {
+            assert!(
+                *plan == fresh,
+                "n = {:?}: updated plan differs from a fresh build",
+                g.n
+            );
+        } else {
+            *plan = fresh;
+        }
+        updated
+    }
+
+    /// A bubble's life in a grid: two balls taken, part of one given back, a third grown
+    /// step by step and given back, several changes caught up at once; every update is
+    /// incremental and equals a fresh build.
+    fn bubble_sequence(g: &mut Grid) {
+        let n = g.n.map(|x| x as f64);
+        let mut plan = LinePlan::build(g).unwrap();
+        let a = ball(g, [n[0] / 2.0, n[1] / 2.0, n[2] / 2.0], 4.0);
+        let b = ball(g, [1.5, n[1] / 2.0 - 1.0, 2.0], 3.0);
+        assert!(!a.is_empty() && !b.is_empty());
+        assert!(change(g, &mut plan, &a, true));
+        assert!(change(g, &mut plan, &b, true));
+        let half: Vec<usize> = a.iter().copied().filter(|&c| c % 2 == 0).collect();
+        assert!(change(g, &mut plan, &half, false));
+        let centre = [n[0] / 3.0, n[1] / 1.6, n[2] / 3.0];
+        let mut grown: Vec<usize> = Vec::new();
+        for step in 1..=6 {
+            let now = ball(g, centre, step as f64);
+            let take: Vec<usize> = now.iter().copied().filter(|c| !grown.contains(c)).collect();
+            assert!(change(g, &mut plan, &take, true));
+            grown = now;
+        }
+        assert!(change(g, &mut plan, &grown, false));
+        // three changes, one update over the union of their boxes
+        g.set_excluded(&b, false);
+        g.set_excluded(&ball(g, [n[0] / 2.0, 2.0, n[2] - 3.0], 2.0), true);
+        g.set_excluded(&a, false);
+        assert!(catch_up(g, &mut plan));
+        // nothing changed
+        assert_eq!(plan.codes_id, g.codes_id());
+        assert!(catch_up(g, &mut plan));
+    }
+
+    #[test]
+    fn updated_plans_are_fresh_plans() {
+        bubble_sequence(&mut fig5_cylinder());
+        bubble_sequence(&mut boxed([24, 20, 16], all_box_faces()));
+        bubble_sequence(&mut boxed([9, 32, 7], all_box_faces()));
+    }
+
+    /// A sealed box's longest segments (x, 16 cells) all cut: the table's stride shrinks to 12
+    /// (y), and grows back when the cells are given back; both times the update declines.
+    #[test]
+    fn a_changed_table_stride_takes_a_fresh_plan() {
+        let mut g = boxed([16, 12, 10], &[]);
+        let mut plan = LinePlan::build(&g).unwrap();
+        assert_eq!(plan.max_len, 16);
+        let wall: Vec<usize> = (0..12 * 10).map(|q| g.index(8, q % 12, q / 12)).collect();
+        assert!(change(&mut g, &mut plan, &wall[..60], true));
+        assert!(!change(&mut g, &mut plan, &wall[60..], true));
+        assert_eq!(plan.max_len, 12);
+        let some = ball(&g, [3.0, 5.0, 5.0], 2.0);
+        assert!(change(&mut g, &mut plan, &some, true));
+        assert!(!change(&mut g, &mut plan, &wall[..1], false));
+        assert_eq!(plan.max_len, 16);
+    }
+
+    /// The change log keeps the last 64 changes: further back, a full build.
+    #[test]
+    fn a_log_too_short_takes_a_fresh_plan() {
+        let mut g = boxed([12, 11, 10], all_box_faces());
+        let mut solver = ImplicitSolver::new();
+        let mut u = vec![1.0; g.len()];
+        solver.step(&g, &mut u, 1e-9, 10.0, 0.5);
+        let id = g.codes_id();
+        let cell = [g.index(5, 5, 5)];
+        for q in 0..64 {
+            g.set_excluded(&cell, q % 2 == 0);
+        }
+        assert!(g.changed_since(id).is_some());
+        g.set_excluded(&cell, true);
+        assert_eq!(g.changed_since(id), None);
+        solver.step(&g, &mut u, 1e-9, 10.0, 0.5);
+        assert_eq!(solver.updates, 0);
+        assert!(*solver.plan.as_ref().unwrap() == LinePlan::build(&g).unwrap());
+        g.set_excluded(&cell, false);
+        solver.step(&g, &mut u, 1e-9, 10.0, 0.5);
+        assert_eq!(solver.updates, 1);
+        assert!(*solver.plan.as_ref().unwrap() == LinePlan::build(&g).unwrap());
+    }
+
+    /// The planned solver kept through changes of the codes (its plan updated, not rebuilt)
+    /// against the generic sweep: the same bits after every change, in every instruction set.
+    fn assert_same_bits_through(g: &Grid, changes: &[(Vec<usize>, bool)]) {
+        let u0: Vec<f64> = (0..g.len())
+            .map(|i| ((i * 7919 + 13) % 101) as f64 / 100.0)
+            .collect();
+        for isa in Isa::available() {
+            let mut g = g.clone();
+            let mut solver = ImplicitSolver::new();
+            let (mut a, mut b) = (u0.clone(), u0.clone());
+            let mut s = vec![0.0; g.len()];
+            let (d, dt, cb) = (2.5e-9, 20.0, 1.5);
+            solver.step_with(&g, &mut b, d, dt, cb, isa);
+            implicit_step(&g, &mut a, &mut s, d, dt, cb);
+            for (q, (cells, excluded)) in changes.iter().enumerate() {
+                g.set_excluded(cells, *excluded);
+                let fa = implicit_step(&g, &mut a, &mut s, d, dt, cb);
+                let fb = solver.step_with(&g, &mut b, d, dt, cb, isa);
+                assert_eq!(solver.updates, q + 1, "{isa:?}: the plan was rebuilt");
+                assert_eq!(fa.to_bits(), fb.to_bits(), "{isa:?}, n = {:?}: inflow", g.n);
+                for i in 0..g.len() {
+                    assert_eq!(
+                        a[i].to_bits(),
+                        b[i].to_bits(),
+                        "{isa:?}, n = {:?}, change {q}, cell {i}",
+                        g.n
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn updated_plans_give_the_generic_sweeps_bits() {
+        let grids = [
+            fig5_cylinder(),
+            Grid::new(
+                Shape::Cylinder {
+                    diameter: 2.1e-3,
+                    depth: 1.1e-3,
+                },
+                1e-4,
+                &[Face::Top, Face::Side],
+            )
+            .unwrap(),
+            boxed([20, 20, 9], all_box_faces()),
+        ];
+        for g in grids {
+            let n = g.n.map(|x| x as f64);
+            let a = ball(&g, [n[0] / 2.0, n[1] / 2.0, n[2] / 2.0], 3.0);
+            let b = ball(&g, [n[0] / 3.0, n[1] / 2.0, n[2] / 3.0], 2.0);
+            let changes = [
+                (a.clone(), true),
+                (b, true),
+                (a[..a.len() / 2].to_vec(), false),
+            ];
+            assert_same_bits_through(&g, &changes);
         }
     }
 }

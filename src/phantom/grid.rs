@@ -117,9 +117,17 @@ pub struct Grid {
     base_codes: std::collections::HashMap<u32, [u8; 3]>,
     /// Identity of the current face codes: a fresh number from a process-wide counter at
     /// construction and at every change ([`Grid::set_excluded`]), so a solver's cached line
-    /// plan ([`super::diffusion::ImplicitSolver`]) knows when to rebuild.
+    /// plan ([`super::diffusion::ImplicitSolver`]) knows when to update.
     codes_id: u64,
+    /// The last [`CHANGE_LOG_LEN`] changes of the codes, oldest first: the `codes_id` each set
+    /// and the box (inclusive lo, hi cell coordinates) of the cells whose codes it rewrote.
+    changes: std::collections::VecDeque<(u64, [usize; 3], [usize; 3])>,
+    /// `codes_id` of the state before the oldest entry of `changes`.
+    changes_from: u64,
 }
+
+/// Most changes a grid's log keeps ([`Grid::changed_since`]).
+const CHANGE_LOG_LEN: usize = 64;
 
 /// A number never handed out before in this process (the grids' `codes_id`).
 fn fresh_codes_id() -> u64 {
@@ -253,8 +261,11 @@ impl Grid {
                 }
             }
         }
+        let codes_id = fresh_codes_id();
         let mut grid = Grid {
-            codes_id: fresh_codes_id(),
+            codes_id,
+            changes: Default::default(),
+            changes_from: codes_id,
             excluded: Default::default(),
             base_codes: Default::default(),
             interior_spans: vec![(0u32, 0u32); n[1] * n[2]],
@@ -279,7 +290,7 @@ impl Grid {
     /// exchanges gas only through its own flux law). Cells with an open side are never
     /// excluded (the caller filters them with [`Grid::has_open_side`]; a bubble reaching an
     /// open face ends the run anyway). The explicit kernel's interior spans of the rows touched
-    /// are recomputed.
+    /// are recomputed; the change is logged ([`Grid::changed_since`]).
     pub fn set_excluded(&mut self, cells: &[usize], excluded: bool) {
         if cells.is_empty() {
             return;
@@ -301,6 +312,24 @@ impl Grid {
         touched.sort_unstable();
         touched.dedup();
         self.codes_id = fresh_codes_id();
+        let (mut lo, mut hi) = ([usize::MAX; 3], [0usize; 3]);
+        for &idx in &touched {
+            let c = [
+                idx % self.n[0],
+                (idx / self.n[0]) % self.n[1],
+                idx / (self.n[0] * self.n[1]),
+            ];
+            for a in 0..3 {
+                lo[a] = lo[a].min(c[a]);
+                hi[a] = hi[a].max(c[a]);
+            }
+        }
+        if self.changes.len() == CHANGE_LOG_LEN {
+            if let Some((id, _, _)) = self.changes.pop_front() {
+                self.changes_from = id;
+            }
+        }
+        self.changes.push_back((self.codes_id, lo, hi));
         for &idx in &touched {
             let base = self.base_of(idx);
             self.base_codes.entry(idx as u32).or_insert(base);
@@ -392,6 +421,25 @@ impl Grid {
     /// change; a clone keeps its original's id until either changes).
     pub fn codes_id(&self) -> u64 {
         self.codes_id
+    }
+
+    /// The box (inclusive lo, hi cell coordinates) holding every cell whose codes changed since
+    /// the state with codes_id `id` (empty, lo > hi, if that is the current state), or `None`
+    /// if `id` is not a state of this grid the change log reaches back to.
+    pub fn changed_since(&self, id: u64) -> Option<([usize; 3], [usize; 3])> {
+        let skip = if id == self.changes_from {
+            0
+        } else {
+            self.changes.iter().position(|c| c.0 == id)? + 1
+        };
+        let (mut lo, mut hi) = ([usize::MAX; 3], [0usize; 3]);
+        for (_, l, h) in self.changes.iter().skip(skip) {
+            for a in 0..3 {
+                lo[a] = lo[a].min(l[a]);
+                hi[a] = hi[a].max(h[a]);
+            }
+        }
+        Some((lo, hi))
     }
 
     /// Total number of cells (inside and outside).
@@ -651,5 +699,20 @@ mod tests {
             m[2] += w * ((kk as f64 + 0.5) * 1e-4 - 5e-4);
         }
         assert!(m.iter().all(|x| x.abs() < 1e-15));
+    }
+
+    #[test]
+    fn changed_since_is_the_box_of_the_later_changes() {
+        let mut g = Grid::new(Shape::Box { size: [1e-3; 3] }, 1e-4, &[]).unwrap();
+        let id0 = g.codes_id();
+        assert_eq!(g.changed_since(id0), Some(([usize::MAX; 3], [0; 3])));
+        g.set_excluded(&[g.index(2, 3, 4)], true);
+        let id1 = g.codes_id();
+        g.set_excluded(&[g.index(7, 5, 6)], true);
+        // each cell and its six neighbours
+        assert_eq!(g.changed_since(id1), Some(([6, 4, 5], [8, 6, 7])));
+        assert_eq!(g.changed_since(id0), Some(([1, 2, 3], [8, 6, 7])));
+        // 0 is never handed out
+        assert_eq!(g.changed_since(0), None);
     }
 }
