@@ -52,9 +52,7 @@ pub struct Numerics {
     /// Largest time step, s: a safety cap; the steps follow the error estimates of the field
     /// (`field_tolerance`) and the bubbles (`bubble_tolerance`) and the other limits. Default 600.
     pub max_step: f64,
-    /// Largest change of ambient pressure per step as a fraction of ambient, while a bubble
-    /// exchanges gas or the pressure falls (a rising pressure with every bubble shut is left
-    /// to the field's limits). Default 0.01.
+    /// Largest change of ambient pressure per step as a fraction of ambient. Default 0.01.
     pub max_pressure_change: f64,
     /// Largest relative change of a bubble's gas content per step. Default 0.03
     /// (≈ 1 % in radius).

@@ -861,14 +861,9 @@ impl<'a> Simulation<'a> {
         let t = self.time;
         let p = profile.ambient(t);
         let mut dt = num.max_step.min(2.0 * dt_prev).min(bubble_dt);
-        // The pressure-change limit is the bubbles' (and the nuclei's): it holds while a bubble
-        // exchanges gas, and while the pressure falls (a shut nucleus may reopen, a nucleus
-        // may activate). A rising pressure with every bubble shut changes nothing but the
-        // open faces' boundary value, which the field's own limits cover.
-        let rate = profile.rate(t + 1e-9);
-        let exchanging = fluxes.iter().any(|j| j.iter().any(|x| *x != 0.0));
-        if rate < 0.0 || (rate > 0.0 && exchanging) {
-            dt = dt.min(num.max_pressure_change * p / rate.abs());
+        let rate = profile.rate(t + 1e-9).abs();
+        if rate > 0.0 {
+            dt = dt.min(num.max_pressure_change * p / rate);
         }
         for (i, b) in self.bubbles.iter().enumerate() {
             if !b.active() {
