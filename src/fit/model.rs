@@ -172,9 +172,15 @@ impl Model {
         data: &Measurements,
         values: &[f64],
     ) -> Result<Vec<f64>, Error> {
-        let docs = self
+        let mut docs = self
             .docs_at(values)
             .map_err(|m| Error::Input(crate::error::InputError::new(m)))?;
+        // only the radii are read: frames without the gel's pass (`Numerics::record_gel`)
+        for d in docs.iter_mut() {
+            if let Some(toml::Value::Table(n)) = d.get_mut("numerics") {
+                n.insert("record_gel".into(), toml::Value::Boolean(false));
+            }
+        }
         let per: Vec<Vec<f64>> = experiments
             .list
             .par_iter()

@@ -106,6 +106,7 @@ struct RawNumerics {
     kernel_min_cells: Option<f64>,
     coupling_gap_cells: Option<f64>,
     record_interval_s: Option<f64>,
+    record_gel: Option<bool>,
     displace_gel: Option<bool>,
     displace_min_cells: Option<f64>,
     displace_step_cells: Option<f64>,
@@ -587,6 +588,7 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
             "cells",
         )?,
         implicit_cost_ratio: d.implicit_cost_ratio,
+        record_gel: n.record_gel.unwrap_or(d.record_gel),
         displace_gel: n.displace_gel.unwrap_or(d.displace_gel),
         displace_min_cells: in_range(
             "numerics.displace_min_cells",

@@ -78,9 +78,10 @@ pub struct Frame {
     /// Active bubbles.
     pub bubbles: Vec<BubbleFrame>,
     /// Largest supersaturation in the gel, Σ_g tension + p_fixed − P_amb, Pa (over all inside
-    /// cells; p_fixed = `bubble_fixed_gases`, 0 for a lab gel).
+    /// cells; p_fixed = `bubble_fixed_gases`, 0 for a lab gel). NaN in a frame recorded
+    /// without the gel's state (`Numerics::record_gel`).
     pub max_supersaturation: f64,
-    /// Gas dissolved in the grid, mol, per gas.
+    /// Gas dissolved in the grid, mol, per gas (empty without the gel's state).
     pub grid_moles: Vec<f64>,
 }
 
@@ -1415,7 +1416,7 @@ impl<'a> Simulation<'a> {
             log.peak_volume = (vol, t1);
         }
         if first {
-            let min = self.record(profile, tensions, observer)?;
+            let min = self.record(profile, tensions, observer, true)?;
             log.min_concentration = log.min_concentration.min(min);
             log.next_record = self.time + num.record_interval;
             return Ok(());
@@ -1449,7 +1450,7 @@ impl<'a> Simulation<'a> {
                     *tension = self.fluxes(i, p1, profile, &mut scratch_flux[..ng]);
                 }
             }
-            let min = self.record(profile, &fresh, observer)?;
+            let min = self.record(profile, &fresh, observer, num.record_gel || done)?;
             log.min_concentration = log.min_concentration.min(min);
             let behind = (self.time + 1e-9 - log.next_record) / num.record_interval;
             if num.record_interval > 0.0
@@ -1607,17 +1608,25 @@ impl<'a> Simulation<'a> {
         )
     }
 
-    /// Send a frame to the observer; checks the gas balance on the way (the frame's grid
-    /// totals come from the same pass), so a broken run stops at the first frame that shows it.
-    /// Returns the lowest concentration in the gel (mol/m³).
+    /// Send a frame to the observer; with the gel's state (`gel`, [`Numerics::record_gel`])
+    /// it checks the gas balance on the way (the frame's grid totals come from the same pass),
+    /// so a broken run stops at the first frame that shows it. Returns the lowest
+    /// concentration in the gel (mol/m³; +∞ without the gel's state).
+    ///
+    /// [`Numerics::record_gel`]: super::params::Numerics::record_gel
     fn record(
         &self,
         profile: &PressureHistory,
         tensions: &[f64],
         observer: &mut dyn Observer,
+        gel: bool,
     ) -> Result<f64, Error> {
         let p = profile.ambient(self.time);
-        let (max_ss, grid_moles, min_c) = self.gel_state(p);
+        let (max_ss, grid_moles, min_c) = if gel {
+            self.gel_state(p)
+        } else {
+            (f64::NAN, Vec::new(), f64::INFINITY)
+        };
         let total = grid_moles.iter().sum::<f64>()
             + self
                 .bubbles
@@ -1628,7 +1637,7 @@ impl<'a> Simulation<'a> {
         let balance = ((total - self.initial_total - self.inflow - self.displaced_gas)
             / self.initial_total)
             .abs();
-        if !(balance < BALANCE_LIMIT) {
+        if gel && !(balance < BALANCE_LIMIT) {
             return Err(Error::Solver(format!(
                 "gas balance lost at t = {:.3} s: |gas now − gas at start − gas in through open faces and perfusion| is {balance:.3e} of the start; the run is not trustworthy",
                 self.time

@@ -52,3 +52,41 @@ fn small_runs_auto_keeps_big_grids_parallel() {
     assert!(GridThreads::Serial.serial_for(&params));
     assert!(!GridThreads::Parallel.serial_for(&params));
 }
+
+/// `record_gel = false` (what `fit` and `discover` ask for): the same bubbles in every frame,
+/// bit for bit, and the same summary (but for the lowest concentration, taken over fewer
+/// frames); the gel's state only in the first and the last frame
+/// (NaN supersaturation and no grid totals between), whose values are those of the full run.
+#[test]
+fn frames_without_the_gel_pass_keep_the_bubbles_bits() {
+    let dir = root().join("benches/small-cube");
+    let history = load(&dir.join("profile.toml"), &LoadOptions::default()).unwrap();
+    let mut params = load_phantom(&dir.join("phantom.toml")).unwrap().params;
+    params.grid_step = 200e-6;
+    assert_eq!(params.numerics.record_interval, 0.0);
+    let full = simulate(&params, &history, &mut |_, _| {}).unwrap();
+    params.numerics.record_gel = false;
+    let light = simulate(&params, &history, &mut |_, _| {}).unwrap();
+    // the lowest concentration is over the first and last frames only
+    assert!(light.summary.min_concentration >= full.summary.min_concentration);
+    let mut same = light.summary.clone();
+    same.min_concentration = full.summary.min_concentration;
+    assert_eq!(format!("{same:?}"), format!("{:?}", full.summary));
+    assert_eq!(light.frames.len(), full.frames.len());
+    assert!(full.frames.len() > 100);
+    let last = full.frames.len() - 1;
+    for (k, (a, b)) in light.frames.iter().zip(&full.frames).enumerate() {
+        assert_eq!(a.time.to_bits(), b.time.to_bits());
+        assert_eq!(format!("{:?}", a.bubbles), format!("{:?}", b.bubbles));
+        if k == 0 || k == last {
+            assert_eq!(
+                a.max_supersaturation.to_bits(),
+                b.max_supersaturation.to_bits()
+            );
+            assert_eq!(a.grid_moles, b.grid_moles);
+        } else {
+            assert!(a.max_supersaturation.is_nan() && a.grid_moles.is_empty());
+            assert!(b.max_supersaturation.is_finite() && !b.grid_moles.is_empty());
+        }
+    }
+}
