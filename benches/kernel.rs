@@ -57,6 +57,36 @@ fn kernels(c: &mut Criterion) {
             let mut out = vec![0.0; g.len()];
             b.iter(|| diffusion::explicit_step(g, &u, &mut out, D, dt_explicit, 0.5))
         });
+        // two gases as the simulation steps them, one field after the other (an iteration is
+        // one gas-step): out of place through one scratch field swapped in, and in place
+        group.bench_with_input(
+            BenchmarkId::new("explicit_step_two_fields", label),
+            g,
+            |b, g| {
+                let mut fields = [u0.clone(), u0.clone()];
+                let mut scratch = vec![0.0; g.len()];
+                let mut q = 0;
+                b.iter(|| {
+                    q ^= 1;
+                    let f =
+                        diffusion::explicit_step(g, &fields[q], &mut scratch, D, dt_explicit, 0.5);
+                    std::mem::swap(&mut fields[q], &mut scratch);
+                    f
+                })
+            },
+        );
+        group.bench_with_input(
+            BenchmarkId::new("explicit_step_in_place_two_fields", label),
+            g,
+            |b, g| {
+                let mut fields = [u0.clone(), u0.clone()];
+                let mut q = 0;
+                b.iter(|| {
+                    q ^= 1;
+                    diffusion::explicit_step_in_place(g, &mut fields[q], D, dt_explicit, 0.5)
+                })
+            },
+        );
         group.bench_with_input(BenchmarkId::new("implicit_step", label), g, |b, g| {
             let mut u = u0.clone();
             let mut solver = diffusion::ImplicitSolver::new();

@@ -85,22 +85,130 @@ pub fn explicit_step(grid: &Grid, u: &[f64], out: &mut [f64], d: f64, dt: f64, c
     explicit_step_with(grid, u, out, d, dt, cb, Isa::detect())
 }
 
-/// The 7-point stencil over the cells `a..a + o.len()` of `u` into `o`, for cells whose six
-/// neighbours are all inside (the same operations in the same order for every instruction
-/// set: vectorised across cells only).
+/// [`explicit_step`] in place, without a second field: the same bits in every inside cell and
+/// the same inflow (cells outside keep their values). The z-planes are cut into contiguous
+/// blocks, one task each; a block goes upward plane by plane, keeping the old values of the
+/// plane below and of the current one in per-thread plane buffers, and the old planes just
+/// outside it (overwritten by its neighbours) are copied into a halo before the pass.
+pub fn explicit_step_in_place(grid: &Grid, u: &mut [f64], d: f64, dt: f64, cb: f64) -> f64 {
+    explicit_step_in_place_with(grid, u, d, dt, cb, Isa::detect())
+}
+
+/// The 7-point stencil over the cells `a..a + o.len()` of a z-plane into `o`, from the old
+/// values of the plane (`c`), the one below (`zm`) and the one above (`zp`), for cells whose
+/// six neighbours are all inside (the same operations in the same order for every
+/// instruction set: vectorised across cells only).
 #[inline(always)]
-fn stencil_span(u: &[f64], o: &mut [f64], a: usize, nx: usize, plane: usize, centre: f64, r: f64) {
+#[allow(clippy::too_many_arguments)]
+fn stencil_span(
+    zm: &[f64],
+    c: &[f64],
+    zp: &[f64],
+    o: &mut [f64],
+    a: usize,
+    nx: usize,
+    centre: f64,
+    r: f64,
+) {
     let b = a + o.len();
-    let c = &u[a..b];
-    let xm = &u[a - 1..b - 1];
-    let xp = &u[a + 1..b + 1];
-    let ym = &u[a - nx..b - nx];
-    let yp = &u[a + nx..b + nx];
-    let zm = &u[a - plane..b - plane];
-    let zp = &u[a + plane..b + plane];
+    let xm = &c[a - 1..b - 1];
+    let xp = &c[a + 1..b + 1];
+    let ym = &c[a - nx..b - nx];
+    let yp = &c[a + nx..b + nx];
+    let zm = &zm[a..b];
+    let zp = &zp[a..b];
+    let c = &c[a..b];
     for (q, o) in o.iter_mut().enumerate() {
         *o = centre * c[q] + r * (xm[q] + xp[q] + ym[q] + yp[q] + zm[q] + zp[q]);
     }
+}
+
+/// The new values of z-plane `k`'s inside cells into `out` (the plane's slice), from the old
+/// values of the plane (`c`), the one below (`zm`) and the one above (`zp`); `zm` (`zp`) may
+/// be empty at the bottom (top) plane, where no cell has an interior face below (above).
+#[allow(clippy::too_many_arguments)]
+fn stencil_plane(
+    grid: &Grid,
+    k: usize,
+    zm: &[f64],
+    c: &[f64],
+    zp: &[f64],
+    out: &mut [f64],
+    r: f64,
+    cb: f64,
+    isa: Isa,
+) {
+    let [nx, ny, _] = grid.n;
+    let plane = nx * ny;
+    let codes = grid
+        .codes
+        .each_ref()
+        .map(|v| &v[k * plane..(k + 1) * plane]);
+    // an inside cell with a side that is not interior (`q` in the plane)
+    let generic = |q: usize| -> f64 {
+        let ui = c[q];
+        let mut acc = 0.0;
+        for (dir, codes) in codes.iter().enumerate() {
+            let code = codes[q];
+            let m = code & 3;
+            let p = (code >> 2) & 3;
+            if m == SIDE_INTERIOR {
+                acc += match dir {
+                    0 => c[q - 1],
+                    1 => c[q - nx],
+                    _ => zm[q],
+                } - ui;
+            } else if m == SIDE_OPEN {
+                acc += 2.0 * (cb - ui);
+            }
+            if p == SIDE_INTERIOR {
+                acc += match dir {
+                    0 => c[q + 1],
+                    1 => c[q + nx],
+                    _ => zp[q],
+                } - ui;
+            } else if p == SIDE_OPEN {
+                acc += 2.0 * (cb - ui);
+            }
+        }
+        ui + r * acc
+    };
+    let centre = 1.0 - 6.0 * r;
+    for j in 0..ny {
+        let row = j + ny * k;
+        let base = j * nx;
+        let (i0, i1) = grid.interior_spans[row];
+        let (i0, i1) = (i0 as usize, (i1 as usize).max(i0 as usize));
+        for i in (0..i0).chain(i1..nx) {
+            if codes[0][base + i] & INSIDE_BIT != 0 {
+                out[base + i] = generic(base + i);
+            }
+        }
+        if i1 > i0 {
+            // all six neighbours exist and are inside: plain 7-point stencil, branch-free
+            let (o, a) = (&mut out[base + i0..base + i1], base + i0);
+            match isa {
+                Isa::Portable => stencil_span(zm, c, zp, o, a, nx, centre, r),
+                // SAFETY: `Isa::detect` found the instruction set on this CPU
+                #[cfg(target_arch = "x86_64")]
+                Isa::Avx2 => unsafe { stencil_span_avx2(zm, c, zp, o, a, nx, centre, r) },
+                #[cfg(target_arch = "x86_64")]
+                Isa::Avx512 => unsafe { stencil_span_avx512(zm, c, zp, o, a, nx, centre, r) },
+            }
+        }
+    }
+}
+
+/// The boundary inflow of an explicit step from `u` (the field before the step), summed in
+/// the order of `grid.open_cells`.
+fn explicit_inflow(grid: &Grid, u: &[f64], r: f64, cb: f64) -> f64 {
+    let mut inflow = 0.0;
+    for cells in &grid.open_cells {
+        for &(idx, cnt) in cells {
+            inflow += r * 2.0 * cnt as f64 * (cb - u[idx as usize]);
+        }
+    }
+    inflow
 }
 
 /// [`explicit_step`] with the interior stencil compiled for `isa`.
@@ -114,63 +222,124 @@ fn explicit_step_with(
     isa: Isa,
 ) -> f64 {
     let r = d * dt / (grid.h * grid.h);
-    let [nx, ny, _] = grid.n;
+    let [nx, ny, nz] = grid.n;
     let plane = nx * ny;
-    let strides = [1usize, nx, plane];
-    // an inside cell with a side that is not interior
-    let generic = |idx: usize| -> f64 {
-        let ui = u[idx];
-        let mut acc = 0.0;
-        for (dir, stride) in strides.iter().enumerate() {
-            let c = grid.codes[dir][idx];
-            let m = c & 3;
-            let p = (c >> 2) & 3;
-            if m == SIDE_INTERIOR {
-                acc += u[idx - stride] - ui;
-            } else if m == SIDE_OPEN {
-                acc += 2.0 * (cb - ui);
-            }
-            if p == SIDE_INTERIOR {
-                acc += u[idx + stride] - ui;
-            } else if p == SIDE_OPEN {
-                acc += 2.0 * (cb - ui);
-            }
-        }
-        ui + r * acc
-    };
-    let centre = 1.0 - 6.0 * r;
     out.par_chunks_mut(plane).enumerate().for_each(|(k, slab)| {
-        for j in 0..ny {
-            let row = j + ny * k;
-            let base = row * nx;
-            let (i0, i1) = grid.interior_spans[row];
-            let (i0, i1) = (i0 as usize, (i1 as usize).max(i0 as usize));
-            let orow = &mut slab[j * nx..(j + 1) * nx];
-            for i in (0..i0).chain(i1..nx) {
-                if grid.codes[0][base + i] & INSIDE_BIT != 0 {
-                    orow[i] = generic(base + i);
-                }
-            }
-            if i1 > i0 {
-                // all six neighbours exist and are inside: plain 7-point stencil, branch-free
-                let (o, a) = (&mut orow[i0..i1], base + i0);
-                match isa {
-                    Isa::Portable => stencil_span(u, o, a, nx, plane, centre, r),
-                    // SAFETY: `Isa::detect` found the instruction set on this CPU
-                    #[cfg(target_arch = "x86_64")]
-                    Isa::Avx2 => unsafe { stencil_span_avx2(u, o, a, nx, plane, centre, r) },
-                    #[cfg(target_arch = "x86_64")]
-                    Isa::Avx512 => unsafe { stencil_span_avx512(u, o, a, nx, plane, centre, r) },
-                }
-            }
-        }
+        let zm = if k > 0 {
+            &u[(k - 1) * plane..k * plane]
+        } else {
+            &[]
+        };
+        let zp = if k + 1 < nz {
+            &u[(k + 1) * plane..(k + 2) * plane]
+        } else {
+            &[]
+        };
+        let c = &u[k * plane..(k + 1) * plane];
+        stencil_plane(grid, k, zm, c, zp, slab, r, cb, isa);
     });
-    let mut inflow = 0.0;
-    for cells in &grid.open_cells {
-        for &(idx, cnt) in cells {
-            inflow += r * 2.0 * cnt as f64 * (cb - u[idx as usize]);
+    explicit_inflow(grid, u, r, cb)
+}
+
+/// Blocks of z-planes per thread in [`explicit_step_in_place`] (one task each): more balance
+/// the load, fewer copy fewer halo planes.
+const BLOCKS_PER_THREAD: usize = 2;
+
+thread_local! {
+    /// Per thread, the old values of two z-planes ([`explicit_step_in_place`]'s block pass).
+    static OLD_PLANES: std::cell::RefCell<Vec<f64>> =
+        const { std::cell::RefCell::new(Vec::new()) };
+    /// The calling thread's halo of [`explicit_step_in_place`]: per block, the old plane below
+    /// its first plane and the one above its last.
+    static HALO: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+}
+
+/// [`explicit_step_in_place`] with the interior stencil compiled for `isa`.
+fn explicit_step_in_place_with(
+    grid: &Grid,
+    u: &mut [f64],
+    d: f64,
+    dt: f64,
+    cb: f64,
+    isa: Isa,
+) -> f64 {
+    let r = d * dt / (grid.h * grid.h);
+    let [nx, ny, nz] = grid.n;
+    let plane = nx * ny;
+    // from the old values, before they are overwritten
+    let inflow = explicit_inflow(grid, u, r, cb);
+    let threads = rayon::current_num_threads().max(1);
+    let blocks = if threads == 1 {
+        1
+    } else {
+        (BLOCKS_PER_THREAD * threads).min(nz)
+    };
+    let block = nz.div_ceil(blocks);
+    let blocks = nz.div_ceil(block);
+    HALO.with(|halo| {
+        let mut halo = halo.borrow_mut();
+        if halo.len() < 2 * blocks * plane {
+            halo.resize(2 * blocks * plane, 0.0);
         }
-    }
+        // halo plane 2b: the plane below block b; 2b + 1: the plane above it
+        {
+            let u: &[f64] = u;
+            halo[..2 * blocks * plane]
+                .par_chunks_mut(plane)
+                .enumerate()
+                .for_each(|(q, h)| {
+                    let b = q / 2;
+                    let k = if q % 2 == 0 {
+                        (b * block).checked_sub(1)
+                    } else {
+                        Some((b + 1) * block).filter(|&k| k < nz)
+                    };
+                    if let Some(k) = k {
+                        h.copy_from_slice(&u[k * plane..(k + 1) * plane]);
+                    }
+                });
+        }
+        let halo: &[f64] = &halo;
+        u.par_chunks_mut(block * plane)
+            .enumerate()
+            .for_each(|(b, slab)| {
+                let k0 = b * block;
+                let planes = slab.len() / plane;
+                OLD_PLANES.with(|t| {
+                    let mut t = t.borrow_mut();
+                    if t.len() < 2 * plane {
+                        t.resize(2 * plane, 0.0);
+                    }
+                    // the old values of the plane below (from the second plane on) and of the
+                    // current plane
+                    let (mut below, mut cur) = t[..2 * plane].split_at_mut(plane);
+                    cur.copy_from_slice(&slab[..plane]);
+                    for q in 0..planes {
+                        let k = k0 + q;
+                        let (done, rest) = slab.split_at_mut((q + 1) * plane);
+                        let zm: &[f64] = if q > 0 {
+                            below
+                        } else if k > 0 {
+                            &halo[2 * b * plane..(2 * b + 1) * plane]
+                        } else {
+                            &[]
+                        };
+                        let zp: &[f64] = if q + 1 < planes {
+                            &rest[..plane]
+                        } else if k + 1 < nz {
+                            &halo[(2 * b + 1) * plane..(2 * b + 2) * plane]
+                        } else {
+                            &[]
+                        };
+                        stencil_plane(grid, k, zm, cur, zp, &mut done[q * plane..], r, cb, isa);
+                        std::mem::swap(&mut below, &mut cur);
+                        if q + 1 < planes {
+                            cur.copy_from_slice(&rest[..plane]);
+                        }
+                    }
+                });
+            });
+    });
     inflow
 }
 
@@ -1312,7 +1481,7 @@ macro_rules! isa_variants {
 }
 
 isa_variants!(stencil_span, stencil_span_avx2, stencil_span_avx512,
-    (u: &[f64], o: &mut [f64], a: usize, nx: usize, plane: usize, centre: f64, r: f64));
+    (zm: &[f64], c: &[f64], zp: &[f64], o: &mut [f64], a: usize, nx: usize, centre: f64, r: f64));
 
 isa_variants!(xy_plane, xy_plane_avx2, xy_plane_avx512,
     (grid: &Grid, plan: &LinePlan, table: &Tables, u: *mut f64, xvals: *mut f64, t: *mut f64, b: usize, simd: bool));
@@ -1666,6 +1835,101 @@ mod planned_tests {
             assert_eq!(fw.to_bits(), fg.to_bits(), "{isa:?}");
             for i in 0..g.len() {
                 assert_eq!(want[i].to_bits(), got[i].to_bits(), "{isa:?}, cell {i}");
+            }
+        }
+    }
+
+    /// The in-place explicit step against the out-of-place one, in every instruction set this
+    /// CPU has and with 1, 2 and 3 threads (the blocks of planes cut in different places): the
+    /// same bits in every inside cell, the same inflow, and the cells outside untouched.
+    fn assert_in_place_same_bits(g: &Grid) {
+        let u0: Vec<f64> = (0..g.len())
+            .map(|i| ((i * 7919 + 13) % 101) as f64 / 100.0)
+            .collect();
+        let d = 2.5e-9;
+        let dt = 0.9 * explicit_limit(g, d);
+        for isa in Isa::available() {
+            let mut want = vec![f64::NAN; g.len()];
+            let fw = explicit_step_with(g, &u0, &mut want, d, dt, 1.5, isa);
+            for threads in 1..=3 {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let mut got = u0.clone();
+                let fg = pool.install(|| explicit_step_in_place_with(g, &mut got, d, dt, 1.5, isa));
+                let at = format!("{isa:?}, {threads} threads, n = {:?}", g.n);
+                assert_eq!(fw.to_bits(), fg.to_bits(), "{at}: inflow");
+                for i in 0..g.len() {
+                    let w = if g.inside(i) { want[i] } else { u0[i] };
+                    assert_eq!(w.to_bits(), got[i].to_bits(), "{at}, cell {i}");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn in_place_explicit_step_is_the_out_of_place_steps_bits() {
+        let mut g = fig5_cylinder();
+        assert_in_place_same_bits(&g);
+        // a bubble's hole, and one across the top of the gel
+        let n = g.n.map(|x| x as f64);
+        let mut hole = ball(&g, [n[0] / 2.0, n[1] / 2.0, n[2] / 2.0], 6.0);
+        hole.extend(ball(&g, [n[0] / 3.0, n[1] / 2.0, n[2] - 4.0], 5.0));
+        g.set_excluded(&hole, true);
+        assert_in_place_same_bits(&g);
+        // blocks of one and two planes (a grid has at least 3)
+        for nz in [3, 4, 5, 7, 13] {
+            assert_in_place_same_bits(&boxed([9, 7, nz], all_box_faces()));
+            assert_in_place_same_bits(&boxed([9, 7, nz], &[]));
+            assert_in_place_same_bits(&boxed([11, 6, nz], &[Face::Top, Face::XMinus]));
+        }
+        // a gel one and two planes thick: the bottom and top planes of a sealed box excluded
+        for nz in [3, 4] {
+            let mut g = boxed([8, 9, nz], &[]);
+            let ends: Vec<usize> = (0..g.len())
+                .filter(|&i| i / 72 == 0 || i / 72 == nz - 1)
+                .collect();
+            g.set_excluded(&ends, true);
+            assert_in_place_same_bits(&g);
+        }
+        assert_in_place_same_bits(&boxed([20, 17, 9], &[Face::Bottom, Face::YPlus]));
+        let mut g = boxed([19, 16, 12], all_box_faces());
+        let cells: Vec<usize> = (0..g.len())
+            .filter(|&i| {
+                let (x, y, z) = (i % g.n[0], (i / g.n[0]) % g.n[1], i / (g.n[0] * g.n[1]));
+                !g.has_open_side(i) && ((x + 2 * y + z) % 3 == 0 || (y % 4 == 1 && x % 2 == 0))
+            })
+            .collect();
+        g.set_excluded(&cells, true);
+        assert_in_place_same_bits(&g);
+    }
+
+    /// Several in-place steps in a row (the per-thread buffers reused, grids of different
+    /// sizes in turn) against out-of-place steps alternating between two fields.
+    #[test]
+    fn repeated_in_place_steps_are_the_out_of_place_steps_bits() {
+        let grids = [fig5_cylinder(), boxed([9, 7, 5], all_box_faces())];
+        let mut fields: Vec<(Vec<f64>, Vec<f64>)> = grids
+            .iter()
+            .map(|g| {
+                let u: Vec<f64> = (0..g.len()).map(|i| (i % 23) as f64 * 0.05).collect();
+                (u.clone(), u)
+            })
+            .collect();
+        for step in 0..4 {
+            for (g, (a, b)) in grids.iter().zip(&mut fields) {
+                let dt = 0.9 * explicit_limit(g, 1e-9);
+                let cb = 0.1 * step as f64;
+                let mut out = a.clone();
+                let fa = explicit_step(g, a, &mut out, 1e-9, dt, cb);
+                *a = out;
+                let fb = explicit_step_in_place(g, b, 1e-9, dt, cb);
+                assert_eq!(fa.to_bits(), fb.to_bits());
+                assert!(a
+                    .iter()
+                    .zip(b.iter())
+                    .all(|(x, y)| x.to_bits() == y.to_bits()));
             }
         }
     }

@@ -1271,27 +1271,18 @@ impl<'a> Simulation<'a> {
         for g in 0..ng {
             let gas = self.gases[g];
             let d = self.diffusivity[g];
+            // both steps are in place: keep the field before the step for the estimate
+            if estimate {
+                self.scratch.copy_from_slice(&self.fields[g]);
+            }
             let inflow = if implicit {
                 let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t + dt) / self.rt;
-                if estimate {
-                    self.scratch.copy_from_slice(&self.fields[g]);
-                }
                 self.implicit
                     .step(&self.grid, &mut self.fields[g], d, dt, cb)
             } else {
                 let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t) / self.rt;
-                let inflow = diffusion::explicit_step(
-                    &self.grid,
-                    &self.fields[g],
-                    &mut self.scratch,
-                    d,
-                    dt,
-                    cb,
-                );
-                std::mem::swap(&mut self.fields[g], &mut self.scratch);
-                inflow
+                diffusion::explicit_step_in_place(&self.grid, &mut self.fields[g], d, dt, cb)
             };
-            // the field before the step is in `scratch` either way
             if estimate {
                 let ratio = if self.last_dt > 0.0 {
                     dt / self.last_dt
