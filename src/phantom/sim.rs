@@ -245,6 +245,7 @@ pub struct Simulation<'a> {
     ostwald: Vec<f64>,
     explicit_limit: Vec<f64>,
     pub(super) fields: Vec<Vec<f64>>,
+    /// The field before the step, for the field's error estimate (allocated when that is on).
     scratch: Vec<f64>,
     /// The implicit step's line plan and factor table ([`diffusion::ImplicitSolver`]).
     implicit: diffusion::ImplicitSolver,
@@ -465,7 +466,7 @@ impl<'a> Simulation<'a> {
         }
         let mut sim = Simulation {
             params,
-            scratch: vec![0.0; grid.len()],
+            scratch: Vec::new(),
             implicit: diffusion::ImplicitSolver::new(),
             last_change: Vec::new(),
             last_dt: 0.0,
@@ -1266,6 +1267,9 @@ impl<'a> Simulation<'a> {
         if estimate && self.last_change.len() != ng {
             self.last_change = vec![vec![0.0; self.grid.len()]; ng];
             self.last_dt = 0.0;
+        }
+        if estimate {
+            self.scratch.resize(self.grid.len(), 0.0);
         }
         let mut err: f64 = 0.0;
         for g in 0..ng {
