@@ -5,7 +5,9 @@
 //! Two schemes, both conservative to round-off (the interior face fluxes cancel in pairs):
 //! - [`explicit_step`]: forward Euler, used when the step the physics asks for is below the
 //!   positivity limit dt ≤ h²/(D·w_max) (w_max the largest stencil weight sum, 6 inside,
-//!   up to 9 in a corner with three open faces);
+//!   up to 9 in a corner with three open faces); the simulation uses
+//!   [`explicit_step_in_place`], the same bits without a second field (z-plane blocks in
+//!   parallel, each keeping the old planes it still needs in per-thread buffers);
 //! - [`implicit_step`]: locally one-dimensional backward Euler (x, y, then z tridiagonal
 //!   solves, Thomas algorithm), unconditionally stable and positivity-preserving, used when
 //!   long holds allow large steps. For a box with uniform D the three 1-D operators commute,
