@@ -79,7 +79,7 @@ pub fn covered_cells(grid: &Grid, centre: [f64; 3], r: f64) -> Vec<usize> {
 
 /// The displaced field: for every gel cell (not excluded once the bubble has radius `r_new`)
 /// at distance r ∈ [r_new, reach] from `centre`, the value of each field at the point the gel
-/// there came from, r_b = (r³ − (r_new³ − r_old³))^{1/3} on the same ray ([`interpolate`],
+/// there came from, r_b = (r³ − (r_new³ − r_old³))^{1/3} on the same ray ([`interpolate_gases`],
 /// with the bubble's cells at the wall value `wall[g]`, Henry's law at its surface). Returns
 /// (cell, value per field in field order); the caller writes it after updating which cells
 /// the bubble holds.
