@@ -1841,6 +1841,95 @@ mod planned_tests {
         }
     }
 
+    /// The explicit step against a per-cell reference written here: the plain 7-point form
+    /// centre·C + r·Σ(neighbours) inside each row's interior span, and outside it the sum of
+    /// the six sides' terms in x−, x+, y−, y+, z−, z+ order (an interior side C_n − C, an open
+    /// one 2(C_b − C)), C + r·sum: the same bits, out of place and in place, on boxes (open on
+    /// every face, on two, sealed) and on a cylinder with excluded cells.
+    #[test]
+    fn explicit_step_matches_a_per_cell_reference() {
+        let reference = |g: &Grid, u: &[f64], r: f64, cb: f64| -> Vec<f64> {
+            let [nx, ny, _] = g.n;
+            let strides = [1usize, nx, nx * ny];
+            let mut out = vec![f64::NAN; g.len()];
+            for (idx, o) in out.iter_mut().enumerate() {
+                if !g.inside(idx) {
+                    continue;
+                }
+                let (i, row) = (idx % nx, idx / nx);
+                let (i0, i1) = g.interior_spans[row];
+                if (i0 as usize..i1 as usize).contains(&i) {
+                    let s: f64 = u[idx - 1]
+                        + u[idx + 1]
+                        + u[idx - nx]
+                        + u[idx + nx]
+                        + u[idx - strides[2]]
+                        + u[idx + strides[2]];
+                    *o = (1.0 - 6.0 * r) * u[idx] + r * s;
+                    continue;
+                }
+                let mut acc = 0.0;
+                for (d, st) in strides.iter().enumerate() {
+                    let code = g.codes[d][idx];
+                    for (side, nb) in [
+                        (code & 3, idx.wrapping_sub(*st)),
+                        ((code >> 2) & 3, idx + st),
+                    ] {
+                        if side == SIDE_INTERIOR {
+                            acc += u[nb] - u[idx];
+                        } else if side == SIDE_OPEN {
+                            acc += 2.0 * (cb - u[idx]);
+                        }
+                    }
+                }
+                *o = u[idx] + r * acc;
+            }
+            out
+        };
+        let mut cyl = Grid::new(
+            Shape::Cylinder {
+                diameter: 3.1e-3,
+                depth: 1.3e-3,
+            },
+            1e-4,
+            &[Face::Top, Face::Side],
+        )
+        .unwrap();
+        let hole: Vec<usize> = (0..cyl.len())
+            .filter(|&i| {
+                let n = cyl.n;
+                let (x, y, z) = (i % n[0], (i / n[0]) % n[1], i / (n[0] * n[1]));
+                (12..15).contains(&x) && (13..16).contains(&y) && (4..7).contains(&z)
+            })
+            .collect();
+        cyl.set_excluded(&hole, true);
+        let size = [2.3e-3, 1.1e-3, 0.7e-3];
+        let grids = [
+            cyl,
+            Grid::new(Shape::Box { size }, 1e-4, &Shape::Box { size }.faces()).unwrap(),
+            Grid::new(Shape::Box { size }, 1e-4, &[Face::Top, Face::XMinus]).unwrap(),
+            Grid::new(Shape::Box { size }, 1e-4, &[]).unwrap(),
+        ];
+        let (d, cb) = (2.5e-9, 1.5);
+        for g in &grids {
+            let u: Vec<f64> = (0..g.len())
+                .map(|i| ((i * 7919 + 13) % 101) as f64 / 100.0)
+                .collect();
+            let dt = 0.9 * explicit_limit(g, d);
+            let want = reference(g, &u, d * dt / (g.h * g.h), cb);
+            for isa in Isa::available() {
+                let mut got = vec![f64::NAN; g.len()];
+                explicit_step_with(g, &u, &mut got, d, dt, cb, isa);
+                let mut inplace = u.clone();
+                explicit_step_in_place_with(g, &mut inplace, d, dt, cb, isa);
+                for i in (0..g.len()).filter(|&i| g.inside(i)) {
+                    assert_eq!(want[i].to_bits(), got[i].to_bits(), "{isa:?}, cell {i}");
+                    assert_eq!(want[i].to_bits(), inplace[i].to_bits(), "{isa:?}, cell {i}");
+                }
+            }
+        }
+    }
+
     /// The in-place explicit step against the out-of-place one, in every instruction set this
     /// CPU has and with 1, 2 and 3 threads (the blocks of planes cut in different places): the
     /// same bits in every inside cell, the same inflow, and the cells outside untouched.
