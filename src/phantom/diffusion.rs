@@ -1906,7 +1906,7 @@ mod planned_tests {
         let size = [2.3e-3, 1.1e-3, 0.7e-3];
         let grids = [
             cyl,
-            Grid::new(Shape::Box { size }, 1e-4, &Shape::Box { size }.faces()).unwrap(),
+            Grid::new(Shape::Box { size }, 1e-4, Shape::Box { size }.faces()).unwrap(),
             Grid::new(Shape::Box { size }, 1e-4, &[Face::Top, Face::XMinus]).unwrap(),
             Grid::new(Shape::Box { size }, 1e-4, &[]).unwrap(),
         ];
