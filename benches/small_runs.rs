@@ -2,7 +2,7 @@
 //! thousand, `benches/small-cube/` — one 60 µm nucleus at the centre of a 6 mm hydrogel cube
 //! open on every face, h = 100 µm (60³ = 216 000 cells), saturated at 60 psi gauge in air,
 //! decompressed to 0 in 10 s and followed for 290 s (300 s in all), frames recorded every step
-//! as `fit` records them.
+//! without the gel pass (`record_gel = false`), as `fit` and `discover` record them.
 //!
 //! - `small_runs/one_run/{1,2}_threads`: one run, its grid loops on one thread
 //!   ([`GridThreads::Serial`]) or on the global pool;
@@ -29,6 +29,7 @@ fn small_runs(c: &mut Criterion) {
     let root = Path::new(env!("CARGO_MANIFEST_DIR")).join("benches/small-cube");
     let history = load(&root.join("profile.toml"), &LoadOptions::default()).unwrap();
     let mut params = load_phantom(&root.join("phantom.toml")).unwrap().params;
+    params.numerics.record_gel = false;
     let mut tag = String::new();
     if let Some(mm) = std::env::var("SMALL_RUNS_SIZE_MM")
         .ok()
