@@ -741,6 +741,7 @@ impl LinePlan {
         let ends = longest_ends(max_len);
         let mut longest = self.n_longest;
         let mut line: Vec<u16> = Vec::new();
+        let mut line_codes: Vec<u8> = Vec::new();
         for dir in 0..3 {
             // the axes across the lines of `dir`
             let (a, b) = match dir {
@@ -763,17 +764,13 @@ impl LinePlan {
                             cell(q)
                         }
                     };
+                    // pass 1 on the line's codes, gathered contiguous
+                    line_codes.clear();
+                    line_codes.extend((0..len).map(|q| codes[cell(q)]));
                     line.clear();
                     line.resize(len, 0);
-                    for q in 1..len {
-                        let cc = codes[cell(q)];
-                        if cc & INSIDE_BIT != 0 && cc & 3 == SIDE_INTERIOR {
-                            let k = line[q - 1] as usize + 1;
-                            if k + 1 > max_len {
-                                return false;
-                            }
-                            line[q] = k as u16;
-                        }
+                    if positions(&line_codes, &mut line, 1).is_none_or(|m| m > max_len) {
+                        return false;
                     }
                     let index = &mut self.index[dir];
                     for (q, &k) in line.iter().enumerate() {
