@@ -265,11 +265,43 @@ fn explicit_step_in_place_with(
     cb: f64,
     isa: Isa,
 ) -> f64 {
-    let r = d * dt / (grid.h * grid.h);
+    let mut inflow = [0.0];
+    explicit_steps_in_place_with(grid, &mut [u], &[(d, cb)], dt, &mut inflow, isa);
+    inflow[0]
+}
+
+/// [`explicit_step_in_place`] of several fields over the same step `dt`, field `f` with
+/// diffusivity and boundary value `dc[f] = (D_f, c_b,f)`, its inflow into `inflow[f]`: each
+/// field the same bits as stepped alone, in one parallel pass (a block of planes steps every
+/// field in turn) instead of two per field.
+pub fn explicit_steps_in_place(
+    grid: &Grid,
+    fields: &mut [&mut [f64]],
+    dc: &[(f64, f64)],
+    dt: f64,
+    inflow: &mut [f64],
+) {
+    explicit_steps_in_place_with(grid, fields, dc, dt, inflow, Isa::detect())
+}
+
+/// [`explicit_steps_in_place`] with the interior stencil compiled for `isa`.
+fn explicit_steps_in_place_with(
+    grid: &Grid,
+    fields: &mut [&mut [f64]],
+    dc: &[(f64, f64)],
+    dt: f64,
+    inflow: &mut [f64],
+    isa: Isa,
+) {
+    let nf = fields.len();
+    assert!(dc.len() == nf && inflow.len() == nf);
     let [nx, ny, nz] = grid.n;
     let plane = nx * ny;
+    let r: Vec<f64> = dc.iter().map(|(d, _)| d * dt / (grid.h * grid.h)).collect();
     // from the old values, before they are overwritten
-    let inflow = explicit_inflow(grid, u, r, cb);
+    for f in 0..nf {
+        inflow[f] = explicit_inflow(grid, fields[f], r[f], dc[f].1);
+    }
     let threads = rayon::current_num_threads().max(1);
     let blocks = if threads == 1 {
         1
@@ -280,16 +312,18 @@ fn explicit_step_in_place_with(
     let blocks = nz.div_ceil(block);
     HALO.with(|halo| {
         let mut halo = halo.borrow_mut();
-        if halo.len() < 2 * blocks * plane {
-            halo.resize(2 * blocks * plane, 0.0);
+        let per_field = 2 * blocks * plane;
+        if halo.len() < nf * per_field {
+            halo.resize(nf * per_field, 0.0);
         }
-        // halo plane 2b: the plane below block b; 2b + 1: the plane above it
+        // per field, halo plane 2b: the plane below block b; 2b + 1: the plane above it
         {
-            let u: &[f64] = u;
-            halo[..2 * blocks * plane]
+            let fields: Vec<&[f64]> = fields.iter().map(|u| &**u).collect();
+            halo[..nf * per_field]
                 .par_chunks_mut(plane)
                 .enumerate()
                 .for_each(|(q, h)| {
+                    let (f, q) = (q / (2 * blocks), q % (2 * blocks));
                     let b = q / 2;
                     let k = if q % 2 == 0 {
                         (b * block).checked_sub(1)
@@ -297,52 +331,80 @@ fn explicit_step_in_place_with(
                         Some((b + 1) * block).filter(|&k| k < nz)
                     };
                     if let Some(k) = k {
-                        h.copy_from_slice(&u[k * plane..(k + 1) * plane]);
+                        h.copy_from_slice(&fields[f][k * plane..(k + 1) * plane]);
                     }
                 });
         }
         let halo: &[f64] = &halo;
-        u.par_chunks_mut(block * plane)
+        // per block, its slab of every field
+        let mut slabs: Vec<Vec<&mut [f64]>> = (0..blocks).map(|_| Vec::with_capacity(nf)).collect();
+        for u in fields.iter_mut() {
+            for (b, slab) in u.chunks_mut(block * plane).enumerate() {
+                slabs[b].push(slab);
+            }
+        }
+        slabs
+            .into_par_iter()
             .enumerate()
-            .for_each(|(b, slab)| {
-                let k0 = b * block;
-                let planes = slab.len() / plane;
+            .for_each(|(b, mut slabs)| {
                 OLD_PLANES.with(|t| {
                     let mut t = t.borrow_mut();
                     if t.len() < 2 * plane {
                         t.resize(2 * plane, 0.0);
                     }
-                    // the old values of the plane below (from the second plane on) and of the
-                    // current plane
-                    let (mut below, mut cur) = t[..2 * plane].split_at_mut(plane);
-                    cur.copy_from_slice(&slab[..plane]);
-                    for q in 0..planes {
-                        let k = k0 + q;
-                        let (done, rest) = slab.split_at_mut((q + 1) * plane);
-                        let zm: &[f64] = if q > 0 {
-                            below
-                        } else if k > 0 {
-                            &halo[2 * b * plane..(2 * b + 1) * plane]
-                        } else {
-                            &[]
-                        };
-                        let zp: &[f64] = if q + 1 < planes {
-                            &rest[..plane]
-                        } else if k + 1 < nz {
-                            &halo[(2 * b + 1) * plane..(2 * b + 2) * plane]
-                        } else {
-                            &[]
-                        };
-                        stencil_plane(grid, k, zm, cur, zp, &mut done[q * plane..], r, cb, isa);
-                        std::mem::swap(&mut below, &mut cur);
-                        if q + 1 < planes {
-                            cur.copy_from_slice(&rest[..plane]);
-                        }
+                    for (f, slab) in slabs.iter_mut().enumerate() {
+                        let halo = &halo[f * per_field..(f + 1) * per_field];
+                        step_block(grid, b * block, slab, halo, b, &mut t, r[f], dc[f].1, isa);
                     }
                 });
             });
     });
-    inflow
+}
+
+/// One block of [`explicit_steps_in_place`] for one field: planes `k0..` in `slab`, going
+/// upward with the old values of the plane below and of the current one in `old` (two planes),
+/// the old planes just outside the block in `halo` (planes 2b and 2b + 1).
+#[allow(clippy::too_many_arguments)]
+fn step_block(
+    grid: &Grid,
+    k0: usize,
+    slab: &mut [f64],
+    halo: &[f64],
+    b: usize,
+    old: &mut [f64],
+    r: f64,
+    cb: f64,
+    isa: Isa,
+) {
+    let [nx, ny, nz] = grid.n;
+    let plane = nx * ny;
+    let planes = slab.len() / plane;
+    // the old values of the plane below (from the second plane on) and of the current plane
+    let (mut below, mut cur) = old[..2 * plane].split_at_mut(plane);
+    cur.copy_from_slice(&slab[..plane]);
+    for q in 0..planes {
+        let k = k0 + q;
+        let (done, rest) = slab.split_at_mut((q + 1) * plane);
+        let zm: &[f64] = if q > 0 {
+            below
+        } else if k > 0 {
+            &halo[2 * b * plane..(2 * b + 1) * plane]
+        } else {
+            &[]
+        };
+        let zp: &[f64] = if q + 1 < planes {
+            &rest[..plane]
+        } else if k + 1 < nz {
+            &halo[(2 * b + 1) * plane..(2 * b + 2) * plane]
+        } else {
+            &[]
+        };
+        stencil_plane(grid, k, zm, cur, zp, &mut done[q * plane..], r, cb, isa);
+        std::mem::swap(&mut below, &mut cur);
+        if q + 1 < planes {
+            cur.copy_from_slice(&rest[..plane]);
+        }
+    }
 }
 
 #[derive(Clone, Copy)]
@@ -1913,6 +1975,48 @@ mod planned_tests {
                 for i in (0..g.len()).filter(|&i| g.inside(i)) {
                     assert_eq!(want[i].to_bits(), got[i].to_bits(), "{isa:?}, cell {i}");
                     assert_eq!(want[i].to_bits(), inplace[i].to_bits(), "{isa:?}, cell {i}");
+                }
+            }
+            // three fields with their own D and boundary value in one pass, with 1 and 3
+            // threads: each the reference's bits, its inflow the sum over the open faces
+            // r·2·(C_b − C) written out here
+            let dc = [(d, cb), (0.4 * d, 0.3), (0.9 * d, 2.0)];
+            let us: Vec<Vec<f64>> = (0..3)
+                .map(|f| {
+                    (0..g.len())
+                        .map(|i| ((i * 7919 + 13 * f + 5) % 101) as f64 / 100.0)
+                        .collect()
+                })
+                .collect();
+            for threads in [1, 3] {
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(threads)
+                    .build()
+                    .unwrap();
+                let mut got = us.clone();
+                let mut inflow = [0.0; 3];
+                pool.install(|| {
+                    let mut fields: Vec<&mut [f64]> =
+                        got.iter_mut().map(|f| f.as_mut_slice()).collect();
+                    explicit_steps_in_place(g, &mut fields, &dc, dt, &mut inflow)
+                });
+                for f in 0..3 {
+                    let r = dc[f].0 * dt / (g.h * g.h);
+                    let want = reference(g, &us[f], r, dc[f].1);
+                    for i in (0..g.len()).filter(|&i| g.inside(i)) {
+                        assert_eq!(
+                            want[i].to_bits(),
+                            got[f][i].to_bits(),
+                            "field {f}, cell {i}"
+                        );
+                    }
+                    let mut flow = 0.0;
+                    for cells in &g.open_cells {
+                        for &(idx, cnt) in cells {
+                            flow += r * 2.0 * cnt as f64 * (dc[f].1 - us[f][idx as usize]);
+                        }
+                    }
+                    assert_eq!(flow.to_bits(), inflow[f].to_bits(), "field {f}: inflow");
                 }
             }
         }

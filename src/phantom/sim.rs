@@ -43,6 +43,34 @@ const BALANCE_LIMIT: f64 = 1e-6;
 /// change of its content, not by a relative change of a vanishing flux.
 const FLUX_FLOOR: f64 = 0.01;
 
+/// Sizes of coupling sphere kept by [`Simulation::prepare_sphere`] before its cache is emptied.
+const SPHERE_CACHE: usize = 16;
+
+/// Points sampled over all bubbles in one round from which [`Simulation::all_fluxes`] runs the
+/// bubbles in parallel (below, a thread's wake-up costs more than it saves: 64 points take a
+/// few µs).
+const PARALLEL_SPHERE_POINTS: usize = 1024;
+
+#[cfg(test)]
+thread_local! {
+    /// Tests: evaluate the bubbles' fluxes one after another, as before they ran in parallel
+    /// (the reference of `parallel_fluxes_tests`).
+    static SERIAL_FLUXES: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
+}
+
+/// Whether the bubbles' fluxes are evaluated one by one where they interleave with the
+/// corrections (tests only; always false in a build).
+fn serial_fluxes() -> bool {
+    #[cfg(test)]
+    {
+        SERIAL_FLUXES.with(|s| s.get())
+    }
+    #[cfg(not(test))]
+    {
+        false
+    }
+}
+
 /// What the observer sees of one bubble at a recorded time.
 #[derive(Debug, Clone, PartialEq)]
 pub struct BubbleFrame {
@@ -262,8 +290,14 @@ pub struct Simulation<'a> {
     /// Gas that entered through open faces and by perfusion since the balance reference, mol.
     pub(super) inflow: f64,
     pub(super) initial_total: f64,
-    sphere: Vec<[f64; 3]>,
+    /// Fibonacci spheres of the sizes in use, keyed by their number of points (the coupling
+    /// spheres of bubbles of different radii; [`Self::sphere_means`]).
+    spheres: std::collections::HashMap<usize, Vec<[f64; 3]>>,
     kernel: Vec<(usize, f64)>,
+    /// The cells (an index box, lowest and highest corner) that [`Self::take_from_grid`] has
+    /// changed since it was last reset, or `None`: the corrector uses it to know which
+    /// bubbles' fluxes, evaluated before the corrections, are still current.
+    touched: Option<([usize; 3], [usize; 3])>,
     pub(super) steps_state: Vec<StepExchange>,
     /// Per bubble: the gel it displaces ([`displacement`]).
     pub(super) displaced: Vec<Displaced>,
@@ -481,8 +515,9 @@ impl<'a> Simulation<'a> {
             time: 0.0,
             inflow: 0.0,
             initial_total: 0.0,
-            sphere: Vec::new(),
+            spheres: std::collections::HashMap::new(),
             kernel: Vec::new(),
+            touched: None,
             steps_state: Vec::new(),
             displaced: Vec::new(),
             displaced_gas: 0.0,
@@ -594,16 +629,13 @@ impl<'a> Simulation<'a> {
     /// Average of every gas's field over the sphere of radius `rho` about `c` into `out` (one
     /// per gas; `fallback` per gas where a point has no inside cell about it). The points'
     /// corners and weights are found once for all gases ([`Grid::interpolate_many`]).
-    fn sphere_means(&mut self, c: [f64; 3], rho: f64, fallback: &[f64], out: &mut [f64]) {
-        let want = ((16.0 * (rho / self.grid.h).powi(2)).ceil() as usize).clamp(64, 20_000);
-        if self.sphere.len() != want {
-            self.sphere = fibonacci_sphere(want);
-        }
+    fn sphere_means(&self, c: [f64; 3], rho: f64, fallback: &[f64], out: &mut [f64]) {
+        let sphere = &self.spheres[&self.sphere_size(rho)];
         let ng = out.len();
         let (grid, fields) = (&self.grid, &self.fields[..ng]);
         let mut sum = [0.0; Gas::ALL.len()];
         let mut at = [0.0; Gas::ALL.len()];
-        for u in &self.sphere {
+        for u in sphere {
             let p = [c[0] + rho * u[0], c[1] + rho * u[1], c[2] + rho * u[2]];
             grid.interpolate_many(p, fallback, &mut at[..ng], |idx, v| {
                 if !grid.inside(idx) {
@@ -619,12 +651,65 @@ impl<'a> Simulation<'a> {
             }
         }
         for (o, s) in out.iter_mut().zip(sum) {
-            *o = s / self.sphere.len() as f64;
+            *o = s / sphere.len() as f64;
+        }
+    }
+
+    /// Points of the Fibonacci sphere [`Self::sphere_means`] samples at radius `rho`:
+    /// 16·(ρ/h)², between 64 and 20 000.
+    fn sphere_size(&self, rho: f64) -> usize {
+        ((16.0 * (rho / self.grid.h).powi(2)).ceil() as usize).clamp(64, 20_000)
+    }
+
+    /// Make bubble `i`'s coupling sphere ready for [`Self::sphere_means`] (built once per
+    /// size; the cache is emptied when it holds more than [`SPHERE_CACHE`] sizes, before a
+    /// round of fluxes). Returns its number of points.
+    fn prepare_sphere(&mut self, i: usize) -> usize {
+        let want = self.sphere_size(self.coupling_radius(i));
+        self.spheres
+            .entry(want)
+            .or_insert_with(|| fibonacci_sphere(want));
+        want
+    }
+
+    /// Every active bubble's fluxes and gel tension at `ambient` into `out` (by bubble index;
+    /// inactive bubbles are left alone), from the grid as it is. Bubbles are independent here
+    /// (each reads the grid and its own state), so when there are several and enough points
+    /// to sample they run in parallel, each with the same operations as alone: the same bits.
+    fn all_fluxes(
+        &mut self,
+        ambient: f64,
+        profile: &PressureHistory,
+        which: &[usize],
+        out: &mut [(f64, [f64; Gas::ALL.len()])],
+    ) {
+        use rayon::prelude::*;
+        if self.spheres.len() > SPHERE_CACHE {
+            self.spheres.clear();
+        }
+        let points: usize = which.iter().map(|&i| self.prepare_sphere(i)).sum();
+        let ng = self.gases.len();
+        let this = &*self;
+        let one = |i: usize| {
+            let mut j = [0.0; Gas::ALL.len()];
+            let t = this.fluxes(i, ambient, profile, &mut j[..ng]);
+            (t, j)
+        };
+        if which.len() > 1 && points >= PARALLEL_SPHERE_POINTS && !serial_fluxes() {
+            let res: Vec<_> = which.par_iter().map(|&i| one(i)).collect();
+            for (&i, r) in which.iter().zip(res) {
+                out[i] = r;
+            }
+        } else {
+            for &i in which {
+                out[i] = one(i);
+            }
         }
     }
 
     /// Gas fluxes into bubble `i` (mol/s per gas) and the gel tension at its coupling sphere.
-    fn fluxes(&mut self, i: usize, ambient: f64, profile: &PressureHistory, j: &mut [f64]) -> f64 {
+    /// The bubble's coupling sphere must have been prepared ([`Self::prepare_sphere`]).
+    fn fluxes(&self, i: usize, ambient: f64, profile: &PressureHistory, j: &mut [f64]) -> f64 {
         let (position, r, r0) = {
             let b = &self.bubbles[i];
             (b.position, b.radius, b.initial_radius)
@@ -833,11 +918,16 @@ impl<'a> Simulation<'a> {
         fluxes: &mut [Vec<f64>],
         tensions: &mut [f64],
     ) {
+        let ng = self.gases.len();
+        let which: Vec<usize> = (0..self.bubbles.len())
+            .filter(|&i| self.bubbles[i].active())
+            .collect();
+        let mut out = vec![(0.0, [0.0; Gas::ALL.len()]); self.bubbles.len()];
+        self.all_fluxes(p, profile, &which, &mut out);
         for i in 0..self.bubbles.len() {
             if self.bubbles[i].active() {
-                let mut j = std::mem::take(&mut fluxes[i]);
-                tensions[i] = self.fluxes(i, p, profile, &mut j);
-                fluxes[i] = j;
+                tensions[i] = out[i].0;
+                fluxes[i].copy_from_slice(&out[i].1[..ng]);
             } else {
                 fluxes[i].iter_mut().for_each(|x| *x = 0.0);
             }
@@ -969,6 +1059,7 @@ impl<'a> Simulation<'a> {
         let (pos, a) = (self.bubbles[i].position, self.kernel_radius(i));
         let mut kernel = std::mem::take(&mut self.kernel);
         self.grid.kernel(pos, a, &mut kernel);
+        self.touch(&kernel);
         let mut wide = Vec::new();
         for (g, &want) in dn.iter().enumerate() {
             if want == 0.0 {
@@ -981,6 +1072,7 @@ impl<'a> Simulation<'a> {
                 if wide.is_empty() {
                     let rho = self.coupling_radius(i);
                     self.grid.kernel(pos, rho, &mut wide);
+                    self.touch(&wide);
                 }
                 taken += self.deposit(g, &wide, want - taken);
             }
@@ -988,6 +1080,30 @@ impl<'a> Simulation<'a> {
         }
         self.kernel = kernel;
         out
+    }
+
+    /// Extend [`Self::touched`] by the cells of `kernel`.
+    fn touch(&mut self, kernel: &[(usize, f64)]) {
+        let [nx, ny, _] = self.grid.n;
+        for &(idx, _) in kernel {
+            let c = [idx % nx, (idx / nx) % ny, idx / (nx * ny)];
+            let (lo, hi) = self.touched.get_or_insert((c, c));
+            for a in 0..3 {
+                lo[a] = lo[a].min(c[a]);
+                hi[a] = hi[a].max(c[a]);
+            }
+        }
+    }
+
+    /// Whether bubble `i`'s coupling sphere (its trilinear samples reach a cell beyond ρ)
+    /// may read a cell in [`Self::touched`].
+    fn reads_touched(&self, i: usize) -> bool {
+        let Some((tlo, thi)) = self.touched else {
+            return false;
+        };
+        let reach = self.coupling_radius(i) + 2.0 * self.grid.h;
+        let (lo, hi) = self.grid.cell_range(self.bubbles[i].position, reach);
+        (0..3).all(|a| lo[a] <= thi[a] && tlo[a] <= hi[a])
     }
 
     /// Bubble `i` has dissolved at `t1`: whatever round-off it still holds is dropped from it
@@ -1026,13 +1142,24 @@ impl<'a> Simulation<'a> {
         let t1 = self.time;
         let mut worst: f64 = 0.0;
         let mut any = false;
-        let mut j1 = [0.0; Gas::ALL.len()];
-        for i in 0..self.bubbles.len() {
+        // every open bubble's end-of-step fluxes, from the grid before any correction; a
+        // bubble whose coupling sphere reads cells that an earlier bubble's correction has
+        // changed is evaluated again when its turn comes (what a serial loop would have read)
+        let which: Vec<usize> = (0..self.bubbles.len())
+            .filter(|&i| self.steps_state[i].open && self.bubbles[i].active())
+            .collect();
+        let mut early = vec![(0.0, [0.0; Gas::ALL.len()]); self.bubbles.len()];
+        self.all_fluxes(p1, profile, &which, &mut early);
+        self.touched = None;
+        for &i in &which {
             let st = self.steps_state[i];
-            if !st.open || !self.bubbles[i].active() {
+            if !self.bubbles[i].active() {
                 continue;
             }
-            self.fluxes(i, p1, profile, &mut j1[..ng]);
+            let mut j1 = early[i].1;
+            if self.reads_touched(i) || serial_fluxes() {
+                self.fluxes(i, p1, profile, &mut j1[..ng]);
+            }
             if (0..ng).all(|g| j1[g] == 0.0 && st.flux[g] == 0.0) {
                 continue;
             }
@@ -1272,6 +1399,29 @@ impl<'a> Simulation<'a> {
             self.scratch.resize(self.grid.len(), 0.0);
         }
         let mut err: f64 = 0.0;
+        if !implicit && !estimate {
+            // every gas in one parallel pass, each the same bits as stepped alone
+            let mut dc = [(0.0, 0.0); Gas::ALL.len()];
+            for (g, dc) in dc[..ng].iter_mut().enumerate() {
+                let cb =
+                    self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], t) / self.rt;
+                *dc = (self.diffusivity[g], cb);
+            }
+            let mut inflow = [0.0; Gas::ALL.len()];
+            let mut fields: Vec<&mut [f64]> =
+                self.fields.iter_mut().map(|f| f.as_mut_slice()).collect();
+            diffusion::explicit_steps_in_place(
+                &self.grid,
+                &mut fields,
+                &dc[..ng],
+                dt,
+                &mut inflow[..ng],
+            );
+            for x in &inflow[..ng] {
+                self.inflow += x * h3;
+            }
+            return (false, 0.0);
+        }
         for g in 0..ng {
             let gas = self.gases[g];
             let d = self.diffusivity[g];
@@ -1437,13 +1587,14 @@ impl<'a> Simulation<'a> {
         }
         let done = log.ending != Ending::Completed || self.time >= end - 1e-9;
         if self.time >= log.next_record - 1e-9 || done {
-            let ng = self.gases.len();
             let mut fresh = tensions.to_vec();
-            let mut scratch_flux = [0.0; Gas::ALL.len()];
-            for (i, tension) in fresh.iter_mut().enumerate() {
-                if self.bubbles[i].active() {
-                    *tension = self.fluxes(i, p1, profile, &mut scratch_flux[..ng]);
-                }
+            let which: Vec<usize> = (0..self.bubbles.len())
+                .filter(|&i| self.bubbles[i].active())
+                .collect();
+            let mut now = vec![(0.0, [0.0; Gas::ALL.len()]); self.bubbles.len()];
+            self.all_fluxes(p1, profile, &which, &mut now);
+            for &i in &which {
+                fresh[i] = now[i].0;
             }
             let min = self.record(profile, &fresh, observer, num.record_gel || done)?;
             log.min_concentration = log.min_concentration.min(min);
@@ -2079,5 +2230,73 @@ mod field_error_tests {
         let mut by_truth = pairs.clone();
         by_truth.sort_by(|a, b| a.0.total_cmp(&b.0));
         assert!(by_truth.windows(2).all(|w| w[0].1 < w[1].1), "{by_truth:?}");
+    }
+}
+
+#[cfg(test)]
+mod parallel_fluxes_tests {
+    use super::*;
+    use crate::gas::GasMix;
+
+    /// The bubbles' fluxes evaluated in parallel (at the start of a step, in the corrector and
+    /// at each frame) give the bits of the serial evaluation, in which each bubble's corrector
+    /// reads the grid after the earlier bubbles' corrections: three growing bubbles in an open
+    /// box, two of them so close that their coupling spheres overlap (the corrector evaluates
+    /// the later one again) and one far from both; every frame of 60 s compared bit by bit.
+    #[test]
+    fn parallel_fluxes_are_the_serial_fluxes_bits() {
+        let h = 1e-4;
+        let mut params = PhantomParams::box_phantom([3.0e-3, 2.0e-3, 2.0e-3], h);
+        params.open_faces = params.shape.faces().to_vec();
+        params.bubbles = BubblePlacement::Explicit(vec![
+            ([0.9e-3, 1.0e-3, 1.0e-3], 3.0e-4),
+            ([1.5e-3, 1.0e-3, 1.0e-3], 2.5e-4),
+            ([2.4e-3, 0.9e-3, 1.1e-3], 3.5e-4),
+        ]);
+        params.numerics.record_interval = 0.0;
+        // supersaturated gel: a 2 bar air dive's gas at the surface
+        let air = GasMix { o2: 0.21, he: 0.0 };
+        let profile = PressureHistory::with_gas(
+            "surface",
+            vec![0.0, 10.0, 70.0],
+            vec![2e5, 1e5, 1e5],
+            air,
+            0.0,
+        )
+        .unwrap();
+        let run = |serial: bool| {
+            SERIAL_FLUXES.with(|s| s.set(serial));
+            let mut sim = Simulation::new(&params, &profile).unwrap();
+            let mut rec = Recorder::default();
+            let summary = sim.run(&profile, &mut rec).unwrap();
+            SERIAL_FLUXES.with(|s| s.set(false));
+            (summary, rec.frames)
+        };
+        let (ss, serial) = run(true);
+        let (ps, parallel) = run(false);
+        assert!(ss.steps.0 + ss.steps.1 > 20, "{:?}", ss.steps);
+        assert_eq!(ss.steps, ps.steps);
+        // the bubbles grew, and the close pair's spheres overlap (ρ ≥ R + 2h each)
+        let last = serial.last().unwrap();
+        assert!(last.bubbles.iter().all(|b| b.radius > b.initial_radius));
+        let (r0, r1) = (last.bubbles[0].radius, last.bubbles[1].radius);
+        assert!(r0 + r1 + 4.0 * h > 0.6e-3, "{r0} {r1}");
+        assert_eq!(serial.len(), parallel.len());
+        for (a, b) in serial.iter().zip(&parallel) {
+            assert_eq!(a.time.to_bits(), b.time.to_bits());
+            assert_eq!(a.bubbles.len(), b.bubbles.len());
+            for (x, y) in a.bubbles.iter().zip(&b.bubbles) {
+                assert_eq!(x.radius.to_bits(), y.radius.to_bits(), "t = {}", a.time);
+                assert_eq!(
+                    x.gel_tension.to_bits(),
+                    y.gel_tension.to_bits(),
+                    "t = {}",
+                    a.time
+                );
+                for (m, n) in x.moles.iter().zip(&y.moles) {
+                    assert_eq!(m.to_bits(), n.to_bits(), "t = {}", a.time);
+                }
+            }
+        }
     }
 }
