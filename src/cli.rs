@@ -665,7 +665,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             if a.json {
                 print!("{}", decophantom::app::json::evaluate(&ev));
             } else {
-                print!("{}", decophantom::app::evaluate::summary_text(&ev));
+                print!("{}", decophantom::evaluate::tables::summary_text(&ev));
                 if ev.resumed > 0 {
                     println!(
                         "{} of {} runs read back from the journal of an unfinished evaluation",

@@ -13,6 +13,7 @@ pub mod algorithm;
 pub mod app;
 pub mod discover;
 pub mod error;
+pub mod evaluate;
 pub mod fit;
 pub mod gas;
 pub mod phantom;

@@ -6,13 +6,13 @@
 //! density; import notes printed and reported), or is written by hand. Every schedule is
 //! watched at the surface after it for the criteria protocol's time.
 
-use super::evaluate::{
-    add_report, dive_history, finish_page, run_matrix, Candidate, Evaluation, PhantomSpec,
-    ReportContext,
-};
 use crate::algorithm::conventions::DECOTENGU;
 use crate::algorithm::waypoints::read_schedule_with_notes;
 use crate::error::Error;
+use crate::evaluate::link::{dive_history, PhantomSpec};
+use crate::evaluate::matrix::run_matrix;
+use crate::evaluate::report::{add_report, finish_page, ReportContext};
+use crate::evaluate::{Candidate, Evaluation};
 use crate::gas::GasMix;
 use crate::report::html::Page;
 use crate::report::output::OutputSet;

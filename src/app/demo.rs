@@ -7,12 +7,13 @@
 //! Every input is compiled in, so the demo runs from any folder.
 
 use super::elasticity::{compare, ElasticityRequest};
-use super::evaluate::{
-    add_report, algorithms_from_text, finish_page, plan_candidates, run_matrix, summary_text,
-    PhantomSpec, ReportContext, HYDROGEL_PHANTOM, HYDROGEL_PHANTOM_PATH,
-};
 use super::simulate::{add_run_files, describe, describe_results, radius_plot, simulate, SimRun};
 use crate::error::Error;
+use crate::evaluate::link::{PhantomSpec, HYDROGEL_PHANTOM, HYDROGEL_PHANTOM_PATH};
+use crate::evaluate::matrix::run_matrix;
+use crate::evaluate::report::{add_report, finish_page, ReportContext};
+use crate::evaluate::tables::summary_text;
+use crate::evaluate::{algorithms_from_text, plan_candidates};
 use crate::phantom::config::parse_phantom;
 use crate::phantom::elasticity::{law_names, AllLawParams};
 use crate::profile::toml as profile_toml;

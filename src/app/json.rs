@@ -3,10 +3,11 @@
 //! the keys. The schema is documented in `docs/json.md`; each object carries
 //! `"schema": "decophantom.<command>/1"`, bumped on any incompatible change.
 
-use super::evaluate::{ranking, ties, Evaluation};
 use super::plan::PlanOutcome;
 use crate::algorithm::schedule::gas_text;
 use crate::algorithm::Schedule;
+use crate::evaluate::rank::{ranking, ties};
+use crate::evaluate::Evaluation;
 use crate::risk::Score;
 use serde::Serialize;
 
