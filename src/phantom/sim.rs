@@ -627,7 +627,8 @@ impl<'a> Simulation<'a> {
     }
 
     /// Average of every gas's field over the sphere of radius `rho` about `c` into `out` (one
-    /// per gas; `fallback` per gas where a point has no inside cell about it). The points'
+    /// per gas; `fallback` per gas where a point has no inside cell about it). The sphere must
+    /// have been prepared ([`Self::prepare_sphere_at`]). The points'
     /// corners and weights are found once for all gases ([`Grid::interpolate_many`]).
     fn sphere_means(&self, c: [f64; 3], rho: f64, fallback: &[f64], out: &mut [f64]) {
         let sphere = &self.spheres[&self.sphere_size(rho)];
@@ -665,7 +666,12 @@ impl<'a> Simulation<'a> {
     /// size; the cache is emptied when it holds more than [`SPHERE_CACHE`] sizes, before a
     /// round of fluxes). Returns its number of points.
     fn prepare_sphere(&mut self, i: usize) -> usize {
-        let want = self.sphere_size(self.coupling_radius(i));
+        self.prepare_sphere_at(self.coupling_radius(i))
+    }
+
+    /// [`Self::prepare_sphere`] for a sphere of radius `rho`.
+    fn prepare_sphere_at(&mut self, rho: f64) -> usize {
+        let want = self.sphere_size(rho);
         self.spheres
             .entry(want)
             .or_insert_with(|| fibonacci_sphere(want));
@@ -1962,6 +1968,7 @@ impl Simulation<'_> {
             for (h, f) in here.iter_mut().zip(&self.fields) {
                 *h = f[e.cell];
             }
+            self.prepare_sphere_at(rho);
             self.sphere_means(e.nucleus.position, rho, &here[..ng], &mut mean[..ng]);
             let mut tension = fixed;
             for (m, kg) in mean.iter().zip(&k) {

@@ -472,7 +472,8 @@ fn decoding_mutated_checkpoints_never_panics() {
         let sum = checkpoint::fnv1a(&b[..n]);
         b[n..].copy_from_slice(&sum.to_le_bytes());
     };
-    let (mut refused, mut read) = (0, 0);
+    // per kind of mutation (word replaced, cut, bytes appended): (refused, read)
+    let mut counts = [(0, 0); 3];
     for i in 0..400 {
         let mut b = good.clone();
         match i % 4 {
@@ -499,18 +500,32 @@ fn decoding_mutated_checkpoints_never_panics() {
                 fix(&mut b);
             }
         }
+        let kind = (i % 4usize).saturating_sub(1).min(2);
         match checkpoint::decode(&b) {
-            Ok(_) => read += 1,
+            Ok(_) => counts[kind].1 += 1,
             Err(DecodeError::Corrupt(m)) => {
                 assert!(!m.is_empty());
-                refused += 1
+                counts[kind].0 += 1
             }
             Err(e) => panic!("unexpected {e:?}"),
         }
     }
-    // most structural damage is found; a changed number inside a field still reads
-    assert!(refused > 200, "{refused} refused, {read} read");
-    assert!(read > 0);
+    // a cut or appended bytes are always found (the structure no longer ends where the
+    // frame says); a replaced word mostly lands in the gas fields' numbers and still reads
+    assert_eq!(counts[1], (100, 0), "cuts: (refused, read)");
+    assert_eq!(counts[2], (100, 0), "appended: (refused, read)");
+    assert!(counts[0].1 > 0, "words replaced: {:?}", counts[0]);
+    // a structural word replaced is found: the count of input sections (the first word after
+    // the 20-byte header) made huge or one too many
+    for v in [u64::MAX / 3, 1 << 40, 4] {
+        let mut b = good.clone();
+        b[20..28].copy_from_slice(&v.to_le_bytes());
+        fix(&mut b);
+        assert!(
+            matches!(checkpoint::decode(&b), Err(DecodeError::Corrupt(_))),
+            "sections count {v} read"
+        );
+    }
 }
 
 /// The evaluation of the `evaluate` tests' kind: two schedules × two laws in a 3 mm cube.
