@@ -60,9 +60,14 @@ pub fn refine(doc: &mut toml::Table) -> Result<(), String> {
         paths::set(doc, p, v / 2.0)?;
     }
     // backward Euler's local error goes as dt²: half the step is a quarter of the error
-    let tol = paths::get(doc, "numerics.field_tolerance").unwrap_or(d.field_tolerance);
-    if tol.is_finite() {
-        paths::set(doc, "numerics.field_tolerance", tol / 4.0)?;
+    for (p, def) in [
+        ("numerics.field_tolerance", d.field_tolerance),
+        ("numerics.loading_tolerance", d.loading_tolerance),
+    ] {
+        let tol = paths::get(doc, p).unwrap_or(def);
+        if tol.is_finite() {
+            paths::set(doc, p, tol / 4.0)?;
+        }
     }
     Ok(())
 }

@@ -60,7 +60,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 /// Version of the file format written; files of other versions are refused.
-pub const FORMAT_VERSION: u32 = 2;
+pub const FORMAT_VERSION: u32 = 3;
 /// The first eight bytes of every checkpoint file.
 pub const MAGIC: &[u8; 8] = b"DCPHCKPT";
 /// Name of the checkpoint file in its folder.
@@ -350,6 +350,9 @@ impl RunState {
         {
             return Err("its step state does not fit its bubbles".into());
         }
+        if lp.last_flow.len() != ng {
+            return Err("its loading history does not fit its gases".into());
+        }
         // the cells held out of the gel: give back those set-up took, take the saved ones
         let now = sim.grid.excluded_cells();
         let give: Vec<usize> = now
@@ -587,6 +590,9 @@ impl Enc {
         self.f64(lp.dt_prev);
         self.f64(lp.bubble_dt);
         self.f64(lp.field_dt);
+        self.f64(lp.loading_dt);
+        self.f64s(&lp.last_flow);
+        self.f64(lp.last_flow_dt);
         self.f64s(&lp.tensions);
         self.usize(lp.fluxes.len());
         for f in &lp.fluxes {
@@ -875,6 +881,9 @@ impl Dec<'_> {
         let dt_prev = self.f64()?;
         let bubble_dt = self.f64()?;
         let field_dt = self.f64()?;
+        let loading_dt = self.f64()?;
+        let last_flow = self.f64s()?;
+        let last_flow_dt = self.f64()?;
         let tensions = self.f64s()?;
         let n = self.len(8)?;
         let fluxes = (0..n).map(|_| self.f64s()).collect::<Res<Vec<_>>>()?;
@@ -905,6 +914,9 @@ impl Dec<'_> {
                 dt_prev,
                 bubble_dt,
                 field_dt,
+                loading_dt,
+                last_flow,
+                last_flow_dt,
                 tensions,
                 fluxes,
             },

@@ -103,6 +103,7 @@ struct RawNumerics {
     max_content_change: Option<f64>,
     bubble_tolerance: Option<f64>,
     field_tolerance: Option<f64>,
+    loading_tolerance: Option<f64>,
     kernel_min_cells: Option<f64>,
     coupling_gap_cells: Option<f64>,
     record_interval_s: Option<f64>,
@@ -565,6 +566,17 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
                 1e-9,
                 1.0,
                 "(fraction of the ambient pressure)",
+            )?,
+        },
+        loading_tolerance: match n.loading_tolerance {
+            None => d.loading_tolerance,
+            Some(x) if x == f64::INFINITY => x,
+            Some(x) => in_range(
+                "numerics.loading_tolerance",
+                positive("numerics.loading_tolerance", x)?,
+                1e-9,
+                1.0,
+                "(fraction of the gel's content of a pure gas at the ambient pressure)",
             )?,
         },
         kernel_min_cells: in_range(

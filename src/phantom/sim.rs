@@ -243,6 +243,12 @@ pub(super) struct LoopState {
     pub(super) bubble_dt: f64,
     /// The step the gel field's error estimate allows, s ([`Simulation::diffuse`]).
     pub(super) field_dt: f64,
+    /// The step the loading's error estimate allows, s ([`Simulation::loading_step`]).
+    pub(super) loading_dt: f64,
+    /// The loading estimate's history: per gas the flow through the open faces over the last
+    /// step, mol, and that step's length, s (0: no history, after a breakpoint).
+    pub(super) last_flow: Vec<f64>,
+    pub(super) last_flow_dt: f64,
     pub(super) tensions: Vec<f64>,
     pub(super) fluxes: Vec<Vec<f64>>,
 }
@@ -294,6 +300,9 @@ pub struct Simulation<'a> {
     /// spheres of bubbles of different radii; [`Self::sphere_means`]).
     spheres: std::collections::HashMap<usize, Vec<[f64; 3]>>,
     kernel: Vec<(usize, f64)>,
+    /// Per gas, its flow into the gel through the open faces in the last step, mol
+    /// ([`Self::diffuse`]; the loading estimate reads it, [`Self::loading_step`]).
+    step_flow: [f64; Gas::ALL.len()],
     /// The cells (an index box, lowest and highest corner) that [`Self::take_from_grid`] has
     /// changed since it was last reset, or `None`: the corrector uses it to know which
     /// bubbles' fluxes, evaluated before the corrections, are still current.
@@ -517,6 +526,7 @@ impl<'a> Simulation<'a> {
             initial_total: 0.0,
             spheres: std::collections::HashMap::new(),
             kernel: Vec::new(),
+            step_flow: [0.0; Gas::ALL.len()],
             touched: None,
             steps_state: Vec::new(),
             displaced: Vec::new(),
@@ -800,6 +810,9 @@ impl<'a> Simulation<'a> {
             mut dt_prev,
             mut bubble_dt,
             mut field_dt,
+            mut loading_dt,
+            mut last_flow,
+            mut last_flow_dt,
             mut tensions,
             mut fluxes,
         } = match resume {
@@ -826,6 +839,9 @@ impl<'a> Simulation<'a> {
                     // the step the bubbles' error estimate allows ([`Self::correct`])
                     bubble_dt: f64::INFINITY,
                     field_dt: f64::INFINITY,
+                    loading_dt: f64::INFINITY,
+                    last_flow: vec![0.0; ng],
+                    last_flow_dt: 0.0,
                     tensions,
                     fluxes,
                 }
@@ -835,8 +851,8 @@ impl<'a> Simulation<'a> {
             let t = self.time;
             let p = profile.ambient(t);
             self.bubble_fluxes(profile, p, &mut fluxes, &mut tensions);
-            let (dt, dt_physics) =
-                self.choose_step(profile, &fluxes, dt_prev, bubble_dt.min(field_dt), lim, end);
+            let estimates = bubble_dt.min(field_dt).min(loading_dt);
+            let (dt, dt_physics) = self.choose_step(profile, &fluxes, dt_prev, estimates, lim, end);
             dt_prev = dt_physics;
             let t1 = t + dt;
             let p1 = profile.ambient(t1);
@@ -851,6 +867,7 @@ impl<'a> Simulation<'a> {
             } else {
                 f64::INFINITY
             };
+            loading_dt = self.loading_step(profile, t, dt, &mut last_flow, &mut last_flow_dt);
             if implicit {
                 log.steps.1 += 1;
             } else {
@@ -882,6 +899,9 @@ impl<'a> Simulation<'a> {
                     dt_prev,
                     bubble_dt,
                     field_dt,
+                    loading_dt,
+                    last_flow: last_flow.clone(),
+                    last_flow_dt,
                     tensions: tensions.clone(),
                     fluxes: fluxes.clone(),
                 };
@@ -1423,8 +1443,9 @@ impl<'a> Simulation<'a> {
                 dt,
                 &mut inflow[..ng],
             );
-            for x in &inflow[..ng] {
+            for (g, x) in inflow[..ng].iter().enumerate() {
                 self.inflow += x * h3;
+                self.step_flow[g] = x * h3;
             }
             return (false, 0.0);
         }
@@ -1469,11 +1490,58 @@ impl<'a> Simulation<'a> {
                 }
             }
             self.inflow += inflow * h3;
+            self.step_flow[g] = inflow * h3;
         }
         if estimate {
             self.last_dt = dt;
         }
         (implicit, err)
+    }
+
+    /// Phase 4b: the loading's error estimate ([`Numerics::loading_tolerance`]) after the step
+    /// [t, t + dt], from each gas's flow through the open faces in this step and the last
+    /// (`last_flow`, over `last_flow_dt`; updated here, and cleared when this step ends at a
+    /// breakpoint of the profile, where the pressure's rate changes). Returns the next step
+    /// it allows (∞ without history or with the estimate off).
+    ///
+    /// [`Numerics::loading_tolerance`]: super::params::Numerics::loading_tolerance
+    fn loading_step(
+        &self,
+        profile: &PressureHistory,
+        t: f64,
+        dt: f64,
+        last_flow: &mut [f64],
+        last_flow_dt: &mut f64,
+    ) -> f64 {
+        let tol = self.params.numerics.loading_tolerance;
+        if !tol.is_finite() {
+            return f64::INFINITY;
+        }
+        let ng = self.gases.len();
+        let flow = &self.step_flow[..ng];
+        let mut next = f64::INFINITY;
+        if *last_flow_dt > 0.0 {
+            // a pure gas at the ambient pressure in the whole gel, mol per unit of L_g
+            let scale =
+                self.grid.n_inside as f64 * self.grid.cell_volume() * profile.ambient(t + dt)
+                    / self.rt;
+            let mut worst: f64 = 0.0;
+            for g in 0..ng {
+                let e =
+                    dt / (dt + *last_flow_dt) * (flow[g] - dt / *last_flow_dt * last_flow[g]).abs();
+                worst = worst.max(e / (scale * self.ostwald[g]));
+            }
+            if worst > 0.0 {
+                next = 0.9 * dt * (tol / worst).sqrt();
+            }
+        }
+        if profile.next_breakpoint(t) <= t + dt + 1e-9 {
+            *last_flow_dt = 0.0;
+        } else {
+            *last_flow_dt = dt;
+            last_flow.copy_from_slice(flow);
+        }
+        next
     }
 
     /// Zero the field-error vector (in `scratch`) in every active bubble's near field: the
