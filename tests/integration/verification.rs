@@ -240,6 +240,18 @@ fn open_cube(n: usize, h: f64, max_step: f64, taus: &[f64]) -> Vec<(Vec<f64>, Ru
     open_cube_with(n, h, max_step, f64::INFINITY, taus)
 }
 
+/// A cube of side `l`, grid step `h`, open on every face, pure N2 (`DIFF_D`, `DIFF_L_N2`).
+fn open_cube_params(l: f64, h: f64) -> PhantomParams {
+    let mut params = PhantomParams::box_phantom([l; 3], h);
+    params.gases = vec![GasProperties {
+        gas: Gas::N2,
+        diffusivity: DIFF_D,
+        ostwald: DIFF_L_N2,
+    }];
+    params.open_faces = params.shape.faces().to_vec();
+    params
+}
+
 /// [`open_cube`] with the field's error control at `field_tolerance` (fraction of ambient).
 fn open_cube_with(
     n: usize,
@@ -249,13 +261,7 @@ fn open_cube_with(
     taus: &[f64],
 ) -> Vec<(Vec<f64>, RunSummary)> {
     let l = n as f64 * h;
-    let mut params = PhantomParams::box_phantom([l; 3], h);
-    params.gases = vec![GasProperties {
-        gas: Gas::N2,
-        diffusivity: DIFF_D,
-        ostwald: DIFF_L_N2,
-    }];
-    params.open_faces = params.shape.faces().to_vec();
+    let mut params = open_cube_params(l, h);
     params.numerics.max_step = max_step;
     params.numerics.field_tolerance = field_tolerance;
     // take an implicit step whenever the step exceeds the explicit limit (no cost-based cut)
@@ -837,13 +843,7 @@ fn a_descent_loads_the_gel_as_duhamels_series() {
     )
     .unwrap();
     let run = |max_step: f64, pressure_change: f64, loading_tolerance: f64| {
-        let mut params = PhantomParams::box_phantom([l; 3], h);
-        params.gases = vec![GasProperties {
-            gas: Gas::N2,
-            diffusivity: DIFF_D,
-            ostwald: DIFF_L_N2,
-        }];
-        params.open_faces = params.shape.faces().to_vec();
+        let mut params = open_cube_params(l, h);
         params.numerics.max_step = max_step;
         params.numerics.max_pressure_change = pressure_change;
         params.numerics.loading_tolerance = loading_tolerance;
