@@ -531,6 +531,12 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
     };
     let d = Numerics::default();
     let n = &raw.numerics;
+    // an error tolerance: the default when not given, infinite (off), or positive up to 1
+    let tolerance = |key: &str, given: Option<f64>, default: f64, unit: &str| match given {
+        None => Ok(default),
+        Some(x) if x == f64::INFINITY => Ok(x),
+        Some(x) => in_range(key, positive(key, x)?, 1e-9, 1.0, unit),
+    };
     let numerics = Numerics {
         max_step: in_range(
             "numerics.max_step_s",
@@ -557,28 +563,18 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
             1.0,
             "(relative change)",
         )?,
-        field_tolerance: match n.field_tolerance {
-            None => d.field_tolerance,
-            Some(x) if x == f64::INFINITY => x,
-            Some(x) => in_range(
-                "numerics.field_tolerance",
-                positive("numerics.field_tolerance", x)?,
-                1e-9,
-                1.0,
-                "(fraction of the ambient pressure)",
-            )?,
-        },
-        loading_tolerance: match n.loading_tolerance {
-            None => d.loading_tolerance,
-            Some(x) if x == f64::INFINITY => x,
-            Some(x) => in_range(
-                "numerics.loading_tolerance",
-                positive("numerics.loading_tolerance", x)?,
-                1e-9,
-                1.0,
-                "(fraction of the gel's content of a pure gas at the ambient pressure)",
-            )?,
-        },
+        field_tolerance: tolerance(
+            "numerics.field_tolerance",
+            n.field_tolerance,
+            d.field_tolerance,
+            "(fraction of the ambient pressure)",
+        )?,
+        loading_tolerance: tolerance(
+            "numerics.loading_tolerance",
+            n.loading_tolerance,
+            d.loading_tolerance,
+            "(fraction of the gel's content of a pure gas at the ambient pressure)",
+        )?,
         kernel_min_cells: in_range(
             "numerics.kernel_min_cells",
             positive(

@@ -806,3 +806,36 @@ fn legacy_schedules_name_the_files_own_line() {
         "{e}"
     );
 }
+
+/// The error tolerances of `[numerics]`: a negative, zero, NaN or above-1 value is refused with
+/// its field named; `inf` switches the estimate off; a missing one takes the default.
+#[test]
+fn numerics_tolerances_are_checked_and_inf_is_off() {
+    for key in ["field_tolerance", "loading_tolerance"] {
+        for bad in ["-1e-3", "0.0", "nan", "2.0"] {
+            let text = format!("{}[numerics]\n{key} = {bad}\n", good_phantom());
+            phantom_refused(&text, &format!("numerics.{key}"));
+        }
+        let text = format!("{}[numerics]\n{key} = inf\n", good_phantom());
+        let n = parse_phantom(&text, Path::new("p.toml"))
+            .unwrap()
+            .params
+            .numerics;
+        let got = if key == "field_tolerance" {
+            n.field_tolerance
+        } else {
+            n.loading_tolerance
+        };
+        assert_eq!(got, f64::INFINITY, "{key}");
+    }
+    let n = parse_phantom(&good_phantom(), Path::new("p.toml"))
+        .unwrap()
+        .params
+        .numerics;
+    let d = decophantom::phantom::params::Numerics::default();
+    assert_eq!(
+        (n.field_tolerance, n.loading_tolerance),
+        (d.field_tolerance, d.loading_tolerance)
+    );
+    assert_eq!(d.loading_tolerance, 1e-3);
+}
