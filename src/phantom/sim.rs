@@ -23,6 +23,7 @@
 use super::bubble::{Balance, Bubble, BubbleFate};
 use super::diffusion;
 use super::displacement::{self, Displaced};
+use super::gel_pass::{plane_gel, PlaneGel};
 use super::grid::{Face, Grid};
 use super::nucleation::{Nucleus, NucleusPool};
 use super::params::{BubblePlacement, PhantomParams};
@@ -318,94 +319,6 @@ pub struct Simulation<'a> {
     /// An upper bound of the gel tension anywhere in the gel so far, Pa (`None`: not known,
     /// computed from the fields when next needed): [`Self::tension_bound`].
     pub(super) tension_bound: Option<f64>,
-}
-
-/// Planes of the grid [`Simulation::gel_state`] reduces together.
-const GEL_LANES: usize = 4;
-
-/// One plane's part of [`Simulation::gel_state`].
-#[derive(Clone, Copy)]
-struct PlaneGel {
-    /// Largest Σ_g C_g·R_u·T/L_g over the plane's inside cells, Pa.
-    max_tension: f64,
-    /// Σ C_g over the plane's inside cells, per gas, summed in cell order.
-    sums: [f64; Gas::ALL.len()],
-    /// Lowest concentration of any gas, mol/m³.
-    min_c: f64,
-}
-
-/// [`PlaneGel`] of planes `kz..kz + lanes` (`lanes` ≤ [`GEL_LANES`]) of the first `NG` fields,
-/// with `k[g]` = R_u·T/L_g. The planes are stepped through together, cell by cell; each plane's
-/// sums and extremes see its cells in the same order as a plane-by-plane loop, so the results
-/// are bit-identical to it.
-fn gel_planes<const NG: usize>(
-    grid: &Grid,
-    fields: &[Vec<f64>],
-    k: &[f64; Gas::ALL.len()],
-    kz: usize,
-    lanes: usize,
-) -> [PlaneGel; GEL_LANES] {
-    let plane = grid.n[0] * grid.n[1];
-    let mut out = [PlaneGel {
-        max_tension: f64::NEG_INFINITY,
-        sums: [0.0; Gas::ALL.len()],
-        min_c: f64::INFINITY,
-    }; GEL_LANES];
-    let codes: [&[u8]; GEL_LANES] = std::array::from_fn(|l| {
-        let z = (kz + l.min(lanes - 1)) * plane;
-        &grid.codes[0][z..z + plane]
-    });
-    let f: [[&[f64]; NG]; GEL_LANES] = std::array::from_fn(|l| {
-        let z = (kz + l.min(lanes - 1)) * plane;
-        std::array::from_fn(|g| &fields[g][z..z + plane])
-    });
-    let mut max_t = [f64::NEG_INFINITY; GEL_LANES];
-    let mut lo = [f64::INFINITY; GEL_LANES];
-    let mut s = [[0.0; NG]; GEL_LANES];
-    for q in 0..plane {
-        for l in 0..GEL_LANES {
-            if codes[l][q] & super::grid::INSIDE_BIT == 0 {
-                continue;
-            }
-            let mut t = 0.0;
-            for g in 0..NG {
-                let c = f[l][g][q];
-                s[l][g] += c;
-                t += c * k[g];
-                lo[l] = min_keep(lo[l], c);
-            }
-            max_t[l] = max_keep(max_t[l], t);
-        }
-    }
-    // planes past `lanes` repeat the last one (see `codes`, `f`): computed, not returned
-    for l in 0..lanes {
-        out[l].max_tension = max_t[l];
-        out[l].min_c = lo[l];
-        out[l].sums[..NG].copy_from_slice(&s[l]);
-    }
-    out
-}
-
-/// `a.min(b)` for an `a` that is not NaN, without the NaN fix-up: `b` when below `a`, else `a`
-/// (a NaN `b` is ignored, as by `f64::min`; of two equal values, `a`, as x86's lowering of
-/// `f64::min` gives).
-#[inline(always)]
-fn min_keep(a: f64, b: f64) -> f64 {
-    if b < a {
-        b
-    } else {
-        a
-    }
-}
-
-/// `a.max(b)` for an `a` that is not NaN ([`min_keep`]'s mirror).
-#[inline(always)]
-fn max_keep(a: f64, b: f64) -> f64 {
-    if b > a {
-        b
-    } else {
-        a
-    }
 }
 
 fn fibonacci_sphere(n: usize) -> Vec<[f64; 3]> {
@@ -1781,12 +1694,8 @@ impl<'a> Simulation<'a> {
 
     /// One parallel pass over the grid: the largest supersaturation Σ_g C_g·R_u·T/L_g + p_fixed − P_amb (Pa),
     /// the gas dissolved in the grid per gas (mol) and the lowest concentration of any gas
-    /// (mol/m³). Per-plane results are combined in plane order, independent of the thread count.
-    ///
-    /// Each plane's sums run in cell order (so the totals have the same bits whatever the
-    /// grouping); [`gel_planes`] steps through [`GEL_LANES`] planes at once so that their
-    /// independent sums overlap instead of waiting on one add chain (with frames recorded
-    /// every step, as fits do, this pass cost as much as the diffusion on a 60³ grid).
+    /// (mol/m³). Plane by plane ([`plane_gel`], vectorised), the planes combined in plane
+    /// order: the same bits whatever the thread count.
     fn gel_state(&self, ambient: f64) -> (f64, Vec<f64>, f64) {
         use rayon::prelude::*;
         let ng = self.fields.len();
@@ -1794,30 +1703,18 @@ impl<'a> Simulation<'a> {
         for (kg, l) in k.iter_mut().zip(&self.ostwald) {
             *kg = self.rt / l;
         }
-        let nz = self.grid.n[2];
-        let groups: Vec<([PlaneGel; GEL_LANES], usize)> = (0..nz.div_ceil(GEL_LANES))
+        let planes: Vec<PlaneGel> = (0..self.grid.n[2])
             .into_par_iter()
-            .map(|grp| {
-                let kz = grp * GEL_LANES;
-                let lanes = GEL_LANES.min(nz - kz);
-                let planes = match ng {
-                    1 => gel_planes::<1>(&self.grid, &self.fields, &k, kz, lanes),
-                    2 => gel_planes::<2>(&self.grid, &self.fields, &k, kz, lanes),
-                    _ => gel_planes::<3>(&self.grid, &self.fields, &k, kz, lanes),
-                };
-                (planes, lanes)
-            })
+            .map(|kz| plane_gel(&self.grid, &self.fields, &k, kz))
             .collect();
         let mut max_t = f64::NEG_INFINITY;
         let mut min_c = f64::INFINITY;
         let mut sums = vec![0.0; ng];
-        for (planes, lanes) in &groups {
-            for p in &planes[..*lanes] {
-                max_t = max_t.max(p.max_tension);
-                min_c = min_c.min(p.min_c);
-                for (a, b) in sums.iter_mut().zip(&p.sums) {
-                    *a += b;
-                }
+        for p in &planes {
+            max_t = max_t.max(p.max_tension);
+            min_c = min_c.min(p.min_c);
+            for (a, b) in sums.iter_mut().zip(&p.sums) {
+                *a += b;
             }
         }
         let v = self.grid.cell_volume();
