@@ -55,9 +55,10 @@ pub struct Numerics {
     /// Largest change of ambient pressure per step as a fraction of ambient. Default 0.02 (0.01
     /// before 25 Nov 2026: on a 20 min 130 psi dive (`profiles/phantoms/hydrogel.toml`, every
     /// other limit ¼ of its default) 0.0025 / 0.01 / 0.02 give a peak volume of 2.932 / 2.933 /
-    /// 2.933 mm³; the oscillation experiment's radii move by 0.0005 % of R). It is also what
-    /// keeps the gel's loading through open faces accurate on a descent (the first-order lag of
-    /// backward Euler behind a moving boundary value: `verification::a_descent_loads_the_gel_as_duhamels_series`).
+    /// 2.933 mm³; the oscillation experiment's radii move by 0.0005 % of R). Not applied while
+    /// the pressure rises and no bubble can exchange gas (every one shut, no nuclei): then only
+    /// the gel loads, its implicit steps are Richardson-extrapolated and the loading's error
+    /// estimate sizes them (`verification::a_descent_loads_the_gel_as_duhamels_series`).
     pub max_pressure_change: f64,
     /// Largest relative change of a bubble's gas content per step. Default 0.03
     /// (≈ 1 % in radius).

@@ -304,6 +304,8 @@ pub struct Simulation<'a> {
     /// Per gas, its flow into the gel through the open faces in the last step, mol
     /// ([`Self::diffuse`]; the loading estimate reads it, [`Self::loading_step`]).
     step_flow: [f64; Gas::ALL.len()],
+    /// A field-sized buffer for the extrapolated step ([`Self::diffuse`]; empty until used).
+    extra: Vec<f64>,
     /// The cells (an index box, lowest and highest corner) that [`Self::take_from_grid`] has
     /// changed since it was last reset, or `None`: the corrector uses it to know which
     /// bubbles' fluxes, evaluated before the corrections, are still current.
@@ -440,6 +442,7 @@ impl<'a> Simulation<'a> {
             spheres: std::collections::HashMap::new(),
             kernel: Vec::new(),
             step_flow: [0.0; Gas::ALL.len()],
+            extra: Vec::new(),
             touched: None,
             steps_state: Vec::new(),
             displaced: Vec::new(),
@@ -772,7 +775,8 @@ impl<'a> Simulation<'a> {
             self.exchange(&fluxes, dt, t1, &mut log.events);
             // the field's tolerance, Pa: a fraction of the ambient pressure
             let field_tol = self.params.numerics.field_tolerance * p.max(p1);
-            let (implicit, field_err) = self.diffuse(profile, t, dt, field_tol);
+            let extrapolate = self.loading_only(profile);
+            let (implicit, field_err) = self.diffuse(profile, t, dt, field_tol, extrapolate);
             // backward Euler's local error grows as dt²: the next step that keeps it at the
             // tolerance, with a safety factor 0.9
             field_dt = if field_err > 0.0 {
@@ -893,7 +897,7 @@ impl<'a> Simulation<'a> {
         let p = profile.ambient(t);
         let mut dt = num.max_step.min(2.0 * dt_prev).min(bubble_dt);
         let rate = profile.rate(t + 1e-9).abs();
-        if rate > 0.0 {
+        if rate > 0.0 && !self.loading_only(profile) {
             dt = dt.min(num.max_pressure_change * p / rate);
         }
         for (i, b) in self.bubbles.iter().enumerate() {
@@ -930,6 +934,20 @@ impl<'a> Simulation<'a> {
             dt = lim;
         }
         (dt, physics)
+    }
+
+    /// Whether the step from now only loads the gel: the pressure rises, every bubble is
+    /// dissolved, merged or shut (R ≤ R_min: no exchange, and a rising pressure compresses it
+    /// further) and there are no sub-grid nuclei. Its implicit steps are then extrapolated
+    /// ([`Self::diffuse`]) and the pressure-change limit does not apply (the loading's error
+    /// estimate sizes the steps).
+    fn loading_only(&self, profile: &PressureHistory) -> bool {
+        profile.rate(self.time + 1e-9) > 0.0
+            && self.nuclei.is_empty()
+            && self
+                .bubbles
+                .iter()
+                .all(|b| !b.active() || b.radius <= self.params.min_radius)
     }
 
     /// Phase 3: the predictor of the gas exchange between bubbles and gel (Heun's method;
@@ -1325,7 +1343,14 @@ impl<'a> Simulation<'a> {
     /// which leaves the smooth components and never enlarges the max norm. Converted to a gas
     /// tension by R_u·T/L_g. Forward-Euler steps (at most a few times the explicit limit, which
     /// bounds their error) keep the history going and are not measured.
-    fn diffuse(&mut self, profile: &PressureHistory, t: f64, dt: f64, tol_pa: f64) -> (bool, f64) {
+    fn diffuse(
+        &mut self,
+        profile: &PressureHistory,
+        t: f64,
+        dt: f64,
+        tol_pa: f64,
+        extrapolate: bool,
+    ) -> (bool, f64) {
         let implicit = self.explicit_limit.iter().any(|lim| dt > *lim);
         let h3 = self.grid.cell_volume();
         let estimate = tol_pa.is_finite();
@@ -1369,7 +1394,48 @@ impl<'a> Simulation<'a> {
             if estimate {
                 self.scratch.copy_from_slice(&self.fields[g]);
             }
-            let inflow = if implicit {
+            let inflow = if implicit && extrapolate {
+                // Richardson: two half steps against one whole, 2·u_½ − u_1, second order
+                let cb =
+                    |s: f64| self.ostwald[g] * profile.inspired_partial_pressure(gas, s) / self.rt;
+                let mut whole = std::mem::take(&mut self.extra);
+                whole.clear();
+                whole.extend_from_slice(&self.fields[g]);
+                let f_whole = self
+                    .implicit
+                    .step(&self.grid, &mut whole, d, dt, cb(t + dt));
+                let f_half = self.implicit.step(
+                    &self.grid,
+                    &mut self.fields[g],
+                    d,
+                    0.5 * dt,
+                    cb(t + 0.5 * dt),
+                ) + self.implicit.step(
+                    &self.grid,
+                    &mut self.fields[g],
+                    d,
+                    0.5 * dt,
+                    cb(t + dt),
+                );
+                let half = &mut self.fields[g];
+                let mut negative = false;
+                for (h, w) in half.iter_mut().zip(&whole) {
+                    let x = 2.0 * *h - w;
+                    negative |= x < 0.0;
+                    *h = x;
+                }
+                let flow = if negative {
+                    // back to the half steps (positive): undo the extrapolation
+                    for (h, w) in half.iter_mut().zip(&whole) {
+                        *h = 0.5 * (*h + w);
+                    }
+                    f_half
+                } else {
+                    2.0 * f_half - f_whole
+                };
+                self.extra = whole;
+                flow
+            } else if implicit {
                 let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t + dt) / self.rt;
                 self.implicit
                     .step(&self.grid, &mut self.fields[g], d, dt, cb)
@@ -2173,10 +2239,10 @@ mod field_error_tests {
             }
             sim.time = t0;
             let tol = 0.0; // always filtered
-            let (imp1, _) = sim.diffuse(&profile, t0, dt1, tol);
+            let (imp1, _) = sim.diffuse(&profile, t0, dt1, tol, false);
             assert!(imp1);
             let start = sim.fields[0].clone();
-            let (imp2, est) = sim.diffuse(&profile, t0 + dt1, dt2, tol);
+            let (imp2, est) = sim.diffuse(&profile, t0 + dt1, dt2, tol, false);
             assert!(imp2);
             // reference from the same start
             let mut reference = start.clone();
