@@ -105,17 +105,17 @@ impl Lanes {
     }
 }
 
-/// The plane's codes, fields and `k` of the first `fields.len()` gases.
+/// Plane `kz`'s codes and fields, and the length of its whole groups of [`LANES`] cells.
 fn plane_slices<'a>(
     grid: &'a Grid,
     fields: &'a [Vec<f64>],
     kz: usize,
-) -> (&'a [u8], Vec<&'a [f64]>) {
+) -> (&'a [u8], Vec<&'a [f64]>, usize) {
     let plane = grid.n[0] * grid.n[1];
     let z = kz * plane;
     let codes = &grid.codes[0][z..z + plane];
     let f = fields.iter().map(|f| &f[z..z + plane]).collect();
-    (codes, f)
+    (codes, f, plane - plane % LANES)
 }
 
 /// [`plane_gel`] without vector instructions (the reference of the vector build's bits).
@@ -125,9 +125,8 @@ fn plane_gel_portable(
     k: &[f64; Gas::ALL.len()],
     kz: usize,
 ) -> PlaneGel {
-    let (codes, f) = plane_slices(grid, fields, kz);
+    let (codes, f, full) = plane_slices(grid, fields, kz);
     let ng = f.len();
-    let full = codes.len() - codes.len() % LANES;
     let mut lanes = Lanes::new();
     let mut c = [0.0; Gas::ALL.len()];
     for q0 in (0..full).step_by(LANES) {
@@ -154,9 +153,8 @@ unsafe fn plane_gel_avx2(
     kz: usize,
 ) -> PlaneGel {
     use std::arch::x86_64::*;
-    let (codes, f) = plane_slices(grid, fields, kz);
+    let (codes, f, full) = plane_slices(grid, fields, kz);
     let ng = f.len();
-    let full = codes.len() - codes.len() % LANES;
     let zero = _mm256_setzero_pd();
     let pos_inf = _mm256_set1_pd(f64::INFINITY);
     let neg_inf = _mm256_set1_pd(f64::NEG_INFINITY);
