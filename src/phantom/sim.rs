@@ -1363,6 +1363,10 @@ impl<'a> Simulation<'a> {
             self.scratch.resize(self.grid.len(), 0.0);
         }
         let mut err: f64 = 0.0;
+        if !extrapolate && !self.extra.is_empty() {
+            // the descent's extrapolation is over: give its field-sized buffer back
+            self.extra = Vec::new();
+        }
         if !implicit && !estimate {
             // every gas in one parallel pass, each the same bits as stepped alone
             let mut dc = [(0.0, 0.0); Gas::ALL.len()];
