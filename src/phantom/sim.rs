@@ -1399,46 +1399,7 @@ impl<'a> Simulation<'a> {
                 self.scratch.copy_from_slice(&self.fields[g]);
             }
             let inflow = if implicit && extrapolate {
-                // Richardson: two half steps against one whole, 2·u_½ − u_1, second order
-                let cb =
-                    |s: f64| self.ostwald[g] * profile.inspired_partial_pressure(gas, s) / self.rt;
-                let mut whole = std::mem::take(&mut self.extra);
-                whole.clear();
-                whole.extend_from_slice(&self.fields[g]);
-                let f_whole = self
-                    .implicit
-                    .step(&self.grid, &mut whole, d, dt, cb(t + dt));
-                let f_half = self.implicit.step(
-                    &self.grid,
-                    &mut self.fields[g],
-                    d,
-                    0.5 * dt,
-                    cb(t + 0.5 * dt),
-                ) + self.implicit.step(
-                    &self.grid,
-                    &mut self.fields[g],
-                    d,
-                    0.5 * dt,
-                    cb(t + dt),
-                );
-                let half = &mut self.fields[g];
-                let mut negative = false;
-                for (h, w) in half.iter_mut().zip(&whole) {
-                    let x = 2.0 * *h - w;
-                    negative |= x < 0.0;
-                    *h = x;
-                }
-                let flow = if negative {
-                    // back to the half steps (positive): undo the extrapolation
-                    for (h, w) in half.iter_mut().zip(&whole) {
-                        *h = 0.5 * (*h + w);
-                    }
-                    f_half
-                } else {
-                    2.0 * f_half - f_whole
-                };
-                self.extra = whole;
-                flow
+                self.extrapolated_step(profile, g, t, dt)
             } else if implicit {
                 let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t + dt) / self.rt;
                 self.implicit
@@ -1479,6 +1440,34 @@ impl<'a> Simulation<'a> {
             self.last_dt = dt;
         }
         (implicit, err)
+    }
+
+    /// Gas `g`'s implicit step over [t, t + dt] Richardson-extrapolated, 2·u_½ − u_1 from two
+    /// half steps and one whole (second order; conservative, its weights summing to 1), or the
+    /// two half steps where the extrapolation would make a cell negative. Returns the inflow
+    /// through the open faces per cell volume, as [`diffusion::ImplicitSolver::step`].
+    fn extrapolated_step(&mut self, profile: &PressureHistory, g: usize, t: f64, dt: f64) -> f64 {
+        let (gas, d) = (self.gases[g], self.diffusivity[g]);
+        let cb = |s: f64| self.ostwald[g] * profile.inspired_partial_pressure(gas, s) / self.rt;
+        let (cb_half, cb_end) = (cb(t + 0.5 * dt), cb(t + dt));
+        let mut whole = std::mem::take(&mut self.extra);
+        whole.clear();
+        whole.extend_from_slice(&self.fields[g]);
+        let f_whole = self.implicit.step(&self.grid, &mut whole, d, dt, cb_end);
+        let half = &mut self.fields[g];
+        let f_half = self.implicit.step(&self.grid, half, d, 0.5 * dt, cb_half)
+            + self.implicit.step(&self.grid, half, d, 0.5 * dt, cb_end);
+        let negative = half.iter().zip(&whole).any(|(h, w)| 2.0 * h - w < 0.0);
+        let flow = if negative {
+            f_half
+        } else {
+            for (h, w) in half.iter_mut().zip(&whole) {
+                *h = 2.0 * *h - w;
+            }
+            2.0 * f_half - f_whole
+        };
+        self.extra = whole;
+        flow
     }
 
     /// Phase 4b: the loading's error estimate ([`Numerics::loading_tolerance`]) after the step

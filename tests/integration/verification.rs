@@ -821,7 +821,7 @@ fn fig3_sensitivity_directions() {
 /// With no bubble to exchange gas, the pressure-change limit does not apply on the way down:
 /// the loading's error estimate (`loading_tolerance`) sizes the steps, and the implicit ones
 /// are Richardson-extrapolated (two half steps against one whole, second order). During the
-/// ramp the default steps are within 0.1 % of the load c_b(T_r) − c_0 of a run at a twentieth
+/// ramp the default steps are within 0.1 % (0.081 %) of the load c_b(T_r) − c_0 of a run at a twentieth
 /// of the explicit limit, whose difference from the series (−0.76 % at the end of the ramp,
 /// then falling) is the cell-centred grid's own; in the hold they lag by up to 0.18 % just
 /// after the ramp, and without the loading estimate (steps straight to the 20 s cap) by 0.48 %.
@@ -922,7 +922,7 @@ fn a_descent_loads_the_gel_as_duhamels_series() {
             100.0 * beyond(f)
         );
     }
-    // the ramp: within 0.08 %; the hold: up to −0.18 %
+    // the ramp: within 0.081 %; the hold: up to −0.18 %
     let (ramp_default, hold_default) = (lag(&frames, 0.0, ramp), lag(&frames, ramp, ramp + hold));
     assert!(
         ramp_default < 0.001,
