@@ -771,42 +771,29 @@ impl<'a> Simulation<'a> {
             let (dt, dt_physics) = self.choose_step(profile, &fluxes, dt_prev, estimates, lim, end);
             dt_prev = dt_physics;
             let t1 = t + dt;
-            let p1 = profile.ambient(t1);
             self.exchange(&fluxes, dt, t1, &mut log.events);
-            // the field's tolerance, Pa: a fraction of the ambient pressure
-            let field_tol = self.params.numerics.field_tolerance * p.max(p1);
-            let extrapolate = self.loading_only(profile);
-            let (implicit, field_err) = self.diffuse(profile, t, dt, field_tol, extrapolate);
-            // backward Euler's local error grows as dt²: the next step that keeps it at the
-            // tolerance, with a safety factor 0.9
-            field_dt = if field_err > 0.0 {
-                0.9 * dt * (field_tol / field_err).sqrt()
-            } else {
-                f64::INFINITY
-            };
-            loading_dt = self.loading_step(profile, t, dt, &mut last_flow, &mut last_flow_dt);
-            if implicit {
-                log.steps.1 += 1;
-            } else {
-                log.steps.0 += 1;
-            }
+            (field_dt, loading_dt) = self.gel_step(
+                profile,
+                (t, dt),
+                &mut last_flow,
+                &mut last_flow_dt,
+                &mut log,
+            );
             self.perfuse(profile, t, dt);
-            self.time = t1;
-            self.update_radii(p1)?;
-            let err = self.correct(profile, p1, dt, &mut log.events)?;
+            let err = self.events(profile, (t, t1, dt), &mut tensions, &mut fluxes, &mut log)?;
             bubble_dt = if err > 0.0 {
                 0.9 * dt * self.params.numerics.bubble_tolerance / err
             } else {
                 f64::INFINITY
             };
-            self.coalesce(t1, p1, &mut log.events)?;
-            self.nucleate(profile, t, p1, &mut tensions, &mut fluxes, &mut log.events)?;
-            self.displace(p1);
-            // a non-finite value spreads a cell per step: every 8th step is soon enough
-            if (log.steps.0 + log.steps.1) % 8 == 0 || self.time >= end - 1e-9 {
-                self.check_health()?;
-            }
-            self.observe(profile, p1, &tensions, observer, &mut log, false)?;
+            self.observe(
+                profile,
+                profile.ambient(t1),
+                &tensions,
+                observer,
+                &mut log,
+                false,
+            )?;
             if log.ending != Ending::Completed || self.time >= end - 1e-9 {
                 break;
             }
@@ -851,6 +838,65 @@ impl<'a> Simulation<'a> {
             events: log.events,
             cells: self.grid.n_inside,
         })
+    }
+
+    /// Phase 4 with its error estimates: the gel's diffusion over [t, t + dt] ([`Self::diffuse`],
+    /// counted in the log as explicit or implicit) and the steps the field's and the loading's
+    /// error estimates allow next ([`Self::loading_step`]; `last_flow`, `last_flow_dt` its
+    /// history).
+    fn gel_step(
+        &mut self,
+        profile: &PressureHistory,
+        (t, dt): (f64, f64),
+        last_flow: &mut [f64],
+        last_flow_dt: &mut f64,
+        log: &mut RunLog,
+    ) -> (f64, f64) {
+        // the field's tolerance, Pa: a fraction of the ambient pressure
+        let p = profile.ambient(t).max(profile.ambient(t + dt));
+        let field_tol = self.params.numerics.field_tolerance * p;
+        let extrapolate = self.loading_only(profile);
+        let (implicit, field_err) = self.diffuse(profile, t, dt, field_tol, extrapolate);
+        // backward Euler's local error grows as dt²: the next step that keeps it at the
+        // tolerance, with a safety factor 0.9
+        let field_dt = if field_err > 0.0 {
+            0.9 * dt * (field_tol / field_err).sqrt()
+        } else {
+            f64::INFINITY
+        };
+        let loading_dt = self.loading_step(profile, t, dt, last_flow, last_flow_dt);
+        if implicit {
+            log.steps.1 += 1;
+        } else {
+            log.steps.0 += 1;
+        }
+        (field_dt, loading_dt)
+    }
+
+    /// Phases 6–8 of the step [t0, t1] of length dt (t1 − t0 but for its rounding) after the gel's diffusion and perfusion: the clock, the
+    /// radii, the corrector of the bubbles' exchange, coalescence, nucleation, displacement and
+    /// the health check. Returns the corrector's error estimate ([`Self::correct`]).
+    fn events(
+        &mut self,
+        profile: &PressureHistory,
+        (t0, t1, dt): (f64, f64, f64),
+        tensions: &mut Vec<f64>,
+        fluxes: &mut Vec<Vec<f64>>,
+        log: &mut RunLog,
+    ) -> Result<f64, Error> {
+        let end = profile.duration_s();
+        let p1 = profile.ambient(t1);
+        self.time = t1;
+        self.update_radii(p1)?;
+        let err = self.correct(profile, p1, dt, &mut log.events)?;
+        self.coalesce(t1, p1, &mut log.events)?;
+        self.nucleate(profile, t0, p1, tensions, fluxes, &mut log.events)?;
+        self.displace(p1);
+        // a non-finite value spreads a cell per step: every 8th step is soon enough
+        if (log.steps.0 + log.steps.1).is_multiple_of(8) || self.time >= end - 1e-9 {
+            self.check_health()?;
+        }
+        Ok(err)
     }
 
     /// Phase 1: every active bubble's fluxes J_g (mol/s) and gel tension at the start of a step.
