@@ -254,6 +254,18 @@ pub(super) struct LoopState {
     pub(super) fluxes: Vec<Vec<f64>>,
 }
 
+/// The buffers of a round of the bubbles' fluxes ([`Simulation::flux_round`]), kept between
+/// steps so the time loop does not allocate them per step.
+#[derive(Debug, Default)]
+struct FluxRound {
+    /// The bubbles of the round.
+    which: Vec<usize>,
+    /// Per bubble (all of them; only `which` filled): the gel tension and the fluxes.
+    out: Vec<(f64, [f64; Gas::ALL.len()])>,
+    /// The parallel round's results in the order of `which`.
+    res: Vec<(f64, [f64; Gas::ALL.len()])>,
+}
+
 /// One bubble's exchange within a step, from the predictor ([`Simulation::exchange`]) to the
 /// corrector ([`Simulation::correct`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -311,6 +323,8 @@ pub struct Simulation<'a> {
     /// bubbles' fluxes, evaluated before the corrections, are still current.
     touched: Option<([usize; 3], [usize; 3])>,
     pub(super) steps_state: Vec<StepExchange>,
+    /// The buffers of the bubbles' flux rounds ([`Self::flux_round`]).
+    round: FluxRound,
     /// Per bubble: the gel it displaces ([`displacement`]).
     pub(super) displaced: Vec<Displaced>,
     /// Change of the grid's gas by displacement since the balance reference, mol: gel pushed
@@ -444,6 +458,7 @@ impl<'a> Simulation<'a> {
             step_flow: [0.0; Gas::ALL.len()],
             extra: Vec::new(),
             touched: None,
+            round: FluxRound::default(),
             steps_state: Vec::new(),
             displaced: Vec::new(),
             displaced_gas: 0.0,
@@ -604,6 +619,34 @@ impl<'a> Simulation<'a> {
         want
     }
 
+    /// The fluxes and gel tensions ([`Self::all_fluxes`]) at `ambient` of the bubbles `keep`
+    /// selects, in the buffers of [`FluxRound`] (kept between steps: give them back with
+    /// `self.round = round`).
+    fn flux_round(
+        &mut self,
+        ambient: f64,
+        profile: &PressureHistory,
+        keep: impl Fn(&Self, usize) -> bool,
+    ) -> FluxRound {
+        let mut round = std::mem::take(&mut self.round);
+        round.which.clear();
+        round
+            .which
+            .extend((0..self.bubbles.len()).filter(|&i| keep(self, i)));
+        round.out.clear();
+        round
+            .out
+            .resize(self.bubbles.len(), (0.0, [0.0; Gas::ALL.len()]));
+        self.all_fluxes(
+            ambient,
+            profile,
+            &round.which,
+            &mut round.out,
+            &mut round.res,
+        );
+        round
+    }
+
     /// Every active bubble's fluxes and gel tension at `ambient` into `out` (by bubble index;
     /// inactive bubbles are left alone), from the grid as it is. Bubbles are independent here
     /// (each reads the grid and its own state), so when there are several and enough points
@@ -614,6 +657,7 @@ impl<'a> Simulation<'a> {
         profile: &PressureHistory,
         which: &[usize],
         out: &mut [(f64, [f64; Gas::ALL.len()])],
+        res: &mut Vec<(f64, [f64; Gas::ALL.len()])>,
     ) {
         use rayon::prelude::*;
         if self.spheres.len() > SPHERE_CACHE {
@@ -628,9 +672,9 @@ impl<'a> Simulation<'a> {
             (t, j)
         };
         if which.len() > 1 && points >= PARALLEL_SPHERE_POINTS && !serial_fluxes() {
-            let res: Vec<_> = which.par_iter().map(|&i| one(i)).collect();
-            for (&i, r) in which.iter().zip(res) {
-                out[i] = r;
+            which.par_iter().map(|&i| one(i)).collect_into_vec(res);
+            for (&i, r) in which.iter().zip(res.iter()) {
+                out[i] = *r;
             }
         } else {
             for &i in which {
@@ -908,19 +952,16 @@ impl<'a> Simulation<'a> {
         tensions: &mut [f64],
     ) {
         let ng = self.gases.len();
-        let which: Vec<usize> = (0..self.bubbles.len())
-            .filter(|&i| self.bubbles[i].active())
-            .collect();
-        let mut out = vec![(0.0, [0.0; Gas::ALL.len()]); self.bubbles.len()];
-        self.all_fluxes(p, profile, &which, &mut out);
+        let round = self.flux_round(p, profile, |s, i| s.bubbles[i].active());
         for i in 0..self.bubbles.len() {
             if self.bubbles[i].active() {
-                tensions[i] = out[i].0;
-                fluxes[i].copy_from_slice(&out[i].1[..ng]);
+                tensions[i] = round.out[i].0;
+                fluxes[i].copy_from_slice(&round.out[i].1[..ng]);
             } else {
                 fluxes[i].iter_mut().for_each(|x| *x = 0.0);
             }
         }
+        self.round = round;
     }
 
     /// Phase 2: the step. The physics sets it — at most ×2 growth per step, `max_step`, the
@@ -1148,18 +1189,16 @@ impl<'a> Simulation<'a> {
         // every open bubble's end-of-step fluxes, from the grid before any correction; a
         // bubble whose coupling sphere reads cells that an earlier bubble's correction has
         // changed is evaluated again when its turn comes (what a serial loop would have read)
-        let which: Vec<usize> = (0..self.bubbles.len())
-            .filter(|&i| self.steps_state[i].open && self.bubbles[i].active())
-            .collect();
-        let mut early = vec![(0.0, [0.0; Gas::ALL.len()]); self.bubbles.len()];
-        self.all_fluxes(p1, profile, &which, &mut early);
+        let round = self.flux_round(p1, profile, |s, i| {
+            s.steps_state[i].open && s.bubbles[i].active()
+        });
         self.touched = None;
-        for &i in &which {
+        for &i in &round.which {
             let st = self.steps_state[i];
             if !self.bubbles[i].active() {
                 continue;
             }
-            let mut j1 = early[i].1;
+            let mut j1 = round.out[i].1;
             if self.reads_touched(i) || serial_fluxes() {
                 self.fluxes(i, p1, profile, &mut j1[..ng]);
             }
@@ -1196,6 +1235,7 @@ impl<'a> Simulation<'a> {
                 self.dissolve(i, t1, events);
             }
         }
+        self.round = round;
         if any {
             self.update_radii(p1)?;
         }
@@ -1680,14 +1720,11 @@ impl<'a> Simulation<'a> {
         let done = log.ending != Ending::Completed || self.time >= end - 1e-9;
         if self.time >= log.next_record - 1e-9 || done {
             let mut fresh = tensions.to_vec();
-            let which: Vec<usize> = (0..self.bubbles.len())
-                .filter(|&i| self.bubbles[i].active())
-                .collect();
-            let mut now = vec![(0.0, [0.0; Gas::ALL.len()]); self.bubbles.len()];
-            self.all_fluxes(p1, profile, &which, &mut now);
-            for &i in &which {
-                fresh[i] = now[i].0;
+            let round = self.flux_round(p1, profile, |s, i| s.bubbles[i].active());
+            for &i in &round.which {
+                fresh[i] = round.out[i].0;
             }
+            self.round = round;
             let min = self.record(profile, &fresh, observer, num.record_gel || done)?;
             log.min_concentration = log.min_concentration.min(min);
             let behind = (self.time + 1e-9 - log.next_record) / num.record_interval;
