@@ -137,7 +137,6 @@ fn distances(
         })
         .map_or(f64::NAN, |(g, p)| {
             g.distance_to_faces(b.position)
-                .into_iter()
                 .filter(|(face, _)| p.open_faces.contains(face))
                 .map(|(_, d)| d)
                 .fold(f64::INFINITY, f64::min)

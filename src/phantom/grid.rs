@@ -480,31 +480,43 @@ impl Grid {
 
     /// Whether a point lies inside the modelled phantom.
     pub fn contains(&self, p: [f64; 3]) -> bool {
-        self.distance_to_faces(p).iter().all(|(_, d)| *d > 0.0)
+        self.distance_to_faces(p).all(|(_, d)| d > 0.0)
     }
 
     /// Distance from a point to every face of the modelled phantom, m (negative outside).
-    pub fn distance_to_faces(&self, p: [f64; 3]) -> Vec<(Face, f64)> {
+    pub fn distance_to_faces(&self, p: [f64; 3]) -> impl Iterator<Item = (Face, f64)> {
         let e = self.extent();
-        match self.shape {
-            Shape::Box { .. } => vec![
-                (Face::XMinus, p[0]),
-                (Face::XPlus, e[0] - p[0]),
-                (Face::YMinus, p[1]),
-                (Face::YPlus, e[1] - p[1]),
-                (Face::Bottom, p[2]),
-                (Face::Top, e[2] - p[2]),
-            ],
+        // no allocation: the time loop asks it for every bubble at every step
+        let (faces, n) = match self.shape {
+            Shape::Box { .. } => (
+                [
+                    (Face::XMinus, p[0]),
+                    (Face::XPlus, e[0] - p[0]),
+                    (Face::YMinus, p[1]),
+                    (Face::YPlus, e[1] - p[1]),
+                    (Face::Bottom, p[2]),
+                    (Face::Top, e[2] - p[2]),
+                ],
+                6,
+            ),
             Shape::Cylinder { .. } => {
                 let c = e[0] / 2.0;
                 let r = ((p[0] - c).powi(2) + (p[1] - c).powi(2)).sqrt();
-                vec![
-                    (Face::Side, c - r),
-                    (Face::Bottom, p[2]),
-                    (Face::Top, e[2] - p[2]),
-                ]
+                let top = (Face::Top, e[2] - p[2]);
+                (
+                    [
+                        (Face::Side, c - r),
+                        (Face::Bottom, p[2]),
+                        top,
+                        top,
+                        top,
+                        top,
+                    ],
+                    3,
+                )
             }
-        }
+        };
+        faces.into_iter().take(n)
     }
 
     /// Trilinear interpolation of a cell-centred field at point `p`, using inside cells only
@@ -663,6 +675,53 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Every face of the shape once, at the distance worked out by hand.
+    #[test]
+    fn distances_to_faces_are_each_face_once() {
+        let h = 1e-4;
+        let b = Grid::new(
+            Shape::Box {
+                size: [2e-3, 3e-3, 4e-3],
+            },
+            h,
+            &[],
+        )
+        .unwrap();
+        let d: Vec<_> = b.distance_to_faces([0.5e-3, 1e-3, 3e-3]).collect();
+        let want = [
+            (Face::XMinus, 0.5e-3),
+            (Face::XPlus, 1.5e-3),
+            (Face::YMinus, 1e-3),
+            (Face::YPlus, 2e-3),
+            (Face::Bottom, 3e-3),
+            (Face::Top, 1e-3),
+        ];
+        assert_eq!(d.len(), 6);
+        for ((f, x), (g, y)) in d.iter().zip(want) {
+            assert_eq!(*f, g);
+            assert!((x - y).abs() < 1e-15, "{f:?} {x} {y}");
+        }
+        let c = Grid::new(
+            Shape::Cylinder {
+                diameter: 2e-3,
+                depth: 1e-3,
+            },
+            h,
+            &[],
+        )
+        .unwrap();
+        // 0.3 mm from the axis (at x = y = 1 mm), 0.2 mm above the bottom
+        let d: Vec<_> = c.distance_to_faces([1.3e-3, 1e-3, 0.2e-3]).collect();
+        assert_eq!(d.len(), 3);
+        assert_eq!(
+            (d[0].0, d[1].0, d[2].0),
+            (Face::Side, Face::Bottom, Face::Top)
+        );
+        assert!((d[0].1 - 0.7e-3).abs() < 1e-15);
+        assert!((d[1].1 - 0.2e-3).abs() < 1e-15);
+        assert!((d[2].1 - 0.8e-3).abs() < 1e-15);
+    }
 
     #[test]
     fn cylinder_mask_volume_approaches_pi_r2_h() {

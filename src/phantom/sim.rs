@@ -917,9 +917,9 @@ impl<'a> Simulation<'a> {
         (field_dt, loading_dt)
     }
 
-    /// Phases 6–8 of the step [t0, t1] of length dt (t1 − t0 but for its rounding) after the gel's diffusion and perfusion: the clock, the
-    /// radii, the corrector of the bubbles' exchange, coalescence, nucleation, displacement and
-    /// the health check. Returns the corrector's error estimate ([`Self::correct`]).
+    /// Phases 6–8 of the step [t0, t1] of length dt (t1 − t0 but for its rounding) after the
+    /// gel's diffusion and perfusion: the clock, the radii, the corrector of the bubbles'
+    /// exchange, coalescence, nucleation, displacement and the health check. Returns the corrector's error estimate ([`Self::correct`]).
     fn events(
         &mut self,
         profile: &PressureHistory,
@@ -1702,7 +1702,6 @@ impl<'a> Simulation<'a> {
             if let Some((face, _)) = self
                 .grid
                 .distance_to_faces(b.position)
-                .into_iter()
                 .find(|(_, d)| *d <= b.radius)
             {
                 log.ending = Ending::BubbleReachedFace {
@@ -2202,10 +2201,7 @@ pub fn place_bubbles(params: &PhantomParams, grid: &Grid) -> Result<Vec<([f64; 3
                         "bubble {i}: initial radius must be positive (got {r0} m)"
                     )));
                 }
-                if let Some((face, d)) = grid
-                    .distance_to_faces(*p)
-                    .into_iter()
-                    .find(|(_, d)| !(*d > *r0))
+                if let Some((face, d)) = grid.distance_to_faces(*p).find(|(_, d)| !(*d > *r0))
                 // NaN positions are outside too
                 {
                     let e = grid.extent();
@@ -2242,8 +2238,7 @@ pub fn place_bubbles(params: &PhantomParams, grid: &Grid) -> Result<Vec<([f64; 3
                 ];
                 if grid
                     .distance_to_faces(p)
-                    .iter()
-                    .any(|(_, d)| *d < margin.max(*initial_radius * 1.01))
+                    .any(|(_, d)| d < margin.max(*initial_radius * 1.01))
                 {
                     continue;
                 }

@@ -162,7 +162,7 @@ impl NucleationModel for CriticalRadius {
                 rng.gen::<f64>() * e[2],
             ];
             let inside = super::cell_of(grid, p).is_some_and(|c| grid.inside(c));
-            if !inside || grid.distance_to_faces(p).iter().any(|(_, d)| *d < margin) {
+            if !inside || grid.distance_to_faces(p).any(|(_, d)| d < margin) {
                 continue;
             }
             out.push(Nucleus {
