@@ -4,11 +4,11 @@
 //! intercept with 95 % intervals, R², the F-test of a zero slope, and the extra sum-of-squares
 //! F-test of a quadratic against the line (the paper's "nonlinear fit was statistically
 //! indicated"). The time-at-depth series is run again with every step limit halved
-//! ([`halve_steps`]): the half-life's trend is judged only where it is above twice that
+//! ([`super::halve_steps`]): the half-life's trend is judged only where it is above twice that
 //! numerical error (it is a few per cent, the size of the error).
 
 use super::{add_verdicts, c, discrepancies, report_err, s3, Agreement, FigureOutput, Progress};
-use super::{Settings, Verdict};
+use super::{halve_steps, Settings, Verdict};
 use crate::app::simulate::SimRun;
 use crate::error::{Error, InputError};
 use crate::fit::data::build_params;
@@ -73,26 +73,6 @@ pub fn dive(hold_s: f64, down: f64, up: f64) -> Result<PressureHistory, Error> {
         0.0,
     )
     .map_err(Error::Solver)
-}
-
-/// The document with every step limit halved (the cap, the pressure and content limits, the
-/// bubbles' tolerance; the loading tolerance, a second-order estimate, quartered): the refined
-/// run of the half-life's numerical-error estimate.
-pub fn halve_steps(doc: &toml::Table) -> Result<toml::Table, Error> {
-    let d = crate::phantom::params::Numerics::default();
-    let mut doc = doc.clone();
-    let path = Path::new(HYDROGEL_PATH);
-    for (key, default, factor) in [
-        ("numerics.max_step_s", d.max_step, 0.5),
-        ("numerics.max_pressure_change", d.max_pressure_change, 0.5),
-        ("numerics.max_content_change", d.max_content_change, 0.5),
-        ("numerics.bubble_tolerance", d.bubble_tolerance, 0.5),
-        ("numerics.loading_tolerance", d.loading_tolerance, 0.25),
-    ] {
-        let v = paths::get(&doc, key).unwrap_or(default);
-        paths::set(&mut doc, key, v * factor).map_err(|m| InputError::new(m).in_file(path))?;
-    }
-    Ok(doc)
 }
 
 /// One run of a phantom document through a profile.
@@ -345,7 +325,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     }
     // the time-at-depth series again with every step limit halved: the half-life's numerical
     // error (its change with time at depth is a few per cent, the size of that error)
-    let fine_doc = halve_steps(&doc)?;
+    let fine_doc = halve_steps(&doc, Path::new(HYDROGEL_PATH))?;
     let jobs: Vec<(f64, f64, bool)> = cases
         .iter()
         .map(|&(hh, r)| (hh, r, false))
@@ -783,7 +763,7 @@ mod halve_tests {
     #[test]
     fn halving_the_steps_halves_every_limit_of_the_preset() {
         let doc = hydrogel(GRID_STEP).unwrap();
-        let fine = halve_steps(&doc).unwrap();
+        let fine = halve_steps(&doc, Path::new(HYDROGEL_PATH)).unwrap();
         let d = crate::phantom::params::Numerics::default();
         let get = |t: &toml::Table, k: &str| paths::get(t, k).unwrap();
         assert_eq!(get(&fine, "numerics.max_step_s"), 300.0);
