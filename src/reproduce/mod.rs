@@ -272,24 +272,12 @@ fn index(done: &[Reproduced], settings: &Settings, command: &str) -> Result<Stri
     Ok(s)
 }
 
-/// The document with every step limit halved (the cap, the pressure and content limits, the
-/// bubbles' tolerance; the loading tolerance, a second-order estimate, quartered): the refined
+/// The document with every step limit halved ([`crate::fit::model::halve_step_limits`]): the refined
 /// run of a numerical-error estimate (Fig. 5's half-life, Fig. 3's metrics); `path` names the
 /// document in errors.
 pub fn halve_steps(doc: &toml::Table, path: &Path) -> Result<toml::Table, Error> {
-    let d = crate::phantom::params::Numerics::default();
     let mut doc = doc.clone();
-    for (key, default, factor) in [
-        ("numerics.max_step_s", d.max_step, 0.5),
-        ("numerics.max_pressure_change", d.max_pressure_change, 0.5),
-        ("numerics.max_content_change", d.max_content_change, 0.5),
-        ("numerics.bubble_tolerance", d.bubble_tolerance, 0.5),
-        ("numerics.loading_tolerance", d.loading_tolerance, 0.25),
-    ] {
-        let v = crate::fit::paths::get(&doc, key).unwrap_or(default);
-        crate::fit::paths::set(&mut doc, key, v * factor)
-            .map_err(|m| InputError::new(m).in_file(path))?;
-    }
+    crate::fit::model::halve_step_limits(&mut doc).map_err(|m| InputError::new(m).in_file(path))?;
     Ok(doc)
 }
 
