@@ -6,7 +6,7 @@
 //! indices over all five at once (the global analysis the paper did not do).
 
 use super::{add_verdicts, discrepancies, report_err, s3, Agreement, FigureOutput, Progress};
-use super::{halve_steps, Settings, Verdict};
+use super::{grade, halve_steps, Part, Settings, Verdict};
 use crate::error::{Error, InputError};
 use crate::fit::paths;
 use crate::report::html::Page;
@@ -157,29 +157,6 @@ fn note(parts: &[Part], base: &str) -> String {
         format!("{UNRESOLVED}{base}")
     } else {
         base.to_string()
-    }
-}
-
-/// What one part of a claim came to, judged above the numerical error.
-#[derive(Debug, Clone, Copy, PartialEq)]
-enum Part {
-    Agrees,
-    Disagrees,
-    /// The comparison is within the numerical error: the model cannot tell.
-    Unresolved,
-}
-
-/// A claim of several parts: yes if every part agrees, no if every one disagrees, not
-/// comparable if no part is resolved, partly otherwise.
-fn grade(parts: &[Part]) -> Agreement {
-    if parts.iter().all(|p| *p == Part::Agrees) {
-        Agreement::Yes
-    } else if parts.iter().all(|p| *p == Part::Disagrees) {
-        Agreement::No
-    } else if parts.iter().all(|p| *p == Part::Unresolved) {
-        Agreement::NotComparable
-    } else {
-        Agreement::Partly
     }
 }
 

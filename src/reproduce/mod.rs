@@ -272,6 +272,43 @@ fn index(done: &[Reproduced], settings: &Settings, command: &str) -> Result<Stri
     Ok(s)
 }
 
+/// What one part of a claim came to, judged above the numerical error.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Part {
+    /// The comparison agrees with the claim, above the numerical error.
+    Agrees,
+    /// It disagrees, above the numerical error.
+    Disagrees,
+    /// The comparison is within the numerical error: the model cannot tell.
+    Unresolved,
+}
+
+/// A claim of several parts: yes if every part agrees, no if every one disagrees, not
+/// comparable if no part is resolved, partly otherwise.
+pub fn grade(parts: &[Part]) -> Agreement {
+    if parts.iter().all(|p| *p == Part::Agrees) {
+        Agreement::Yes
+    } else if parts.iter().all(|p| *p == Part::Disagrees) {
+        Agreement::No
+    } else if parts.iter().all(|p| *p == Part::Unresolved) {
+        Agreement::NotComparable
+    } else {
+        Agreement::Partly
+    }
+}
+
+/// Whether `a` exceeds `b` (each with its numerical error): agrees when a − e_a > b + e_b,
+/// disagrees when b − e_b > a + e_a, unresolved otherwise.
+pub fn exceeds((a, ea): (f64, f64), (b, eb): (f64, f64)) -> Part {
+    if a - ea > b + eb {
+        Part::Agrees
+    } else if b - eb > a + ea {
+        Part::Disagrees
+    } else {
+        Part::Unresolved
+    }
+}
+
 /// The document with every step limit halved ([`crate::fit::model::halve_step_limits`]): the refined
 /// run of a numerical-error estimate (Fig. 5's half-life, Fig. 3's metrics); `path` names the
 /// document in errors.
@@ -343,4 +380,19 @@ pub fn c(v: f64) -> String {
 /// Error for a plot or page that could not be made.
 pub fn report_err(e: impl std::fmt::Display) -> Error {
     Error::Solver(format!("reproduce: {e}"))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Above, below and within the errors (numbers worked by hand).
+    #[test]
+    fn exceeds_judges_a_difference_against_both_errors() {
+        assert_eq!(exceeds((10.0, 1.0), (5.0, 1.0)), Part::Agrees);
+        assert_eq!(exceeds((5.0, 1.0), (10.0, 1.0)), Part::Disagrees);
+        // 10 − 3 = 7 is not above 5 + 3 = 8
+        assert_eq!(exceeds((10.0, 3.0), (5.0, 3.0)), Part::Unresolved);
+        assert_eq!(exceeds((10.0, 0.0), (10.0, 0.0)), Part::Unresolved);
+    }
 }
