@@ -202,17 +202,73 @@ fn discovers_perfusion() {
     // named, with surface-permeability, the elastic terms and solubility-scale fitting within the
     // numerical error (reported as not told apart) — all slow the growth after decompression.
     //
-    // KNOWN ISSUE (open in issue 7's follow-up): since the physics fixes of issue 8 the fit
-    // stops at 5.2e-3 with RMSE 2.31 µm against 2 µm of noise, although the data come from the
-    // same model (at the truth the RMSE would be the noise): the interval [5.04e-3, 5.37e-3]
-    // misses 5e-3. Suspected: the adaptive bubble step makes the output non-smooth in k, which
-    // the forward-difference Jacobian sees. Until that is fixed the estimate is held to 10 %.
+    // At this seed the estimate is 5.20e-3 [5.04e-3, 5.37e-3]: the interval misses 5e-3. That is
+    // a draw, not a defect (session 9): the weighted SSR is smooth in k at the Jacobian's 0.2 %
+    // step, the weighted SSR at the fit's optimum is lower than at the truth (53.46 against
+    // 54.3: the experiment with the smaller numerical error, weighted 30× the other, prefers
+    // 5.2e-3 for this draw of the noise), and over 120 seeds
+    // (`perfusion_intervals_cover_the_truth_over_seeds`) the intervals cover 5e-3 in 110
+    // (91.7 %; binomial p = 0.08 against 95 %), the estimates' mean is
+    // 5.028e-3 ± 0.011e-3 (+0.55 %, the small-sample bias of a nonlinear fit) and their sd
+    // 1.23e-4 against a mean reported se of 1.16e-4; seed 16 lies 2.5 of its se high. The estimate is
+    // held to 10 % here and the coverage is tested there.
     hidden_within(
         "perfusion",
         "perfusion=5e-3",
         &[("perfusion.rate_per_s", 5e-3)],
         16,
         Some(0.10),
+    );
+}
+
+#[test]
+#[ignore = "coverage study of the perfusion intervals, about 2.5 CPU-minutes: cargo test --release -- --ignored"]
+fn perfusion_intervals_cover_the_truth_over_seeds() {
+    // `discovers_perfusion` misses the truth at seed 16: a bias or a draw? 120 seeds of the
+    // lab with perfusion k = 5e-3 /s hidden (the value the data were made with is the reference),
+    // each fitted by `discover` restricted to the perfusion candidate (so that every seed yields
+    // a k). Coverage: if the 95 % intervals are right, the number covering k is
+    // Binomial(120, 0.95), and P(≤ 107) = 0.0072, so at least 108 must cover (measured: 110).
+    // Bias: the estimates' mean within 1 % of k (measured +0.55 % ± 0.22 %).
+    let dir = tempdir("discover-perfusion-coverage");
+    let ex = read_experiments(&lab(&dir, "air", 3.2e-3, 200e-6, false)).unwrap();
+    let opts = DiscoverOptions {
+        only: vec!["perfusion".into()],
+        ..DiscoverOptions::default()
+    };
+    let truth = 5e-3;
+    let (mut estimates, mut covered) = (Vec::new(), 0);
+    for seed in 1..=120 {
+        let csv = synthesize(
+            &ex,
+            &[EffectSetting::parse("perfusion=5e-3").unwrap()],
+            NOISE,
+            5.0,
+            seed,
+        )
+        .unwrap();
+        let data = parse_measurements(&csv, Path::new("synthetic.csv")).unwrap();
+        let d = discover(&ex, &data, &opts, &|_, _| {}).unwrap();
+        let added = d
+            .added
+            .iter()
+            .find(|a| a.effect == "perfusion")
+            .unwrap_or_else(|| panic!("seed {seed}: perfusion not named"));
+        let e = &added.parameters[0];
+        estimates.push(e.value);
+        covered += usize::from(e.ci95[0] <= truth && truth <= e.ci95[1]);
+    }
+    let n = estimates.len() as f64;
+    let mean = estimates.iter().sum::<f64>() / n;
+    let sd = (estimates.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
+    eprintln!(
+        "perfusion over {n} seeds: {covered} intervals cover {truth}; mean {mean:.4e} ± {:.1e} (sd {sd:.3e})",
+        sd / n.sqrt()
+    );
+    assert!(covered >= 108, "{covered} of 120 intervals cover the truth");
+    assert!(
+        ((mean - truth) / truth).abs() < 0.01,
+        "mean estimate {mean}"
     );
 }
 
