@@ -339,6 +339,9 @@ pub struct SimulateArgs {
     /// Testing: save a checkpoint after step N, then stop as if interrupted.
     #[arg(long, value_name = "N", hide = true)]
     pub checkpoint_at_step: Option<usize>,
+    /// Also write steps.csv: every time step the loop took, the scheme, the limit that set its length and the error estimates (for studying the time stepping).
+    #[arg(long)]
+    pub trace_steps: bool,
 }
 
 /// Arguments of `elasticity`.
@@ -564,6 +567,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                     .transpose()?,
                 checkpoint_at_step: a.checkpoint_at_step,
                 resume: a.resume,
+                trace_steps: a.trace_steps,
             };
             let mut bar = Progress::new();
             let run = decophantom::app::simulate::run(&req, &mut |t, e| bar.update(t, e));

@@ -8,7 +8,7 @@ use crate::phantom::checkpoint::{self, Checkpoint, Checkpointer};
 use crate::phantom::config::load_phantom;
 use crate::phantom::params::PhantomParams;
 use crate::phantom::sim::{
-    BubbleFrame, Ending, Event, Frame, Observer, Recorder, RunSummary, Simulation,
+    BubbleFrame, Ending, Event, Frame, Observer, Recorder, RunSummary, Simulation, StepRecord,
 };
 use crate::profile::{load, LoadOptions, PressureHistory};
 use crate::report::output::OutputSet;
@@ -39,6 +39,8 @@ pub struct SimulateRequest {
     pub checkpoint_at_step: Option<usize>,
     /// Continue from this checkpoint (`--resume`: the file, or the folder holding it).
     pub resume: Option<PathBuf>,
+    /// Keep every step the loop takes and write them to `steps.csv` (`--trace-steps`).
+    pub trace_steps: bool,
 }
 
 /// A finished run: its summary, frames and wall time.
@@ -56,10 +58,15 @@ pub struct SimRun {
     pub checkpoints: Option<checkpoint::Stats>,
     /// Simulated time the run was resumed from, s (`--resume`).
     pub resumed_at: Option<f64>,
+    /// Every step the loop took (only when asked: `--trace-steps`; of a resumed run, the
+    /// steps after the checkpoint).
+    pub steps: Vec<StepRecord>,
 }
 
 struct WithProgress<'a> {
     rec: Recorder,
+    /// The steps taken, when they are traced.
+    steps: Option<Vec<StepRecord>>,
     progress: &'a mut dyn FnMut(f64, f64),
     stop: Option<&'a AtomicBool>,
     checkpointer: Option<&'a mut Checkpointer>,
@@ -74,6 +81,11 @@ impl WithProgress<'_> {
 impl Observer for WithProgress<'_> {
     fn frame(&mut self, frame: &Frame) {
         self.rec.frame(frame);
+    }
+    fn step(&mut self, step: &StepRecord) {
+        if let Some(steps) = &mut self.steps {
+            steps.push(*step);
+        }
     }
     fn progress(&mut self, time: f64, end: f64) {
         (self.progress)(time, end);
@@ -123,12 +135,12 @@ pub fn simulate_until(
     progress: &mut dyn FnMut(f64, f64),
     stop: Option<&AtomicBool>,
 ) -> Result<SimRun, Error> {
-    simulate_checkpointed(params, profile, progress, stop, None, None)
+    simulate_checkpointed(params, profile, progress, stop, None, None, false)
 }
 
 /// [`simulate_until`] with checkpoints (`checkpointer`) and/or continued from a checkpoint
 /// (`resume`: the checkpoint and its file, already checked against these inputs by
-/// [`checkpoint::read`]).
+/// [`checkpoint::read`]); `trace`: keep every step ([`SimRun::steps`]).
 pub fn simulate_checkpointed(
     params: &PhantomParams,
     profile: &PressureHistory,
@@ -136,11 +148,13 @@ pub fn simulate_checkpointed(
     stop: Option<&AtomicBool>,
     mut checkpointer: Option<&mut Checkpointer>,
     resume: Option<(Checkpoint, &std::path::Path)>,
+    trace: bool,
 ) -> Result<SimRun, Error> {
     let start = std::time::Instant::now();
     super::cost::check(params, profile)?;
     let mut obs = WithProgress {
         rec: Recorder::default(),
+        steps: trace.then(Vec::new),
         progress,
         stop,
         checkpointer: checkpointer.as_deref_mut(),
@@ -157,6 +171,7 @@ pub fn simulate_checkpointed(
         }
     };
     let frames = obs.rec.frames;
+    let steps = obs.steps.unwrap_or_default();
     Ok(SimRun {
         summary,
         frames,
@@ -164,6 +179,7 @@ pub fn simulate_checkpointed(
         notes: Vec::new(),
         checkpoints: checkpointer.map(|c| c.stats.clone()),
         resumed_at,
+        steps,
     })
 }
 
@@ -442,8 +458,34 @@ fn plot_err(e: impl std::fmt::Display) -> Error {
     Error::Solver(format!("plot: {e}"))
 }
 
+/// `steps.csv`: one row per step the loop took (`--trace-steps`): its start and length, the
+/// scheme, the limit that set it, the step the physics allowed, the bubbles' error estimate
+/// over it as a fraction of their tolerance, and the next steps the three error estimates
+/// allow (`inf`: no limit).
+pub fn steps_csv(steps: &[StepRecord]) -> String {
+    let mut s = String::from(
+        "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,next_loading_dt_s\n",
+    );
+    for r in steps {
+        s.push_str(&format!(
+            "{:.6},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n",
+            r.time,
+            r.dt,
+            r.scheme.name(),
+            r.limit.name(),
+            r.physics_dt,
+            r.bubble_error,
+            r.next_bubble_dt,
+            r.next_field_dt,
+            r.next_loading_dt
+        ));
+    }
+    s
+}
+
 /// The files of a simulation, added to `set` under `prefix`: bubbles.csv, summary.toml,
-/// radius.svg, volume.svg, and timing.toml (the wall time, which differs from run to run).
+/// radius.svg, volume.svg, timing.toml (the wall time, which differs from run to run), and
+/// steps.csv when the steps were traced.
 pub fn add_run_files(
     set: &mut OutputSet,
     prefix: &str,
@@ -461,6 +503,9 @@ pub fn add_run_files(
         summary_toml(run, profile_name, phantom_name)?,
     );
     set.add(format!("{prefix}timing.toml"), timing_toml(run));
+    if !run.steps.is_empty() {
+        set.add(format!("{prefix}steps.csv"), steps_csv(&run.steps));
+    }
     let title = format!("{profile_name} — {phantom_name}");
     set.add(
         format!("{prefix}radius.svg"),
@@ -520,6 +565,7 @@ pub fn run(req: &SimulateRequest, progress: &mut dyn FnMut(f64, f64)) -> Result<
         req.stop.as_deref(),
         checkpointer.as_mut(),
         resume.zip(resumed_from.as_deref()),
+        req.trace_steps,
     )?;
     run.notes = notes;
     let mut set = OutputSet::new();

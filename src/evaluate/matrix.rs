@@ -113,6 +113,7 @@ pub fn run_matrix_journaled(
                         notes: Vec::new(),
                         checkpoints: None,
                         resumed_at: None,
+                        steps: Vec::new(),
                     }),
                 _ => None,
             };

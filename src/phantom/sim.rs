@@ -114,11 +114,110 @@ pub struct Frame {
     pub grid_moles: Vec<f64>,
 }
 
+/// How the gel's diffusion was stepped over one time step ([`StepRecord`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepScheme {
+    /// Forward Euler within the explicit limit.
+    Explicit,
+    /// Locally-one-dimensional backward Euler.
+    Implicit,
+    /// Backward Euler Richardson-extrapolated from two half steps (descents with every bubble
+    /// shut).
+    Extrapolated,
+}
+
+impl StepScheme {
+    /// Name in `steps.csv`.
+    pub fn name(self) -> &'static str {
+        match self {
+            StepScheme::Explicit => "explicit",
+            StepScheme::Implicit => "implicit",
+            StepScheme::Extrapolated => "extrapolated",
+        }
+    }
+}
+
+/// Which limit set a step's length ([`StepRecord`]; the last of the limits of
+/// `Simulation::choose_step` to shorten it).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum StepLimit {
+    /// `max_step`.
+    MaxStep,
+    /// At most twice the last step.
+    Growth,
+    /// The bubbles' error estimate (`bubble_tolerance`).
+    BubbleError,
+    /// The gel field's error estimate (`field_tolerance`).
+    FieldError,
+    /// The loading's error estimate (`loading_tolerance`).
+    LoadingError,
+    /// `max_pressure_change`.
+    PressureChange,
+    /// A bubble's content change (`max_content_change`).
+    BubbleContent,
+    /// A bubble losing at most half of one gas.
+    BubbleGas,
+    /// A breakpoint of the profile, hit exactly.
+    Breakpoint,
+    /// The end of the profile.
+    End,
+    /// Cut to the explicit limit: between it and `implicit_cost_ratio` times it, the explicit
+    /// step is the cheaper.
+    ExplicitLimit,
+}
+
+impl StepLimit {
+    /// Name in `steps.csv`.
+    pub fn name(self) -> &'static str {
+        match self {
+            StepLimit::MaxStep => "max-step",
+            StepLimit::Growth => "growth",
+            StepLimit::BubbleError => "bubble-error",
+            StepLimit::FieldError => "field-error",
+            StepLimit::LoadingError => "loading-error",
+            StepLimit::PressureChange => "pressure-change",
+            StepLimit::BubbleContent => "bubble-content",
+            StepLimit::BubbleGas => "bubble-gas",
+            StepLimit::Breakpoint => "breakpoint",
+            StepLimit::End => "end",
+            StepLimit::ExplicitLimit => "explicit-limit",
+        }
+    }
+}
+
+/// One time step as the loop took it ([`Observer::step`]; `simulate --trace-steps`
+/// writes them to `steps.csv`): for studying the time stepping, not a result.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct StepRecord {
+    /// Start of the step, s.
+    pub time: f64,
+    /// Its length, s.
+    pub dt: f64,
+    /// How the gel was stepped.
+    pub scheme: StepScheme,
+    /// What set the length.
+    pub limit: StepLimit,
+    /// The step the physics allowed before the breakpoints and the scheme's cost cut it, s.
+    pub physics_dt: f64,
+    /// The corrector's error estimate of the bubbles' exchange over this step (the largest
+    /// over the bubbles), as a fraction of `bubble_tolerance` (0 without open bubbles).
+    pub bubble_error: f64,
+    /// The next step each error estimate allows, s (∞: no limit): the bubbles', the gel
+    /// field's and the loading's.
+    pub next_bubble_dt: f64,
+    /// See `next_bubble_dt`.
+    pub next_field_dt: f64,
+    /// See `next_bubble_dt`.
+    pub next_loading_dt: f64,
+}
+
 /// Receives what the simulation does (like ripgrep's `Sink`): recorders, CSV writers and
 /// progress bars are observers, the time loop knows nothing of files or terminals.
 pub trait Observer {
     /// A recorded frame.
     fn frame(&mut self, frame: &Frame);
+    /// A step just taken. Default does nothing.
+    fn step(&mut self, _step: &StepRecord) {}
     /// Progress: simulated time and end time, s. Called every step; default does nothing.
     fn progress(&mut self, _time: f64, _end: f64) {}
     /// Whether the run should stop now (e.g. the user pressed Ctrl-C). Checked every step; the
@@ -811,12 +910,18 @@ impl<'a> Simulation<'a> {
             let t = self.time;
             let p = profile.ambient(t);
             self.bubble_fluxes(profile, p, &mut fluxes, &mut tensions);
-            let estimates = bubble_dt.min(field_dt).min(loading_dt);
-            let (dt, dt_physics) = self.choose_step(profile, &fluxes, dt_prev, estimates, lim, end);
+            let estimates = [
+                (bubble_dt, StepLimit::BubbleError),
+                (field_dt, StepLimit::FieldError),
+                (loading_dt, StepLimit::LoadingError),
+            ];
+            let (dt, dt_physics, limit) =
+                self.choose_step(profile, &fluxes, dt_prev, estimates, lim, end);
             dt_prev = dt_physics;
             let t1 = t + dt;
             self.exchange(&fluxes, dt, t1, &mut log.events);
-            (field_dt, loading_dt) = self.gel_step(
+            let scheme;
+            (field_dt, loading_dt, scheme) = self.gel_step(
                 profile,
                 (t, dt),
                 &mut last_flow,
@@ -825,11 +930,23 @@ impl<'a> Simulation<'a> {
             );
             self.perfuse(profile, t, dt);
             let err = self.events(profile, (t, t1, dt), &mut tensions, &mut fluxes, &mut log)?;
+            let tol = self.params.numerics.bubble_tolerance;
             bubble_dt = if err > 0.0 {
-                0.9 * dt * self.params.numerics.bubble_tolerance / err
+                0.9 * dt * tol / err
             } else {
                 f64::INFINITY
             };
+            observer.step(&StepRecord {
+                time: t,
+                dt,
+                scheme,
+                limit,
+                physics_dt: dt_physics,
+                bubble_error: err / tol,
+                next_bubble_dt: bubble_dt,
+                next_field_dt: field_dt,
+                next_loading_dt: loading_dt,
+            });
             self.observe(
                 profile,
                 profile.ambient(t1),
@@ -895,7 +1012,7 @@ impl<'a> Simulation<'a> {
         last_flow: &mut [f64],
         last_flow_dt: &mut f64,
         log: &mut RunLog,
-    ) -> (f64, f64) {
+    ) -> (f64, f64, StepScheme) {
         // the field's tolerance, Pa: a fraction of the ambient pressure
         let p = profile.ambient(t).max(profile.ambient(t + dt));
         let field_tol = self.params.numerics.field_tolerance * p;
@@ -909,12 +1026,18 @@ impl<'a> Simulation<'a> {
             f64::INFINITY
         };
         let loading_dt = self.loading_step(profile, t, dt, last_flow, last_flow_dt);
-        if implicit {
-            log.steps.1 += 1;
-        } else {
+        let scheme = if !implicit {
             log.steps.0 += 1;
-        }
-        (field_dt, loading_dt)
+            StepScheme::Explicit
+        } else {
+            log.steps.1 += 1;
+            if extrapolate {
+                StepScheme::Extrapolated
+            } else {
+                StepScheme::Implicit
+            }
+        };
+        (field_dt, loading_dt, scheme)
     }
 
     /// Phases 6–8 of the step [t0, t1] of length dt (t1 − t0 but for its rounding) after the
@@ -975,17 +1098,32 @@ impl<'a> Simulation<'a> {
         profile: &PressureHistory,
         fluxes: &[Vec<f64>],
         dt_prev: f64,
-        bubble_dt: f64,
+        estimates: [(f64, StepLimit); 3],
         lim: f64,
         end: f64,
-    ) -> (f64, f64) {
+    ) -> (f64, f64, StepLimit) {
         let num = self.params.numerics;
         let t = self.time;
         let p = profile.ambient(t);
-        let mut dt = num.max_step.min(2.0 * dt_prev).min(bubble_dt);
+        // every limit in turn; `limit` names the last one that shortened the step
+        let mut dt = num.max_step;
+        let mut limit = StepLimit::MaxStep;
+        let mut lower = |dt: &mut f64, new: f64, which: StepLimit| {
+            if new < *dt {
+                limit = which;
+            }
+            *dt = new;
+        };
+        let d = dt.min(2.0 * dt_prev);
+        lower(&mut dt, d, StepLimit::Growth);
+        for (e, which) in estimates {
+            let d = dt.min(e);
+            lower(&mut dt, d, which);
+        }
         let rate = profile.rate(t + 1e-9).abs();
         if rate > 0.0 && !self.loading_only(profile) {
-            dt = dt.min(num.max_pressure_change * p / rate);
+            let d = dt.min(num.max_pressure_change * p / rate);
+            lower(&mut dt, d, StepLimit::PressureChange);
         }
         for (i, b) in self.bubbles.iter().enumerate() {
             if !b.active() {
@@ -1002,25 +1140,29 @@ impl<'a> Simulation<'a> {
                 continue;
             }
             if jabs > 0.0 {
-                dt = dt.min(num.max_content_change * n / jabs).max(1e-6);
+                let d = dt.min(num.max_content_change * n / jabs).max(1e-6);
+                lower(&mut dt, d, StepLimit::BubbleContent);
             }
             for (m, j) in b.moles.iter().zip(&fluxes[i]) {
                 if *j < 0.0 && *m > 1e-9 * n {
-                    dt = dt.min(0.5 * m / -j).max(1e-6);
+                    let d = dt.min(0.5 * m / -j).max(1e-6);
+                    lower(&mut dt, d, StepLimit::BubbleGas);
                 }
             }
         }
         let physics = dt;
-        dt = dt
-            .min(profile.next_breakpoint(t) - t)
-            .min(end - t)
-            .max(1e-9);
+        let d = dt.min(profile.next_breakpoint(t) - t);
+        lower(&mut dt, d, StepLimit::Breakpoint);
+        let d = dt.min(end - t);
+        lower(&mut dt, d, StepLimit::End);
+        dt = dt.max(1e-9);
         // An implicit step costs about ten explicit ones (benches/kernel.rs): below that
         // ratio, the explicit limit itself is the cheaper (and more accurate) step.
         if dt > lim && dt < num.implicit_cost_ratio * lim {
             dt = lim;
+            limit = StepLimit::ExplicitLimit;
         }
-        (dt, physics)
+        (dt, physics, limit)
     }
 
     /// Whether the step from now only loads the gel: the pressure rises, every bubble is

@@ -431,3 +431,75 @@ fn a_dive_log_run_watches_the_surface_after_the_dive() {
         .iter()
         .any(|n| n.as_str().unwrap().contains("no water density")));
 }
+
+#[test]
+fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
+    // `--trace-steps` writes steps.csv: one row per step, which must tile the run's time, count
+    // as summary.toml counts, and label its scheme as the explicit limit says. The limit is
+    // worked out here from the geometry: the box is open on every face but the bottom, so a top
+    // corner cell has three open sides (weight 2 each) and three interior ones: w_max = 9 and
+    // the forward-Euler limit is h²/(9D) = (100 µm)²/(9 · 2.5e-9 m²/s) = 0.4444 s.
+    let dir = tempdir("trace-steps");
+    let phantom = write(&dir, "p.toml", SMALL_PHANTOM);
+    let profile = write(&dir, "d.toml", SHORT_DIVE);
+    let out = dir.join("out");
+    let o = Command::new(bin())
+        .args(["simulate", "--quiet", "--trace-steps", "--profile"])
+        .arg(&profile)
+        .arg("--phantom")
+        .arg(&phantom)
+        .arg("--out")
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let summary: toml::Table = std::fs::read_to_string(out.join("summary.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let count = |k: &str| summary[k].as_integer().unwrap() as usize;
+    let csv = std::fs::read_to_string(out.join("steps.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next().unwrap(),
+        "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,next_loading_dt_s"
+    );
+    let rows: Vec<Vec<String>> = lines
+        .map(|l| l.split(',').map(str::to_string).collect())
+        .collect();
+    assert_eq!(
+        rows.len(),
+        count("steps_explicit") + count("steps_implicit")
+    );
+    let num = |s: &str| -> f64 { s.parse().unwrap() };
+    let lim = (100e-6f64).powi(2) / (9.0 * 2.5e-9);
+    let (mut t, mut explicit, mut cut) = (0.0, 0, 0);
+    for r in &rows {
+        let (start, dt, physics) = (num(&r[0]), num(&r[1]), num(&r[4]));
+        assert!(
+            (start - t).abs() < 1e-5,
+            "a step starts at {start}, the last ended at {t}"
+        );
+        t = start + dt;
+        match r[2].as_str() {
+            "explicit" => {
+                explicit += 1;
+                assert!(dt <= lim * (1.0 + 1e-5), "explicit step of {dt} s");
+            }
+            "implicit" | "extrapolated" => assert!(dt > lim, "implicit step of {dt} s"),
+            s => panic!("scheme {s}"),
+        }
+        if r[3] == "explicit-limit" {
+            cut += 1;
+            assert!((dt / lim - 1.0).abs() < 1e-5 && physics > dt);
+        }
+        assert!(num(&r[5]) >= 0.0);
+    }
+    assert_eq!(explicit, count("steps_explicit"));
+    assert!(cut > 0, "no step was cut to the explicit limit");
+    assert!((t - 2500.0).abs() < 1e-3, "the steps end at {t} s");
+    // without the flag there is no steps.csv
+    let plain = dir.join("plain");
+    assert!(simulate(&profile, &phantom, &plain).status.success());
+    assert!(!plain.join("steps.csv").exists());
+}
