@@ -15,7 +15,8 @@
 //!   source S (the bubbles' deposits) it does: the fixed point of the split step solves
 //!   A·u − dt·(A_xA_y + A_yA_z + A_zA_x)·u + dt²·A_xA_yA_z·u = −S, not A·u = −S, so the field
 //!   near a steady sink depends on the step (README, "Time stepping": −6 % / −18 % / −38 % in
-//!   the depression one to two cells from a point sink at 3.6 / 10 / 30 s steps, h = 100 µm).
+//!   the depression one to two cells from a point sink at 3.6 / 10 / 30 s steps, h = 100 µm;
+//!   on the bubbles' runs the exchange over a long step matters more).
 //!
 //! Both return the amount that entered through open faces during the step (mol per unit of
 //! `cell_volume`, i.e. multiply by h³ for mol), for the gas balance.
