@@ -112,7 +112,7 @@ fn default_steps_are_within_0_3_percent_of_16x_smaller_steps() {
 
 /// Long (implicit) steps near a growing bubble, against a run with no implicit step at all.
 /// Over a long step the bubbles' exchange and the split step's fixed point near a sink both
-/// bias the flux (README "Time stepping": every long step of 3.6–4.1 s drops the flux by 5 %,
+/// bias the flux (README "Time stepping": every long step of 3.6–4.1 s drops the flux by 3–5 %,
 /// which the explicit steps after it take 3.5 s to restore). The reference small case (`benches/small-cube/`: one nucleus in a 6 mm open cube,
 /// h = 100 µm, decompressed from saturation at 60 psi gauge, 300 s) with the default steps
 /// (some of them implicit) against the same case with every step within the explicit limit

@@ -52,8 +52,20 @@ fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
 }
 
 fn simulate(profile: &Path, phantom: &Path, out: &Path) -> std::process::Output {
+    simulate_with(profile, phantom, out, &[])
+}
+
+/// [`simulate`] with further options.
+fn simulate_with(
+    profile: &Path,
+    phantom: &Path,
+    out: &Path,
+    extra: &[&str],
+) -> std::process::Output {
     Command::new(bin())
-        .args(["simulate", "--profile"])
+        .arg("simulate")
+        .args(extra)
+        .arg("--profile")
         .arg(profile)
         .arg("--phantom")
         .arg(phantom)
@@ -443,15 +455,7 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
     let phantom = write(&dir, "p.toml", SMALL_PHANTOM);
     let profile = write(&dir, "d.toml", SHORT_DIVE);
     let out = dir.join("out");
-    let o = Command::new(bin())
-        .args(["simulate", "--quiet", "--trace-steps", "--profile"])
-        .arg(&profile)
-        .arg("--phantom")
-        .arg(&phantom)
-        .arg("--out")
-        .arg(&out)
-        .output()
-        .unwrap();
+    let o = simulate_with(&profile, &phantom, &out, &["--quiet", "--trace-steps"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let summary: toml::Table = std::fs::read_to_string(out.join("summary.toml"))
         .unwrap()
