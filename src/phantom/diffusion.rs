@@ -185,8 +185,14 @@ fn stencil_plane(
         let row = j + ny * k;
         let base = j * nx;
         let (i0, i1) = grid.interior_spans[row];
-        let (i0, i1) = (i0 as usize, (i1 as usize).max(i0 as usize));
-        for i in (0..i0).chain(i1..nx) {
+        let (e0, e1) = grid.inside_extents[row];
+        let (e0, e1) = (e0 as usize, e1 as usize);
+        let (i0, i1) = if i1 > i0 {
+            (i0 as usize, i1 as usize)
+        } else {
+            (e1, e1)
+        };
+        for i in (e0..i0).chain(i1..e1) {
             if codes[0][base + i] & INSIDE_BIT != 0 {
                 out[base + i] = generic(base + i);
             }

@@ -110,6 +110,10 @@ pub struct Grid {
     /// Per x-row (index j + ny·k): the range [i0, i1) of cells whose six sides are all interior
     /// faces (empty when i0 ≥ i1). The explicit kernel runs a branch-free stencil there.
     pub interior_spans: Vec<(u32, u32)>,
+    /// Per x-row (index j + ny·k): the range [i0, i1) from the row's first to its last cell
+    /// inside the phantom's shape (empty when none is); cells a bubble takes out of the gel
+    /// stay within it. The explicit kernel visits no cell of the row outside it.
+    pub inside_extents: Vec<(u32, u32)>,
     /// Cells taken out of the gel by bubbles ([`Grid::set_excluded`]): while excluded a cell is
     /// outside the phantom for the solvers, and its neighbours' faces toward it are sealed.
     excluded: std::collections::HashSet<u32>,
@@ -269,6 +273,7 @@ impl Grid {
             excluded: Default::default(),
             base_codes: Default::default(),
             interior_spans: vec![(0u32, 0u32); n[1] * n[2]],
+            inside_extents: vec![(0u32, 0u32); n[1] * n[2]],
             n,
             h,
             shape,
@@ -279,6 +284,10 @@ impl Grid {
         };
         for row in 0..n[1] * n[2] {
             grid.interior_spans[row] = grid.interior_span(row);
+            let inside = |i: &usize| grid.codes[0][row * n[0] + i] & INSIDE_BIT != 0;
+            if let (Some(i0), Some(i1)) = ((0..n[0]).find(inside), (0..n[0]).rev().find(inside)) {
+                grid.inside_extents[row] = (i0 as u32, i1 as u32 + 1);
+            }
         }
         Ok(grid)
     }
