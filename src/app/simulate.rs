@@ -460,15 +460,23 @@ fn plot_err(e: impl std::fmt::Display) -> Error {
 
 /// `steps.csv`: one row per step the loop took (`--trace-steps`): its start and length, the
 /// scheme, the limit that set it, the step the physics allowed, the bubbles' error estimate
-/// over it as a fraction of their tolerance, and the next steps the three error estimates
-/// allow (`inf`: no limit).
-pub fn steps_csv(steps: &[StepRecord]) -> String {
+/// over it as a fraction of their tolerance, the next steps the three error estimates allow
+/// (`inf`: no limit), and the bubble that gave the error estimate (empty without one) with
+/// its flux of each gas at the start and at the end of the step (mol/s, positive into the
+/// bubble; the end is the corrector's, before its correction).
+pub fn steps_csv(steps: &[StepRecord], gases: &[Gas]) -> String {
     let mut s = String::from(
-        "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,next_loading_dt_s\n",
+        "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,next_loading_dt_s,bubble",
     );
+    for when in ["start", "end"] {
+        for g in gases {
+            s.push_str(&format!(",flux_{when}_{}_mol_s", g.name()));
+        }
+    }
+    s.push('\n');
     for r in steps {
         s.push_str(&format!(
-            "{:.6},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n",
+            "{:.6},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},",
             r.time,
             r.dt,
             r.scheme.name(),
@@ -479,6 +487,19 @@ pub fn steps_csv(steps: &[StepRecord]) -> String {
             r.next_field_dt,
             r.next_loading_dt
         ));
+        if let Some(b) = r.bubble {
+            s.push_str(&b.to_string());
+        }
+        for j in [&r.flux_start, &r.flux_end] {
+            for x in &j[..gases.len()] {
+                if r.bubble.is_some() {
+                    s.push_str(&format!(",{x:.9e}"));
+                } else {
+                    s.push(',');
+                }
+            }
+        }
+        s.push('\n');
     }
     s
 }
@@ -504,7 +525,7 @@ pub fn add_run_files(
     );
     set.add(format!("{prefix}timing.toml"), timing_toml(run));
     if !run.steps.is_empty() {
-        set.add(format!("{prefix}steps.csv"), steps_csv(&run.steps));
+        set.add(format!("{prefix}steps.csv"), steps_csv(&run.steps, gases));
     }
     let title = format!("{profile_name} — {phantom_name}");
     set.add(

@@ -209,7 +209,18 @@ pub struct StepRecord {
     pub next_field_dt: f64,
     /// See `next_bubble_dt`.
     pub next_loading_dt: f64,
+    /// The bubble whose exchange gave `bubble_error` (None without open bubbles).
+    pub bubble: Option<usize>,
+    /// That bubble's fluxes at the start of the step, mol/s per gas in the run's order
+    /// ([`RunSummary::gases`]; 0 past its gases): what the predictor moved per second.
+    pub flux_start: [f64; Gas::ALL.len()],
+    /// Its fluxes at the end of the step (the corrector's, before the correction).
+    pub flux_end: [f64; Gas::ALL.len()],
 }
+
+/// The bubble whose exchange gave the corrector's largest error estimate over a step, with its
+/// fluxes at the start and the end of the step ([`StepRecord`]).
+type WorstExchange = Option<(usize, [f64; Gas::ALL.len()], [f64; Gas::ALL.len()])>;
 
 /// Receives what the simulation does (like ripgrep's `Sink`): recorders, CSV writers and
 /// progress bars are observers, the time loop knows nothing of files or terminals.
@@ -929,7 +940,8 @@ impl<'a> Simulation<'a> {
                 &mut log,
             );
             self.perfuse(profile, t, dt);
-            let err = self.events(profile, (t, t1, dt), &mut tensions, &mut fluxes, &mut log)?;
+            let (err, worst) =
+                self.events(profile, (t, t1, dt), &mut tensions, &mut fluxes, &mut log)?;
             let tol = self.params.numerics.bubble_tolerance;
             bubble_dt = if err > 0.0 {
                 0.9 * dt * tol / err
@@ -946,6 +958,9 @@ impl<'a> Simulation<'a> {
                 next_bubble_dt: bubble_dt,
                 next_field_dt: field_dt,
                 next_loading_dt: loading_dt,
+                bubble: worst.map(|w| w.0),
+                flux_start: worst.map_or([0.0; Gas::ALL.len()], |w| w.1),
+                flux_end: worst.map_or([0.0; Gas::ALL.len()], |w| w.2),
             });
             self.observe(
                 profile,
@@ -1042,7 +1057,8 @@ impl<'a> Simulation<'a> {
 
     /// Phases 6–8 of the step [t0, t1] of length dt (t1 − t0 but for its rounding) after the
     /// gel's diffusion and perfusion: the clock, the radii, the corrector of the bubbles'
-    /// exchange, coalescence, nucleation, displacement and the health check. Returns the corrector's error estimate ([`Self::correct`]).
+    /// exchange, coalescence, nucleation, displacement and the health check. Returns the
+    /// corrector's error estimate and the bubble that gave it ([`Self::correct`]).
     fn events(
         &mut self,
         profile: &PressureHistory,
@@ -1050,7 +1066,7 @@ impl<'a> Simulation<'a> {
         tensions: &mut Vec<f64>,
         fluxes: &mut Vec<Vec<f64>>,
         log: &mut RunLog,
-    ) -> Result<f64, Error> {
+    ) -> Result<(f64, WorstExchange), Error> {
         let end = profile.duration_s();
         let p1 = profile.ambient(t1);
         self.time = t1;
@@ -1323,10 +1339,11 @@ impl<'a> Simulation<'a> {
         p1: f64,
         dt: f64,
         events: &mut Vec<Event>,
-    ) -> Result<f64, Error> {
+    ) -> Result<(f64, WorstExchange), Error> {
         let ng = self.gases.len();
         let t1 = self.time;
         let mut worst: f64 = 0.0;
+        let mut which: WorstExchange = None;
         let mut any = false;
         // every open bubble's end-of-step fluxes, from the grid before any correction; a
         // bubble whose coupling sphere reads cells that an earlier bubble's correction has
@@ -1360,7 +1377,11 @@ impl<'a> Simulation<'a> {
             }
             let scale = moved + FLUX_FLOOR * n0;
             if scale > 0.0 {
-                worst = worst.max(change / scale);
+                let e = change / scale;
+                worst = worst.max(e);
+                if e >= worst {
+                    which = Some((i, st.flux, j1));
+                }
             }
             let taken = self.take_from_grid(i, &rest[..ng]);
             for g in 0..ng {
@@ -1381,7 +1402,7 @@ impl<'a> Simulation<'a> {
         if any {
             self.update_radii(p1)?;
         }
-        Ok(worst)
+        Ok((worst, which))
     }
 
     /// Phase 7b: bubbles displace the gel ([`displacement`], issue 8 item 5). A bubble of

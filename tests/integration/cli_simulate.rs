@@ -444,6 +444,102 @@ fn a_dive_log_run_watches_the_surface_after_the_dive() {
         .any(|n| n.as_str().unwrap().contains("no water density")));
 }
 
+/// One nucleus in the small box, a frame at every step.
+const ONE_BUBBLE_EVERY_STEP: &str = r#"
+name = "one bubble"
+[geometry]
+shape = "box"
+size_m = [1.5e-3, 1.5e-3, 1.0e-3]
+grid_step_m = 100e-6
+[material]
+surface_tension = 0.07
+[material.elasticity]
+law = "hyperelastic"
+shear_modulus = 40.0
+[gases.n2]
+diffusivity = 2.5e-9
+ostwald = 0.014
+[gases.o2]
+diffusivity = 2.5e-9
+ostwald = 0.027
+[nuclei]
+min_radius_m = 20e-6
+[numerics]
+record_interval_s = 0.0
+[[bubbles]]
+position_m = [0.75e-3, 0.75e-3, 0.5e-3]
+initial_radius_m = 60e-6
+"#;
+
+#[test]
+fn traced_fluxes_are_the_ones_that_moved_the_bubbles_gas() {
+    // steps.csv names, per step, the bubble whose exchange sized the next step and its flux of
+    // each gas at the start and end of the step. Heun's corrector moves the trapezoid of the
+    // two, (J_start + J_end)·dt/2, into the bubble (README "Time stepping"; nothing else
+    // changes a lone bubble's content), so the content bubbles.csv records at every step must
+    // change by exactly that: an independent check that the traced fluxes are the ones used.
+    let dir = tempdir("trace-fluxes");
+    let phantom = write(&dir, "p.toml", ONE_BUBBLE_EVERY_STEP);
+    let profile = write(
+        &dir,
+        "d.toml",
+        "name = \"saturated, decompressed\"\ntime_unit = \"s\"\npressure_unit = \"psi-gauge\"\n\
+         gas = \"air\"\npoints = [[0, 60], [10, 0], [60, 0]]\n",
+    );
+    let out = dir.join("out");
+    let o = simulate_with(&profile, &phantom, &out, &["--quiet", "--trace-steps"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let table = |name: &str| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(out.join(name))
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| {
+                l.split(',')
+                    .map(|x| x.parse().unwrap_or(f64::NAN))
+                    .collect()
+            })
+            .collect()
+    };
+    let steps = table("steps.csv");
+    // time_s,bubble,radius_m,volume_m3,area_m2,n_n2_mol,n_o2_mol: one row per frame
+    let frames = table("bubbles.csv");
+    assert_eq!(
+        frames.len(),
+        steps.len() + 1,
+        "a frame at the start and after every step"
+    );
+    let mut checked = 0;
+    for (k, s) in steps.iter().enumerate() {
+        let (dt, bubble) = (s[1], s[9]);
+        let (before, after) = (&frames[k], &frames[k + 1]);
+        assert!(
+            (after[0] - (s[0] + dt)).abs() < 1e-5,
+            "frame {k} is not the step's end"
+        );
+        if bubble.is_nan() {
+            continue;
+        }
+        assert_eq!(bubble, 0.0);
+        for g in 0..2 {
+            let moved = 0.5 * (s[10 + g] + s[12 + g]) * dt;
+            let change = after[5 + g] - before[5 + g];
+            let tol = 1e-5 * moved.abs() + 2e-9 * before[5 + g];
+            assert!(
+                (change - moved).abs() <= tol,
+                "step {k} at {} s, gas {g}: the content changed by {change:e} mol, the traced \
+                 fluxes move {moved:e}",
+                s[0]
+            );
+        }
+        checked += 1;
+    }
+    assert!(checked > 50, "only {checked} steps had a bubble");
+    // the decompression makes the bubble grow: nitrogen goes in after the ramp
+    let last = steps.last().unwrap();
+    assert!(last[10] > 0.0 && last[12] > 0.0, "{last:?}");
+}
+
 #[test]
 fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
     // `--trace-steps` writes steps.csv: one row per step, which must tile the run's time, count
@@ -466,7 +562,9 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
     let mut lines = csv.lines();
     assert_eq!(
         lines.next().unwrap(),
-        "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,next_loading_dt_s"
+        "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,\
+         next_loading_dt_s,bubble,flux_start_n2_mol_s,flux_start_o2_mol_s,flux_end_n2_mol_s,\
+         flux_end_o2_mol_s"
     );
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
