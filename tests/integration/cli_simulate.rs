@@ -444,25 +444,9 @@ fn a_dive_log_run_watches_the_surface_after_the_dive() {
         .any(|n| n.as_str().unwrap().contains("no water density")));
 }
 
-/// One nucleus in the small box, a frame at every step.
-const ONE_BUBBLE_EVERY_STEP: &str = r#"
-name = "one bubble"
-[geometry]
-shape = "box"
-size_m = [1.5e-3, 1.5e-3, 1.0e-3]
-grid_step_m = 100e-6
-[material]
-surface_tension = 0.07
-[material.elasticity]
-law = "hyperelastic"
-shear_modulus = 40.0
-[gases.n2]
-diffusivity = 2.5e-9
-ostwald = 0.014
-[gases.o2]
-diffusivity = 2.5e-9
-ostwald = 0.027
-[nuclei]
+/// [`SMALL_PHANTOM`]'s gel with one nucleus in place of its population, a frame at every
+/// step (the text after its `[nuclei]` table).
+const ONE_BUBBLE_EVERY_STEP: &str = r#"[nuclei]
 min_radius_m = 20e-6
 [numerics]
 record_interval_s = 0.0
@@ -479,7 +463,8 @@ fn traced_fluxes_are_the_ones_that_moved_the_bubbles_gas() {
     // changes a lone bubble's content), so the content bubbles.csv records at every step must
     // change by exactly that: an independent check that the traced fluxes are the ones used.
     let dir = tempdir("trace-fluxes");
-    let phantom = write(&dir, "p.toml", ONE_BUBBLE_EVERY_STEP);
+    let gel = &SMALL_PHANTOM[..SMALL_PHANTOM.find("[nuclei]").unwrap()];
+    let phantom = write(&dir, "p.toml", &format!("{gel}{ONE_BUBBLE_EVERY_STEP}"));
     let profile = write(
         &dir,
         "d.toml",
