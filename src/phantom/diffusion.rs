@@ -6,8 +6,10 @@
 //! - [`explicit_step`]: forward Euler, used when the step the physics asks for is below the
 //!   positivity limit dt ≤ h²/(D·w_max) (w_max the largest stencil weight sum, 6 inside,
 //!   up to 9 in a corner with three open faces); the simulation uses
-//!   [`explicit_step_in_place`], the same bits without a second field (z-plane blocks in
-//!   parallel, each keeping the old planes it still needs in per-thread buffers);
+//!   [`explicit_steps_in_place`], the same bits without a second field (z-plane blocks in
+//!   parallel, each keeping the old planes it still needs in per-thread buffers), or on
+//!   small grids with more than one thread [`explicit_steps_into`] a second set of fields
+//!   (`sim::OUT_OF_PLACE_BYTES`);
 //! - [`implicit_step`]: locally one-dimensional backward Euler (x, y, then z tridiagonal
 //!   solves, Thomas algorithm), unconditionally stable and positivity-preserving, used when
 //!   long holds allow large steps. For a box with uniform D the three 1-D operators commute,
@@ -294,6 +296,54 @@ pub fn explicit_steps_in_place(
     inflow: &mut [f64],
 ) {
     explicit_steps_in_place_with(grid, fields, dc, dt, inflow, Isa::detect())
+}
+
+/// [`explicit_steps_in_place`] out of place: field `f`'s step from `src[f]` into `dst[f]`
+/// (the same bits; only the inside cells of `dst` are written), in one parallel pass over
+/// z-planes, each plane stepping every field in turn.
+pub fn explicit_steps_into(
+    grid: &Grid,
+    src: &[&[f64]],
+    dst: &mut [&mut [f64]],
+    dc: &[(f64, f64)],
+    dt: f64,
+    inflow: &mut [f64],
+) {
+    let isa = Isa::detect();
+    let nf = src.len();
+    assert!(dst.len() == nf && dc.len() == nf && inflow.len() == nf);
+    let [nx, ny, nz] = grid.n;
+    let plane = nx * ny;
+    let r: Vec<f64> = dc.iter().map(|(d, _)| d * dt / (grid.h * grid.h)).collect();
+    for f in 0..nf {
+        inflow[f] = explicit_inflow(grid, src[f], r[f], dc[f].1);
+    }
+    let mut planes: Vec<Vec<&mut [f64]>> = (0..nz).map(|_| Vec::with_capacity(nf)).collect();
+    for u in dst.iter_mut() {
+        for (k, p) in u.chunks_mut(plane).enumerate() {
+            planes[k].push(p);
+        }
+    }
+    planes
+        .into_par_iter()
+        .enumerate()
+        .for_each(|(k, mut outs)| {
+            for (f, out) in outs.iter_mut().enumerate() {
+                let u = src[f];
+                let zm = if k > 0 {
+                    &u[(k - 1) * plane..k * plane]
+                } else {
+                    &[]
+                };
+                let zp = if k + 1 < nz {
+                    &u[(k + 1) * plane..(k + 2) * plane]
+                } else {
+                    &[]
+                };
+                let c = &u[k * plane..(k + 1) * plane];
+                stencil_plane(grid, k, zm, c, zp, out, r[f], dc[f].1, isa);
+            }
+        });
 }
 
 /// [`explicit_steps_in_place`] with the interior stencil compiled for `isa`.

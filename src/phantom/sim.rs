@@ -47,6 +47,16 @@ const FLUX_FLOOR: f64 = 0.01;
 /// Sizes of coupling sphere kept by [`Simulation::prepare_sphere`] before its cache is emptied.
 const SPHERE_CACHE: usize = 16;
 
+/// Largest set of fields (bytes, all gases) whose explicit steps run out of place, into a
+/// second set ([`Simulation::explicit_steps_out_of_place`]), when the grid loops have more
+/// than one thread; other runs step in place. Measured on the 2-core Intel machine of
+/// 25 Nov 2026, alternated with in-place steps (README, "Speed"): the oscillation experiment
+/// (8.4 MB of fields) 0.91–0.94 s against 0.99–1.04 s; the Fig. 5 dive (15 MB) 5.55–5.78 s
+/// against 5.65–5.68 s, nothing for 12 MB more memory, so it stays in place; a small run on
+/// one thread, as `fit` runs it, was 10–20 % slower out of place (four fields of 1.7 MB no
+/// longer stay in the core's 2 MB L2).
+const OUT_OF_PLACE_BYTES: usize = 12 << 20;
+
 /// Points sampled over all bubbles in one round from which [`Simulation::all_fluxes`] runs the
 /// bubbles in parallel (below, a thread's wake-up costs more than it saves: 64 points take a
 /// few µs).
@@ -404,6 +414,14 @@ pub struct Simulation<'a> {
     pub(super) fields: Vec<Vec<f64>>,
     /// The field before the step, for the field's error estimate (allocated when that is on).
     scratch: Vec<f64>,
+    /// The explicit steps' second set of fields (one per gas) when stepped out of place
+    /// ([`OUT_OF_PLACE_BYTES`]): each step writes the new values of the inside cells here and
+    /// swaps it with `fields`. Its outside cells equal `fields`' since the codes `back_codes`
+    /// ([`Grid::codes_id`]); it is copied again from `fields` when the codes change.
+    back: Vec<Vec<f64>>,
+    back_codes: u64,
+    /// [`OUT_OF_PLACE_BYTES`] (a field so that a test can step in place).
+    out_of_place_bytes: usize,
     /// The implicit step's line plan and factor table ([`diffusion::ImplicitSolver`]).
     implicit: diffusion::ImplicitSolver,
     /// Per gas, the change of every cell by diffusion in the last step (mol/m³), for the
@@ -549,6 +567,9 @@ impl<'a> Simulation<'a> {
         let mut sim = Simulation {
             params,
             scratch: Vec::new(),
+            back: Vec::new(),
+            back_codes: 0,
+            out_of_place_bytes: OUT_OF_PLACE_BYTES,
             implicit: diffusion::ImplicitSolver::new(),
             last_change: Vec::new(),
             last_dt: 0.0,
@@ -1625,15 +1646,19 @@ impl<'a> Simulation<'a> {
                 *dc = (self.diffusivity[g], cb);
             }
             let mut inflow = [0.0; Gas::ALL.len()];
-            let mut fields: Vec<&mut [f64]> =
-                self.fields.iter_mut().map(|f| f.as_mut_slice()).collect();
-            diffusion::explicit_steps_in_place(
-                &self.grid,
-                &mut fields,
-                &dc[..ng],
-                dt,
-                &mut inflow[..ng],
-            );
+            if self.fields_bytes() <= self.out_of_place_bytes && rayon::current_num_threads() > 1 {
+                self.explicit_steps_out_of_place(&dc[..ng], dt, &mut inflow[..ng]);
+            } else {
+                let mut fields: Vec<&mut [f64]> =
+                    self.fields.iter_mut().map(|f| f.as_mut_slice()).collect();
+                diffusion::explicit_steps_in_place(
+                    &self.grid,
+                    &mut fields,
+                    &dc[..ng],
+                    dt,
+                    &mut inflow[..ng],
+                );
+            }
             for (g, x) in inflow[..ng].iter().enumerate() {
                 self.inflow += x * h3;
                 self.step_flow[g] = x * h3;
@@ -1689,6 +1714,36 @@ impl<'a> Simulation<'a> {
             self.last_dt = dt;
         }
         (implicit, err)
+    }
+
+    /// The bytes of one set of fields (every gas).
+    fn fields_bytes(&self) -> usize {
+        self.grid.len() * self.fields.len() * std::mem::size_of::<f64>()
+    }
+
+    /// Every gas's explicit step from `fields` into `back`, then the two swapped: the same
+    /// bits as [`diffusion::explicit_steps_in_place`] (test
+    /// `out_of_place_explicit_steps_are_the_in_place_bits`), without that step's copy of every
+    /// plane's old values. `back` is brought level with `fields` first when the grid's codes
+    /// changed since it last was (a cell taken out of the gel is zeroed in `fields` only), so
+    /// the cells the step does not write, those outside the gel, hold the values they would
+    /// hold in place.
+    fn explicit_steps_out_of_place(&mut self, dc: &[(f64, f64)], dt: f64, inflow: &mut [f64]) {
+        let id = self.grid.codes_id();
+        if self.back.len() != self.fields.len() || self.back_codes != id {
+            self.back.resize_with(self.fields.len(), Vec::new);
+            for (b, f) in self.back.iter_mut().zip(&self.fields) {
+                b.clear();
+                b.extend_from_slice(f);
+            }
+            self.back_codes = id;
+        }
+        {
+            let src: Vec<&[f64]> = self.fields.iter().map(|f| f.as_slice()).collect();
+            let mut dst: Vec<&mut [f64]> = self.back.iter_mut().map(|f| f.as_mut_slice()).collect();
+            diffusion::explicit_steps_into(&self.grid, &src, &mut dst, dc, dt, inflow);
+        }
+        std::mem::swap(&mut self.fields, &mut self.back);
     }
 
     /// Gas `g`'s implicit step over [t, t + dt] Richardson-extrapolated, 2·u_½ − u_1 from two
@@ -2643,6 +2698,92 @@ mod extrapolated_step_tests {
         assert!(got.iter().all(|c| *c >= 0.0));
         for (g, h) in got.iter().zip(&half) {
             assert!((g - h).abs() <= 1e-12 * h.abs().max(1e-30), "{g} {h}");
+        }
+    }
+}
+
+#[cfg(test)]
+mod out_of_place_tests {
+    use super::*;
+    use crate::gas::GasMix;
+
+    /// The explicit steps out of place (into a second set of fields, swapped) give the in-place
+    /// steps' bits through a run in which bubbles grow over cells of the gel and give them back
+    /// (the gel's displacement takes cells out, which changes the codes and zeroes those cells
+    /// in one set only, then a recompression shrinks the bubbles): three bubbles in an open box;
+    /// every frame's radii, contents and gel tensions, the step counts, the gas balance and the
+    /// final fields compared bit by bit.
+    #[test]
+    fn out_of_place_explicit_steps_are_the_in_place_bits() {
+        let h = 1e-4;
+        let mut params = PhantomParams::box_phantom([3.0e-3, 2.0e-3, 2.0e-3], h);
+        params.open_faces = params.shape.faces().to_vec();
+        params.bubbles = BubblePlacement::Explicit(vec![
+            ([0.9e-3, 1.0e-3, 1.0e-3], 3.0e-4),
+            ([1.5e-3, 1.0e-3, 1.0e-3], 2.5e-4),
+            ([2.4e-3, 0.9e-3, 1.1e-3], 3.5e-4),
+        ]);
+        params.numerics.record_interval = 0.0;
+        let air = GasMix { o2: 0.21, he: 0.0 };
+        let profile = PressureHistory::with_gas(
+            "surface",
+            vec![0.0, 10.0, 40.0, 45.0, 90.0],
+            vec![2e5, 1e5, 1e5, 3e5, 3e5],
+            air,
+            0.0,
+        )
+        .unwrap();
+        let run = |out_of_place: bool| {
+            let mut sim = Simulation::new(&params, &profile).unwrap();
+            if !out_of_place {
+                sim.out_of_place_bytes = 0;
+            }
+            let start_codes = sim.grid.codes_id();
+            let mut rec = Recorder::default();
+            // out of place only with more than one thread in the grid loops
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(2)
+                .build()
+                .unwrap();
+            let summary = pool.install(|| sim.run(&profile, &mut rec)).unwrap();
+            assert_ne!(
+                sim.grid.codes_id(),
+                start_codes,
+                "no cell was taken out of the gel"
+            );
+            assert_eq!(sim.back.is_empty(), !out_of_place);
+            (summary, rec.frames, sim.fields.clone(), sim.grid.clone())
+        };
+        let (ps, inplace, pf, grid) = run(false);
+        let (os, outplace, of, _) = run(true);
+        assert!(ps.steps.0 > 20, "{:?}", ps.steps);
+        assert_eq!(ps.steps, os.steps);
+        assert_eq!(
+            ps.gas_balance_error.to_bits(),
+            os.gas_balance_error.to_bits()
+        );
+        assert_eq!(inplace.len(), outplace.len());
+        for (a, b) in inplace.iter().zip(&outplace) {
+            assert_eq!(a.time.to_bits(), b.time.to_bits());
+            for (x, y) in a.bubbles.iter().zip(&b.bubbles) {
+                assert_eq!(x.radius.to_bits(), y.radius.to_bits(), "t = {}", a.time);
+                assert_eq!(
+                    x.gel_tension.to_bits(),
+                    y.gel_tension.to_bits(),
+                    "t = {}",
+                    a.time
+                );
+                for (m, n) in x.moles.iter().zip(&y.moles) {
+                    assert_eq!(m.to_bits(), n.to_bits(), "t = {}", a.time);
+                }
+            }
+        }
+        for (f, g) in pf.iter().zip(&of) {
+            for idx in 0..grid.len() {
+                if grid.inside(idx) {
+                    assert_eq!(f[idx].to_bits(), g[idx].to_bits(), "cell {idx}");
+                }
+            }
         }
     }
 }
