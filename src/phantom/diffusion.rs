@@ -238,23 +238,31 @@ fn explicit_step_with(
     isa: Isa,
 ) -> f64 {
     let r = d * dt / (grid.h * grid.h);
+    let plane = grid.n[0] * grid.n[1];
+    out.par_chunks_mut(plane)
+        .enumerate()
+        .for_each(|(k, slab)| step_plane_from(grid, u, k, slab, r, cb, isa));
+    explicit_inflow(grid, u, r, cb)
+}
+
+/// The new values of z-plane `k`'s inside cells into `out` (the plane's slice) from the whole
+/// field `u` before the step ([`stencil_plane`] with the plane and its neighbours).
+#[allow(clippy::too_many_arguments)]
+fn step_plane_from(grid: &Grid, u: &[f64], k: usize, out: &mut [f64], r: f64, cb: f64, isa: Isa) {
     let [nx, ny, nz] = grid.n;
     let plane = nx * ny;
-    out.par_chunks_mut(plane).enumerate().for_each(|(k, slab)| {
-        let zm = if k > 0 {
-            &u[(k - 1) * plane..k * plane]
-        } else {
-            &[]
-        };
-        let zp = if k + 1 < nz {
-            &u[(k + 1) * plane..(k + 2) * plane]
-        } else {
-            &[]
-        };
-        let c = &u[k * plane..(k + 1) * plane];
-        stencil_plane(grid, k, zm, c, zp, slab, r, cb, isa);
-    });
-    explicit_inflow(grid, u, r, cb)
+    let zm = if k > 0 {
+        &u[(k - 1) * plane..k * plane]
+    } else {
+        &[]
+    };
+    let zp = if k + 1 < nz {
+        &u[(k + 1) * plane..(k + 2) * plane]
+    } else {
+        &[]
+    };
+    let c = &u[k * plane..(k + 1) * plane];
+    stencil_plane(grid, k, zm, c, zp, out, r, cb, isa);
 }
 
 /// Blocks of z-planes per thread in [`explicit_step_in_place`] (one task each): more balance
@@ -329,19 +337,7 @@ pub fn explicit_steps_into(
         .enumerate()
         .for_each(|(k, mut outs)| {
             for (f, out) in outs.iter_mut().enumerate() {
-                let u = src[f];
-                let zm = if k > 0 {
-                    &u[(k - 1) * plane..k * plane]
-                } else {
-                    &[]
-                };
-                let zp = if k + 1 < nz {
-                    &u[(k + 1) * plane..(k + 2) * plane]
-                } else {
-                    &[]
-                };
-                let c = &u[k * plane..(k + 1) * plane];
-                stencil_plane(grid, k, zm, c, zp, out, r[f], dc[f].1, isa);
+                step_plane_from(grid, src[f], k, out, r[f], dc[f].1, isa);
             }
         });
 }
@@ -1387,31 +1383,13 @@ unsafe fn mid_fwd(
     e: usize,
 ) {
     #[cfg(target_arch = "x86_64")]
-    {
-        let done = match isa {
-            Isa::Avx512 => mid_fwd_avx512(cur, prev, ix, inv, r, s, e),
-            Isa::Avx2 => mid_fwd_avx2(cur, prev, ix, inv, r, s, e),
-            Isa::Portable => s,
-        };
-        mid_fwd_scalar(cur, prev, ix, inv, r, done, e);
-    }
+    let s = match isa {
+        Isa::Avx512 => mid_fwd_avx512(cur, prev, ix, inv, r, s, e),
+        Isa::Avx2 => mid_fwd_avx2(cur, prev, ix, inv, r, s, e),
+        Isa::Portable => s,
+    };
     #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = isa;
-        mid_fwd_scalar(cur, prev, ix, inv, r, s, e);
-    }
-}
-
-#[inline(always)]
-unsafe fn mid_fwd_scalar(
-    cur: *mut f64,
-    prev: *const f64,
-    ix: *const u16,
-    inv: *const f64,
-    r: f64,
-    s: usize,
-    e: usize,
-) {
+    let _ = isa;
     for i in s..e {
         let rhs = *cur.add(i) + r * *prev.add(i);
         *cur.add(i) = rhs * *inv.add(*ix.add(i) as usize);
@@ -1433,136 +1411,115 @@ unsafe fn mid_back(
     e: usize,
 ) {
     #[cfg(target_arch = "x86_64")]
-    {
-        let done = match isa {
-            Isa::Avx512 => mid_back_avx512(cur, next, ix, cneg, s, e),
-            Isa::Avx2 => mid_back_avx2(cur, next, ix, cneg, s, e),
-            Isa::Portable => s,
-        };
-        mid_back_scalar(cur, next, ix, cneg, done, e);
-    }
+    let s = match isa {
+        Isa::Avx512 => mid_back_avx512(cur, next, ix, cneg, s, e),
+        Isa::Avx2 => mid_back_avx2(cur, next, ix, cneg, s, e),
+        Isa::Portable => s,
+    };
     #[cfg(not(target_arch = "x86_64"))]
-    {
-        let _ = isa;
-        mid_back_scalar(cur, next, ix, cneg, s, e);
-    }
-}
-
-#[inline(always)]
-unsafe fn mid_back_scalar(
-    cur: *mut f64,
-    next: *const f64,
-    ix: *const u16,
-    cneg: *const f64,
-    s: usize,
-    e: usize,
-) {
+    let _ = isa;
     for i in s..e {
         *cur.add(i) -= *cneg.add(*ix.add(i) as usize) * *next.add(i);
     }
 }
 
-/// [`mid_fwd_scalar`] eight cells at a time with gathered pivots (the same operations per
-/// cell, so the same bits); returns where the scalar tail starts.
+/// The vector forms of [`mid_fwd`] and [`mid_back`] for one instruction set:
+/// `$lanes` cells at a time with the pivots or weights gathered (the same operations per
+/// cell, so the same bits); each returns where the scalar tail starts.
+macro_rules! gathered_mid_runs {
+    ($feature:literal, $fwd:ident, $back:ident, $lanes:literal, $gather:ident,
+     $set1:ident, $load:ident, $store:ident, $add:ident, $sub:ident, $mul:ident) => {
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $feature)]
+        unsafe fn $fwd(
+            cur: *mut f64,
+            prev: *const f64,
+            ix: *const u16,
+            inv: *const f64,
+            r: f64,
+            s: usize,
+            e: usize,
+        ) -> usize {
+            use std::arch::x86_64::*;
+            let rv = $set1(r);
+            let mut i = s;
+            while i + $lanes <= e {
+                let f = $gather(ix.add(i), inv);
+                let p = $mul(rv, $load(prev.add(i)));
+                let rhs = $add($load(cur.add(i)), p);
+                $store(cur.add(i), $mul(rhs, f));
+                i += $lanes;
+            }
+            i
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $feature)]
+        unsafe fn $back(
+            cur: *mut f64,
+            next: *const f64,
+            ix: *const u16,
+            cneg: *const f64,
+            s: usize,
+            e: usize,
+        ) -> usize {
+            use std::arch::x86_64::*;
+            let mut i = s;
+            while i + $lanes <= e {
+                let w = $gather(ix.add(i), cneg);
+                let t = $mul(w, $load(next.add(i)));
+                $store(cur.add(i), $sub($load(cur.add(i)), t));
+                i += $lanes;
+            }
+            i
+        }
+    };
+}
+
+/// Eight table entries at the u16 indices `ix[0..8]`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
-unsafe fn mid_fwd_avx512(
-    cur: *mut f64,
-    prev: *const f64,
-    ix: *const u16,
-    inv: *const f64,
-    r: f64,
-    s: usize,
-    e: usize,
-) -> usize {
+unsafe fn gather8(ix: *const u16, table: *const f64) -> std::arch::x86_64::__m512d {
     use std::arch::x86_64::*;
-    let rv = _mm512_set1_pd(r);
-    let mut i = s;
-    while i + 8 <= e {
-        let k = _mm512_cvtepu16_epi64(_mm_loadu_si128(ix.add(i) as *const __m128i));
-        let f = _mm512_i64gather_pd::<8>(k, inv);
-        let p = _mm512_mul_pd(rv, _mm512_loadu_pd(prev.add(i)));
-        let rhs = _mm512_add_pd(_mm512_loadu_pd(cur.add(i)), p);
-        _mm512_storeu_pd(cur.add(i), _mm512_mul_pd(rhs, f));
-        i += 8;
-    }
-    i
+    let k = _mm512_cvtepu16_epi64(_mm_loadu_si128(ix as *const __m128i));
+    _mm512_i64gather_pd::<8>(k, table)
 }
 
-/// [`mid_back_scalar`] eight cells at a time with gathered weights; returns where the scalar
-/// tail starts.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-unsafe fn mid_back_avx512(
-    cur: *mut f64,
-    next: *const f64,
-    ix: *const u16,
-    cneg: *const f64,
-    s: usize,
-    e: usize,
-) -> usize {
-    use std::arch::x86_64::*;
-    let mut i = s;
-    while i + 8 <= e {
-        let k = _mm512_cvtepu16_epi64(_mm_loadu_si128(ix.add(i) as *const __m128i));
-        let w = _mm512_i64gather_pd::<8>(k, cneg);
-        let t = _mm512_mul_pd(w, _mm512_loadu_pd(next.add(i)));
-        _mm512_storeu_pd(cur.add(i), _mm512_sub_pd(_mm512_loadu_pd(cur.add(i)), t));
-        i += 8;
-    }
-    i
-}
-
-/// [`mid_fwd_scalar`] four cells at a time with gathered pivots; returns where the scalar
-/// tail starts.
+/// Four table entries at the u16 indices `ix[0..4]`.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn mid_fwd_avx2(
-    cur: *mut f64,
-    prev: *const f64,
-    ix: *const u16,
-    inv: *const f64,
-    r: f64,
-    s: usize,
-    e: usize,
-) -> usize {
+unsafe fn gather4(ix: *const u16, table: *const f64) -> std::arch::x86_64::__m256d {
     use std::arch::x86_64::*;
-    let rv = _mm256_set1_pd(r);
-    let mut i = s;
-    while i + 4 <= e {
-        let k = _mm_cvtepu16_epi32(_mm_loadl_epi64(ix.add(i) as *const __m128i));
-        let f = _mm256_i32gather_pd::<8>(inv, k);
-        let p = _mm256_mul_pd(rv, _mm256_loadu_pd(prev.add(i)));
-        let rhs = _mm256_add_pd(_mm256_loadu_pd(cur.add(i)), p);
-        _mm256_storeu_pd(cur.add(i), _mm256_mul_pd(rhs, f));
-        i += 4;
-    }
-    i
+    let k = _mm_cvtepu16_epi32(_mm_loadl_epi64(ix as *const __m128i));
+    _mm256_i32gather_pd::<8>(table, k)
 }
 
-/// [`mid_back_scalar`] four cells at a time with gathered weights; returns where the scalar
-/// tail starts.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn mid_back_avx2(
-    cur: *mut f64,
-    next: *const f64,
-    ix: *const u16,
-    cneg: *const f64,
-    s: usize,
-    e: usize,
-) -> usize {
-    use std::arch::x86_64::*;
-    let mut i = s;
-    while i + 4 <= e {
-        let k = _mm_cvtepu16_epi32(_mm_loadl_epi64(ix.add(i) as *const __m128i));
-        let w = _mm256_i32gather_pd::<8>(cneg, k);
-        let t = _mm256_mul_pd(w, _mm256_loadu_pd(next.add(i)));
-        _mm256_storeu_pd(cur.add(i), _mm256_sub_pd(_mm256_loadu_pd(cur.add(i)), t));
-        i += 4;
-    }
-    i
-}
+gathered_mid_runs!(
+    "avx512f",
+    mid_fwd_avx512,
+    mid_back_avx512,
+    8,
+    gather8,
+    _mm512_set1_pd,
+    _mm512_loadu_pd,
+    _mm512_storeu_pd,
+    _mm512_add_pd,
+    _mm512_sub_pd,
+    _mm512_mul_pd
+);
+gathered_mid_runs!(
+    "avx2",
+    mid_fwd_avx2,
+    mid_back_avx2,
+    4,
+    gather4,
+    _mm256_set1_pd,
+    _mm256_loadu_pd,
+    _mm256_storeu_pd,
+    _mm256_add_pd,
+    _mm256_sub_pd,
+    _mm256_mul_pd
+);
 
 /// The forward elimination of a broadcast run of `n` cells: the generic sweep's operations,
 /// with the terms the row has.

@@ -2560,6 +2560,45 @@ mod field_error_tests {
     }
 }
 
+/// Three bubbles in a 3 × 2 × 2 mm box open on every face, grid step `h`, a frame at every
+/// step: two of them so close that their coupling spheres overlap once they grow, one far from
+/// both (the bit-for-bit tests of the parallel fluxes and the out-of-place steps).
+#[cfg(test)]
+fn three_bubbles_in_an_open_box(h: f64) -> PhantomParams {
+    let mut params = PhantomParams::box_phantom([3.0e-3, 2.0e-3, 2.0e-3], h);
+    params.open_faces = params.shape.faces().to_vec();
+    params.bubbles = BubblePlacement::Explicit(vec![
+        ([0.9e-3, 1.0e-3, 1.0e-3], 3.0e-4),
+        ([1.5e-3, 1.0e-3, 1.0e-3], 2.5e-4),
+        ([2.4e-3, 0.9e-3, 1.1e-3], 3.5e-4),
+    ]);
+    params.numerics.record_interval = 0.0;
+    params
+}
+
+/// Every frame of `a` and `b` the same bits: time, and each bubble's radius, gel tension and
+/// content.
+#[cfg(test)]
+fn assert_same_frame_bits(a: &[Frame], b: &[Frame]) {
+    assert_eq!(a.len(), b.len());
+    for (a, b) in a.iter().zip(b) {
+        assert_eq!(a.time.to_bits(), b.time.to_bits());
+        assert_eq!(a.bubbles.len(), b.bubbles.len());
+        for (x, y) in a.bubbles.iter().zip(&b.bubbles) {
+            assert_eq!(x.radius.to_bits(), y.radius.to_bits(), "t = {}", a.time);
+            assert_eq!(
+                x.gel_tension.to_bits(),
+                y.gel_tension.to_bits(),
+                "t = {}",
+                a.time
+            );
+            for (m, n) in x.moles.iter().zip(&y.moles) {
+                assert_eq!(m.to_bits(), n.to_bits(), "t = {}", a.time);
+            }
+        }
+    }
+}
+
 #[cfg(test)]
 mod parallel_fluxes_tests {
     use super::*;
@@ -2573,14 +2612,7 @@ mod parallel_fluxes_tests {
     #[test]
     fn parallel_fluxes_are_the_serial_fluxes_bits() {
         let h = 1e-4;
-        let mut params = PhantomParams::box_phantom([3.0e-3, 2.0e-3, 2.0e-3], h);
-        params.open_faces = params.shape.faces().to_vec();
-        params.bubbles = BubblePlacement::Explicit(vec![
-            ([0.9e-3, 1.0e-3, 1.0e-3], 3.0e-4),
-            ([1.5e-3, 1.0e-3, 1.0e-3], 2.5e-4),
-            ([2.4e-3, 0.9e-3, 1.1e-3], 3.5e-4),
-        ]);
-        params.numerics.record_interval = 0.0;
+        let params = three_bubbles_in_an_open_box(h);
         // supersaturated gel: a 2 bar air dive's gas at the surface
         let air = GasMix { o2: 0.21, he: 0.0 };
         let profile = PressureHistory::with_gas(
@@ -2609,22 +2641,7 @@ mod parallel_fluxes_tests {
         let (r0, r1) = (last.bubbles[0].radius, last.bubbles[1].radius);
         assert!(r0 + r1 + 4.0 * h > 0.6e-3, "{r0} {r1}");
         assert_eq!(serial.len(), parallel.len());
-        for (a, b) in serial.iter().zip(&parallel) {
-            assert_eq!(a.time.to_bits(), b.time.to_bits());
-            assert_eq!(a.bubbles.len(), b.bubbles.len());
-            for (x, y) in a.bubbles.iter().zip(&b.bubbles) {
-                assert_eq!(x.radius.to_bits(), y.radius.to_bits(), "t = {}", a.time);
-                assert_eq!(
-                    x.gel_tension.to_bits(),
-                    y.gel_tension.to_bits(),
-                    "t = {}",
-                    a.time
-                );
-                for (m, n) in x.moles.iter().zip(&y.moles) {
-                    assert_eq!(m.to_bits(), n.to_bits(), "t = {}", a.time);
-                }
-            }
-        }
+        assert_same_frame_bits(&serial, &parallel);
     }
 }
 
@@ -2715,15 +2732,7 @@ mod out_of_place_tests {
     /// final fields compared bit by bit.
     #[test]
     fn out_of_place_explicit_steps_are_the_in_place_bits() {
-        let h = 1e-4;
-        let mut params = PhantomParams::box_phantom([3.0e-3, 2.0e-3, 2.0e-3], h);
-        params.open_faces = params.shape.faces().to_vec();
-        params.bubbles = BubblePlacement::Explicit(vec![
-            ([0.9e-3, 1.0e-3, 1.0e-3], 3.0e-4),
-            ([1.5e-3, 1.0e-3, 1.0e-3], 2.5e-4),
-            ([2.4e-3, 0.9e-3, 1.1e-3], 3.5e-4),
-        ]);
-        params.numerics.record_interval = 0.0;
+        let params = three_bubbles_in_an_open_box(1e-4);
         let air = GasMix { o2: 0.21, he: 0.0 };
         let profile = PressureHistory::with_gas(
             "surface",
@@ -2763,21 +2772,7 @@ mod out_of_place_tests {
             os.gas_balance_error.to_bits()
         );
         assert_eq!(inplace.len(), outplace.len());
-        for (a, b) in inplace.iter().zip(&outplace) {
-            assert_eq!(a.time.to_bits(), b.time.to_bits());
-            for (x, y) in a.bubbles.iter().zip(&b.bubbles) {
-                assert_eq!(x.radius.to_bits(), y.radius.to_bits(), "t = {}", a.time);
-                assert_eq!(
-                    x.gel_tension.to_bits(),
-                    y.gel_tension.to_bits(),
-                    "t = {}",
-                    a.time
-                );
-                for (m, n) in x.moles.iter().zip(&y.moles) {
-                    assert_eq!(m.to_bits(), n.to_bits(), "t = {}", a.time);
-                }
-            }
-        }
+        assert_same_frame_bits(&inplace, &outplace);
         for (f, g) in pf.iter().zip(&of) {
             for idx in 0..grid.len() {
                 if grid.inside(idx) {
