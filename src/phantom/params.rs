@@ -116,9 +116,13 @@ pub struct Numerics {
     /// costs about a third of the run.
     pub record_gel: bool,
     /// Cost of an implicit step in explicit steps: a step between the explicit limit and this
-    /// many times it is cut to the explicit limit instead. Default 8 (`cargo bench --bench
-    /// kernel`: 148 against 1 133 M cell-updates/s on 128×128×32, a ratio of 7.7). 1 = always
-    /// implicit above the limit.
+    /// many times it is cut to the explicit limit instead. Default 8, set when the kernels'
+    /// ratio was 7.7 (`cargo bench --bench kernel`: 148 against 1 133 M cell-updates/s on
+    /// 128×128×32) and kept for accuracy since: the kernels' ratio is now about 2–3, but at 4
+    /// and 3 two verification figures near growing bubbles leave their tolerances, and with no
+    /// bubble exchanging, 3 and 2 moved the demo's peak supersaturation away from the
+    /// all-explicit reference (README, "Time stepping" and "Speed"). 1 = always implicit above
+    /// the limit.
     pub implicit_cost_ratio: f64,
     /// Bubbles displace the gel ([`super::displacement`], issue 8 item 5): a bubble of radius
     /// at least `displace_min_cells`·h takes the cells inside it out of the gel and pushes the
