@@ -339,7 +339,7 @@ pub struct SimulateArgs {
     /// Testing: save a checkpoint after step N, then stop as if interrupted.
     #[arg(long, value_name = "N", hide = true)]
     pub checkpoint_at_step: Option<usize>,
-    /// Also write steps.csv: every time step the loop took, the scheme, the limit that set its length and the error estimates (for studying the time stepping).
+    /// Also write steps.csv: every time step the loop took, the scheme, the limit that set its length, the error estimates and the wall time (for studying the time stepping).
     #[arg(long)]
     pub trace_steps: bool,
 }

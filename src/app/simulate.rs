@@ -60,13 +60,26 @@ pub struct SimRun {
     pub resumed_at: Option<f64>,
     /// Every step the loop took (only when asked: `--trace-steps`; of a resumed run, the
     /// steps after the checkpoint).
-    pub steps: Vec<StepRecord>,
+    pub steps: Vec<TracedStep>,
+}
+
+/// A step as `--trace-steps` keeps it: the loop's record and the wall time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TracedStep {
+    /// What the loop reported.
+    pub record: StepRecord,
+    /// Wall time since the run (or its continuation) started when the step's physics was
+    /// done, s: the difference between two steps is the later step's cost, with the frame
+    /// recorded after the earlier one.
+    pub wall_s: f64,
 }
 
 struct WithProgress<'a> {
     rec: Recorder,
     /// The steps taken, when they are traced.
-    steps: Option<Vec<StepRecord>>,
+    steps: Option<Vec<TracedStep>>,
+    /// When the run started (the steps' wall times count from it).
+    start: std::time::Instant,
     progress: &'a mut (dyn FnMut(f64, f64) + Send),
     stop: Option<&'a AtomicBool>,
     checkpointer: Option<&'a mut Checkpointer>,
@@ -84,7 +97,10 @@ impl Observer for WithProgress<'_> {
     }
     fn step(&mut self, step: &StepRecord) {
         if let Some(steps) = &mut self.steps {
-            steps.push(*step);
+            steps.push(TracedStep {
+                record: *step,
+                wall_s: self.start.elapsed().as_secs_f64(),
+            });
         }
     }
     fn progress(&mut self, time: f64, end: f64) {
@@ -161,6 +177,7 @@ pub fn simulate_checkpointed(
     let mut obs = WithProgress {
         rec: Recorder::default(),
         steps: trace.then(Vec::new),
+        start,
         progress,
         stop,
         checkpointer: checkpointer.as_deref_mut(),
@@ -469,12 +486,13 @@ fn plot_err(e: impl std::fmt::Display) -> Error {
 /// `steps.csv`: one row per step the loop took (`--trace-steps`): its start and length, the
 /// scheme, the limit that set it, the step the physics allowed, the bubbles' error estimate
 /// over it as a fraction of their tolerance, the next steps the three error estimates allow
-/// (`inf`: no limit), and the bubble that gave the error estimate (empty without one) with
+/// (`inf`: no limit), the wall time since the run started ([`TracedStep::wall_s`]: not a
+/// result, it differs from run to run), and the bubble that gave the error estimate (empty without one) with
 /// its flux of each gas at the start and at the end of the step (mol/s, positive into the
 /// bubble; the end is the corrector's, before its correction).
-pub fn steps_csv(steps: &[StepRecord], gases: &[Gas]) -> String {
+pub fn steps_csv(steps: &[TracedStep], gases: &[Gas]) -> String {
     let mut s = String::from(
-        "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,next_loading_dt_s,bubble",
+        "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,next_loading_dt_s,wall_s,bubble",
     );
     for when in ["start", "end"] {
         for g in gases {
@@ -482,9 +500,10 @@ pub fn steps_csv(steps: &[StepRecord], gases: &[Gas]) -> String {
         }
     }
     s.push('\n');
-    for r in steps {
+    for t in steps {
+        let r = &t.record;
         s.push_str(&format!(
-            "{:.6},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},",
+            "{:.6},{:.6e},{},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6},",
             r.time,
             r.dt,
             r.scheme.name(),
@@ -493,7 +512,8 @@ pub fn steps_csv(steps: &[StepRecord], gases: &[Gas]) -> String {
             r.bubble_error,
             r.next_bubble_dt,
             r.next_field_dt,
-            r.next_loading_dt
+            r.next_loading_dt,
+            t.wall_s
         ));
         if let Some(b) = r.bubble {
             s.push_str(&b.to_string());

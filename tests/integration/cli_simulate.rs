@@ -496,7 +496,7 @@ fn traced_fluxes_are_the_ones_that_moved_the_bubbles_gas() {
     );
     let mut checked = 0;
     for (k, s) in steps.iter().enumerate() {
-        let (dt, bubble) = (s[1], s[9]);
+        let (dt, bubble) = (s[1], s[10]);
         let (before, after) = (&frames[k], &frames[k + 1]);
         assert!(
             (after[0] - (s[0] + dt)).abs() < 1e-5,
@@ -507,7 +507,7 @@ fn traced_fluxes_are_the_ones_that_moved_the_bubbles_gas() {
         }
         assert_eq!(bubble, 0.0);
         for g in 0..2 {
-            let moved = 0.5 * (s[10 + g] + s[12 + g]) * dt;
+            let moved = 0.5 * (s[11 + g] + s[13 + g]) * dt;
             let change = after[5 + g] - before[5 + g];
             let tol = 1e-5 * moved.abs() + 2e-9 * before[5 + g];
             assert!(
@@ -522,7 +522,7 @@ fn traced_fluxes_are_the_ones_that_moved_the_bubbles_gas() {
     assert!(checked > 50, "only {checked} steps had a bubble");
     // the decompression makes the bubble grow: nitrogen goes in after the ramp
     let last = steps.last().unwrap();
-    assert!(last[10] > 0.0 && last[12] > 0.0, "{last:?}");
+    assert!(last[11] > 0.0 && last[13] > 0.0, "{last:?}");
 }
 
 #[test]
@@ -548,8 +548,8 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
     assert_eq!(
         lines.next().unwrap(),
         "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,\
-         next_loading_dt_s,bubble,flux_start_n2_mol_s,flux_start_o2_mol_s,flux_end_n2_mol_s,\
-         flux_end_o2_mol_s"
+         next_loading_dt_s,wall_s,bubble,flux_start_n2_mol_s,flux_start_o2_mol_s,\
+         flux_end_n2_mol_s,flux_end_o2_mol_s"
     );
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
@@ -561,7 +561,16 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
     let num = |s: &str| -> f64 { s.parse().unwrap() };
     let lim = (100e-6f64).powi(2) / (9.0 * 2.5e-9);
     let (mut t, mut explicit, mut cut) = (0.0, 0, 0);
+    // the wall time counts up from the run's start and ends within the run's own (timing.toml)
+    let timing: toml::Table = std::fs::read_to_string(out.join("timing.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let mut wall = 0.0;
     for r in &rows {
+        let w = num(&r[9]);
+        assert!(w >= wall, "the wall time went back from {wall} to {w} s");
+        wall = w;
         let (start, dt, physics) = (num(&r[0]), num(&r[1]), num(&r[4]));
         assert!(
             (start - t).abs() < 1e-5,
@@ -584,6 +593,12 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
     }
     assert_eq!(explicit, count("steps_explicit"));
     assert!(cut > 0, "no step was cut to the explicit limit");
+    assert!(wall > 0.0);
+    let run_wall = timing["wall_seconds"].as_float().unwrap();
+    assert!(
+        wall <= run_wall,
+        "{wall} s of steps in a run of {run_wall} s"
+    );
     assert!((t - 2500.0).abs() < 1e-3, "the steps end at {t} s");
     // without the flag there is no steps.csv
     let plain = dir.join("plain");
