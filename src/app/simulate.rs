@@ -487,9 +487,9 @@ fn plot_err(e: impl std::fmt::Display) -> Error {
 /// scheme, the limit that set it, the step the physics allowed, the bubbles' error estimate
 /// over it as a fraction of their tolerance, the next steps the three error estimates allow
 /// (`inf`: no limit), the wall time since the run started ([`TracedStep::wall_s`]: not a
-/// result, it differs from run to run), and the bubble that gave the error estimate (empty without one) with
-/// its flux of each gas at the start and at the end of the step (mol/s, positive into the
-/// bubble; the end is the corrector's, before its correction).
+/// result, it differs from run to run), and the bubble that gave the error estimate (empty
+/// without one) with its flux of each gas at the start and at the end of the step (mol/s,
+/// positive into the bubble; the end is the corrector's, before its correction).
 pub fn steps_csv(steps: &[TracedStep], gases: &[Gas]) -> String {
     let mut s = String::from(
         "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,next_loading_dt_s,wall_s,bubble",

@@ -47,9 +47,10 @@
 //! generic sweep's terms; stretches of middle rows (linked, no open face) look up only the
 //! pivot and the back-substitution weight per cell (gathered, 8 or 4 cells per instruction
 //! with AVX-512 or AVX2); the rest looks up the full factor row per cell (its back
-//! substitution gathered the same way); cells outside are skipped. The inner loops are compiled three times (baseline,
-//! AVX2, AVX-512F via `#[target_feature]`, no FMA: Rust never contracts) and the best the
-//! CPU has is picked at run time; all variants are tested against the generic sweep.
+//! substitution gathered the same way); cells outside are skipped. The inner loops are
+//! compiled three times (baseline, AVX2, AVX-512F via `#[target_feature]`, no FMA: Rust never
+//! contracts) and the best the CPU has is picked at run time; all variants are tested
+//! against the generic sweep.
 
 use super::grid::{Grid, INSIDE_BIT, SIDE_INTERIOR, SIDE_OPEN, SIDE_SEALED};
 use rayon::prelude::*;
