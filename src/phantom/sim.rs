@@ -2593,6 +2593,21 @@ fn three_bubbles_in_an_open_box(h: f64) -> PhantomParams {
     params
 }
 
+/// Air at 2 bar, to 1 bar in 10 s (the bubbles of [`three_bubbles_in_an_open_box`] grow), held
+/// to 40 s, to 3 bar in 5 s (they shrink and give cells back), held to `end` s.
+#[cfg(test)]
+fn grow_then_recompress(end: f64) -> PressureHistory {
+    let air = crate::gas::GasMix { o2: 0.21, he: 0.0 };
+    PressureHistory::with_gas(
+        "surface",
+        vec![0.0, 10.0, 40.0, 45.0, end],
+        vec![2e5, 1e5, 1e5, 3e5, 3e5],
+        air,
+        0.0,
+    )
+    .unwrap()
+}
+
 /// Every frame of `a` and `b` the same bits: time, and each bubble's radius, gel tension and
 /// content.
 #[cfg(test)]
@@ -2739,7 +2754,6 @@ mod extrapolated_step_tests {
 #[cfg(test)]
 mod out_of_place_tests {
     use super::*;
-    use crate::gas::GasMix;
 
     /// The explicit steps out of place (into a second set of fields, swapped) give the in-place
     /// steps' bits through a run in which bubbles grow over cells of the gel and give them back
@@ -2750,15 +2764,7 @@ mod out_of_place_tests {
     #[test]
     fn out_of_place_explicit_steps_are_the_in_place_bits() {
         let params = three_bubbles_in_an_open_box(1e-4);
-        let air = GasMix { o2: 0.21, he: 0.0 };
-        let profile = PressureHistory::with_gas(
-            "surface",
-            vec![0.0, 10.0, 40.0, 45.0, 90.0],
-            vec![2e5, 1e5, 1e5, 3e5, 3e5],
-            air,
-            0.0,
-        )
-        .unwrap();
+        let profile = grow_then_recompress(90.0);
         let run = |out_of_place: bool| {
             let mut sim = Simulation::new(&params, &profile).unwrap();
             if !out_of_place {
@@ -2803,22 +2809,13 @@ mod out_of_place_tests {
 #[cfg(test)]
 mod frame_round_tests {
     use super::*;
-    use crate::gas::GasMix;
 
     /// A step that starts from the fluxes its previous frame computed gives the bits of one
     /// that computes them again: three growing bubbles (two with overlapping spheres), frames
     /// at every step and every 0.7 s, every frame and the summary compared bit by bit.
     #[test]
     fn reusing_the_frames_flux_round_keeps_the_bits() {
-        let air = GasMix { o2: 0.21, he: 0.0 };
-        let profile = PressureHistory::with_gas(
-            "surface",
-            vec![0.0, 10.0, 40.0, 45.0, 60.0],
-            vec![2e5, 1e5, 1e5, 3e5, 3e5],
-            air,
-            0.0,
-        )
-        .unwrap();
+        let profile = grow_then_recompress(60.0);
         for interval in [0.0, 0.7] {
             let mut params = three_bubbles_in_an_open_box(1e-4);
             params.numerics.record_interval = interval;
