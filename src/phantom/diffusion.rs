@@ -238,12 +238,9 @@ fn explicit_step_with(
     cb: f64,
     isa: Isa,
 ) -> f64 {
-    let r = d * dt / (grid.h * grid.h);
-    let plane = grid.n[0] * grid.n[1];
-    out.par_chunks_mut(plane)
-        .enumerate()
-        .for_each(|(k, slab)| step_plane_from(grid, u, k, slab, r, cb, isa));
-    explicit_inflow(grid, u, r, cb)
+    let mut inflow = [0.0];
+    explicit_steps_into_with(grid, &[u], &mut [out], &[(d, cb)], dt, &mut inflow, isa);
+    inflow[0]
 }
 
 /// The new values of z-plane `k`'s inside cells into `out` (the plane's slice) from the whole
@@ -318,7 +315,19 @@ pub fn explicit_steps_into(
     dt: f64,
     inflow: &mut [f64],
 ) {
-    let isa = Isa::detect();
+    explicit_steps_into_with(grid, src, dst, dc, dt, inflow, Isa::detect())
+}
+
+/// [`explicit_steps_into`] with the interior stencil compiled for `isa`.
+fn explicit_steps_into_with(
+    grid: &Grid,
+    src: &[&[f64]],
+    dst: &mut [&mut [f64]],
+    dc: &[(f64, f64)],
+    dt: f64,
+    inflow: &mut [f64],
+    isa: Isa,
+) {
     let nf = src.len();
     assert!(dst.len() == nf && dc.len() == nf && inflow.len() == nf);
     let [nx, ny, nz] = grid.n;
