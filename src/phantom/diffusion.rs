@@ -196,13 +196,9 @@ fn stencil_plane(
         } else {
             (e1, e1)
         };
-        for i in (e0..i0).chain(i1..e1) {
-            if codes[0][base + i] & INSIDE_BIT != 0 {
-                out[base + i] = generic(base + i);
-            }
-        }
         if i1 > i0 {
-            // all six neighbours exist and are inside: plain 7-point stencil, branch-free
+            // all six neighbours exist and are inside: plain 7-point stencil, branch-free; first,
+            // so that the row's other cells find their neighbours' cache lines loaded
             let (o, a) = (&mut out[base + i0..base + i1], base + i0);
             match isa {
                 Isa::Portable => stencil_span(zm, c, zp, o, a, nx, centre, r),
@@ -213,6 +209,89 @@ fn stencil_plane(
                 Isa::Avx512 => unsafe { stencil_span_avx512(zm, c, zp, o, a, nx, centre, r) },
             }
         }
+        for (lo, hi) in [(e0, i0), (i1, e1)] {
+            // runs of cells with the same codes: one branch-free pass per side
+            let mut i = lo;
+            while i < hi {
+                let q = base + i;
+                let code = [codes[0][q], codes[1][q], codes[2][q]];
+                let mut j = i + 1;
+                while j < hi && (0..3).all(|d| codes[d][base + j] == code[d]) {
+                    j += 1;
+                }
+                if code[0] & INSIDE_BIT == 0 {
+                } else if j - i >= UNIFORM_RUN {
+                    let (o, a) = (&mut out[base + i..base + j], base + i);
+                    match isa {
+                        Isa::Portable => uniform_span(zm, c, zp, o, a, nx, code, r, cb),
+                        // SAFETY: `Isa::detect` found the instruction set on this CPU
+                        #[cfg(target_arch = "x86_64")]
+                        Isa::Avx2 => unsafe { uniform_span_avx2(zm, c, zp, o, a, nx, code, r, cb) },
+                        #[cfg(target_arch = "x86_64")]
+                        Isa::Avx512 => unsafe {
+                            uniform_span_avx512(zm, c, zp, o, a, nx, code, r, cb)
+                        },
+                    }
+                } else {
+                    for q in base + i..base + j {
+                        out[q] = generic(q);
+                    }
+                }
+                i = j;
+            }
+        }
+    }
+}
+
+/// Runs of at least this many neighbouring cells with the same codes (a face of the grid, a
+/// row along one) take [`uniform_span`]; shorter ones the cell-by-cell path.
+const UNIFORM_RUN: usize = 4;
+
+/// [`stencil_plane`]'s cell-by-cell path for a run of cells `a..a + o.len()` of one plane
+/// that share their codes `code` (inside, the same kind of side in each of the six
+/// directions), side by side: the same terms added in the same order (x−, x+, y−, y+, z−,
+/// z+; an interior side C_n − C, an open one 2·(C_b − C), a sealed one nothing), so the
+/// same bits, with `o` as the accumulator.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn uniform_span(
+    zm: &[f64],
+    c: &[f64],
+    zp: &[f64],
+    o: &mut [f64],
+    a: usize,
+    nx: usize,
+    code: [u8; 3],
+    r: f64,
+    cb: f64,
+) {
+    let b = a + o.len();
+    let u = &c[a..b];
+    o.fill(0.0);
+    for (d, code) in code.into_iter().enumerate() {
+        for (side, plus) in [(code & 3, false), ((code >> 2) & 3, true)] {
+            if side == SIDE_INTERIOR {
+                // an interior side: the neighbour exists for every cell of the run
+                let nb = match (d, plus) {
+                    (0, false) => &c[a - 1..b - 1],
+                    (0, true) => &c[a + 1..b + 1],
+                    (1, false) => &c[a - nx..b - nx],
+                    (1, true) => &c[a + nx..b + nx],
+                    (_, false) => &zm[a..b],
+                    (_, true) => &zp[a..b],
+                };
+                for ((o, &n), &u) in o.iter_mut().zip(nb).zip(u) {
+                    *o += n - u;
+                }
+            } else if side == SIDE_OPEN {
+                for (o, &u) in o.iter_mut().zip(u) {
+                    *o += 2.0 * (cb - u);
+                }
+            }
+        }
+    }
+    for (o, &u) in o.iter_mut().zip(u) {
+        *o = u + r * *o;
     }
 }
 
@@ -226,6 +305,38 @@ fn explicit_inflow(grid: &Grid, u: &[f64], r: f64, cb: f64) -> f64 {
         }
     }
     inflow
+}
+
+/// [`explicit_inflow`] of every field (`r[f]`, boundary value `dc[f].1`) into `inflow[f]`, in
+/// one pass over the open cells: each field's sum the same bits as alone (its own chain of
+/// additions in the same order), the chains side by side instead of one after the other.
+fn explicit_inflows(grid: &Grid, u: &[&[f64]], r: &[f64], dc: &[(f64, f64)], inflow: &mut [f64]) {
+    fn fixed<const N: usize>(grid: &Grid, u: &[&[f64]], r: &[f64], dc: &[(f64, f64)]) -> [f64; N] {
+        let u: [&[f64]; N] = std::array::from_fn(|f| u[f]);
+        let (r, cb): ([f64; N], [f64; N]) = (
+            std::array::from_fn(|f| r[f]),
+            std::array::from_fn(|f| dc[f].1),
+        );
+        let mut acc = [0.0; N];
+        for cells in &grid.open_cells {
+            for &(idx, cnt) in cells {
+                for f in 0..N {
+                    acc[f] += r[f] * 2.0 * cnt as f64 * (cb[f] - u[f][idx as usize]);
+                }
+            }
+        }
+        acc
+    }
+    match u.len() {
+        1 => inflow.copy_from_slice(&fixed::<1>(grid, u, r, dc)),
+        2 => inflow.copy_from_slice(&fixed::<2>(grid, u, r, dc)),
+        3 => inflow.copy_from_slice(&fixed::<3>(grid, u, r, dc)),
+        _ => {
+            for f in 0..u.len() {
+                inflow[f] = explicit_inflow(grid, u[f], r[f], dc[f].1);
+            }
+        }
+    }
 }
 
 /// [`explicit_step`] with the interior stencil compiled for `isa`.
@@ -333,9 +444,7 @@ fn explicit_steps_into_with(
     let [nx, ny, nz] = grid.n;
     let plane = nx * ny;
     let r: Vec<f64> = dc.iter().map(|(d, _)| d * dt / (grid.h * grid.h)).collect();
-    for f in 0..nf {
-        inflow[f] = explicit_inflow(grid, src[f], r[f], dc[f].1);
-    }
+    explicit_inflows(grid, src, &r, dc, inflow);
     let mut planes: Vec<Vec<&mut [f64]>> = (0..nz).map(|_| Vec::with_capacity(nf)).collect();
     for u in dst.iter_mut() {
         for (k, p) in u.chunks_mut(plane).enumerate() {
@@ -367,8 +476,9 @@ fn explicit_steps_in_place_with(
     let plane = nx * ny;
     let r: Vec<f64> = dc.iter().map(|(d, _)| d * dt / (grid.h * grid.h)).collect();
     // from the old values, before they are overwritten
-    for f in 0..nf {
-        inflow[f] = explicit_inflow(grid, fields[f], r[f], dc[f].1);
+    {
+        let fields: Vec<&[f64]> = fields.iter().map(|u| &**u).collect();
+        explicit_inflows(grid, &fields, &r, dc, inflow);
     }
     let threads = rayon::current_num_threads().max(1);
     let blocks = if threads == 1 {
@@ -1772,6 +1882,9 @@ macro_rules! isa_variants {
 
 isa_variants!(stencil_span, stencil_span_avx2, stencil_span_avx512,
     (zm: &[f64], c: &[f64], zp: &[f64], o: &mut [f64], a: usize, nx: usize, centre: f64, r: f64));
+
+isa_variants!(uniform_span, uniform_span_avx2, uniform_span_avx512,
+    (zm: &[f64], c: &[f64], zp: &[f64], o: &mut [f64], a: usize, nx: usize, code: [u8; 3], r: f64, cb: f64));
 
 isa_variants!(xy_plane, xy_plane_avx2, xy_plane_avx512,
     (grid: &Grid, plan: &LinePlan, table: &Tables, u: *mut f64, xvals: *mut f64, t: *mut f64, b: usize, isa: Isa));
