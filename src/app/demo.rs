@@ -164,6 +164,7 @@ pub fn run_sized(
     };
     // one run per elasticity law, in parallel; progress counts runs
     let names = law_names();
+    let main_idx = names.iter().position(|n| *n == "hyperelastic").unwrap_or(0);
     let progress = std::sync::Mutex::new((vec![0.0f64; names.len()], progress));
     let runs: Vec<Result<SimRun, Error>> = names
         .par_iter()
@@ -172,6 +173,9 @@ pub fn run_sized(
             let mut p = base.clone();
             p.elasticity = Arc::from(laws.build(name).map_err(Error::Solver)?);
             p.name = format!("{} ({name})", base.name);
+            // the other laws give only bubble 0's radius and the gas balance (the last
+            // frame has the gel either way): their frames skip the gel's pass
+            p.numerics.record_gel = i == main_idx;
             let mut cb = |t: f64, e: f64| {
                 if let Ok(mut g) = progress.lock() {
                     let (fr, cb) = &mut *g;
@@ -188,7 +192,6 @@ pub fn run_sized(
         })
         .collect();
     let runs: Vec<SimRun> = runs.into_iter().collect::<Result<_, _>>()?;
-    let main_idx = names.iter().position(|n| *n == "hyperelastic").unwrap_or(0);
     add_run_files(
         &mut set,
         "oscillation/",
