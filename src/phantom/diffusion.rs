@@ -1307,6 +1307,8 @@ pub struct ImplicitSolver {
     scratch: Vec<f64>,
     /// The x-open cells' values after the x sweep (as `grid.open_cells[0]`), for the inflow.
     xvals: Vec<f64>,
+    /// The table and x-open values of the second and later fields of [`Self::steps`].
+    others: Vec<(Tables, Vec<f64>)>,
     /// Plans brought up to date by [`LinePlan::update`] (not built anew).
     #[cfg(test)]
     updates: usize,
@@ -1326,6 +1328,85 @@ impl ImplicitSolver {
 
     fn step_with(&mut self, grid: &Grid, u: &mut [f64], d: f64, dt: f64, cb: f64, isa: Isa) -> f64 {
         assert_eq!(u.len(), grid.len());
+        let r = d * dt / (grid.h * grid.h);
+        if !self.refresh(grid) {
+            self.scratch.resize(grid.len(), 0.0);
+            let mut inflow = 0.0;
+            for dir in 0..3 {
+                inflow += sweep(grid, dir, u, &mut self.scratch, r, cb);
+            }
+            return inflow;
+        }
+        let plan = self.plan.as_ref().expect("refreshed");
+        planned_step(grid, plan, &mut self.table, &mut self.xvals, u, r, cb, isa)
+    }
+
+    /// Several fields' steps over the same grid, field `f` with diffusivity and boundary value
+    /// `dc[f] = (D_f, c_b,f)`, each the same bits as [`Self::step`] alone; the fields are
+    /// stepped side by side (rayon), so one field's serial parts (its table, its inflow sums)
+    /// overlap the other's sweeps. Returns each field's inflow into `inflow[f]`.
+    pub fn steps(
+        &mut self,
+        grid: &Grid,
+        fields: &mut [&mut [f64]],
+        dc: &[(f64, f64)],
+        dt: f64,
+        inflow: &mut [f64],
+    ) {
+        self.steps_with(grid, fields, dc, dt, inflow, Isa::detect())
+    }
+
+    fn steps_with(
+        &mut self,
+        grid: &Grid,
+        fields: &mut [&mut [f64]],
+        dc: &[(f64, f64)],
+        dt: f64,
+        inflow: &mut [f64],
+        isa: Isa,
+    ) {
+        let nf = fields.len();
+        assert!(dc.len() == nf && inflow.len() == nf);
+        if nf < 2 || !self.refresh(grid) {
+            for f in 0..nf {
+                inflow[f] = self.step_with(grid, fields[f], dc[f].0, dt, dc[f].1, isa);
+            }
+            return;
+        }
+        if self.others.len() < nf - 1 {
+            self.others.resize_with(nf - 1, Default::default);
+        }
+        let plan = self.plan.as_ref().expect("refreshed");
+        let h2 = grid.h * grid.h;
+        let (first, rest) = fields.split_at_mut(1);
+        let (table, xvals) = (&mut self.table, &mut self.xvals);
+        let others = &mut self.others[..nf - 1];
+        let (a, b) = rayon::join(
+            || {
+                let u = &mut *first[0];
+                assert_eq!(u.len(), grid.len());
+                planned_step(grid, plan, table, xvals, u, dc[0].0 * dt / h2, dc[0].1, isa)
+            },
+            || {
+                let mut out = Vec::with_capacity(nf - 1);
+                rest.par_iter_mut()
+                    .zip(others.par_iter_mut())
+                    .zip(&dc[1..])
+                    .map(|((u, (table, xvals)), &(d, cb))| {
+                        assert_eq!(u.len(), grid.len());
+                        planned_step(grid, plan, table, xvals, u, d * dt / h2, cb, isa)
+                    })
+                    .collect_into_vec(&mut out);
+                out
+            },
+        );
+        inflow[0] = a;
+        inflow[1..].copy_from_slice(&b);
+    }
+
+    /// Bring the plan level with the grid's codes; false when the grid takes the generic
+    /// sweep (segments too long for the table).
+    fn refresh(&mut self, grid: &Grid) -> bool {
         let id = grid.codes_id();
         let stale = self.plan.as_ref().is_none_or(|p| p.codes_id != id);
         if stale && self.generic != Some(id) {
@@ -1344,30 +1425,37 @@ impl ImplicitSolver {
             }
             self.generic = if self.plan.is_none() { Some(id) } else { None };
         }
-        let r = d * dt / (grid.h * grid.h);
-        let Some(plan) = self.plan.as_ref().filter(|p| p.codes_id == id) else {
-            self.scratch.resize(grid.len(), 0.0);
-            let mut inflow = 0.0;
-            for dir in 0..3 {
-                inflow += sweep(grid, dir, u, &mut self.scratch, r, cb);
-            }
-            return inflow;
-        };
-        self.table.fill(plan.max_len, r, cb);
-        self.xvals.resize(grid.open_cells[0].len(), 0.0);
-        sweep_xy(grid, plan, &self.table, u, &mut self.xvals, isa);
-        // the x inflow from the values right after the x sweep, summed in cell order
-        let mut fx = 0.0;
-        for (&(_, cnt), &x) in grid.open_cells[0].iter().zip(&self.xvals) {
-            fx += r * 2.0 * cnt as f64 * (cb - x);
-        }
-        let mut inflow = 0.0;
-        inflow += fx;
-        inflow += open_face_inflow(grid, 1, u, r, cb);
-        sweep_z(grid, plan, &self.table, u, isa);
-        inflow += open_face_inflow(grid, 2, u, r, cb);
-        inflow
+        self.plan.as_ref().is_some_and(|p| p.codes_id == id)
     }
+}
+
+/// One field's planned LOD step ([`ImplicitSolver::step`]) with its own factor table and
+/// x-open values; r = D·dt/h². Returns the boundary inflow.
+#[allow(clippy::too_many_arguments)]
+fn planned_step(
+    grid: &Grid,
+    plan: &LinePlan,
+    table: &mut Tables,
+    xvals: &mut Vec<f64>,
+    u: &mut [f64],
+    r: f64,
+    cb: f64,
+    isa: Isa,
+) -> f64 {
+    table.fill(plan.max_len, r, cb);
+    xvals.resize(grid.open_cells[0].len(), 0.0);
+    sweep_xy(grid, plan, table, u, xvals, isa);
+    // the x inflow from the values right after the x sweep, summed in cell order
+    let mut fx = 0.0;
+    for (&(_, cnt), &x) in grid.open_cells[0].iter().zip(xvals.iter()) {
+        fx += r * 2.0 * cnt as f64 * (cb - x);
+    }
+    let mut inflow = 0.0;
+    inflow += fx;
+    inflow += open_face_inflow(grid, 1, u, r, cb);
+    sweep_z(grid, plan, table, u, isa);
+    inflow += open_face_inflow(grid, 2, u, r, cb);
+    inflow
 }
 
 /// Solve the lines of a stack of rows in place: row a (0 ≤ a < `n_along`) holds cells
@@ -2485,6 +2573,63 @@ mod planned_tests {
                     );
                 }
                 assert_eq!(fa.to_bits(), fb.to_bits(), "{isa:?}, n = {:?}: inflow", g.n);
+            }
+        }
+    }
+
+    /// [`ImplicitSolver::steps`] (the fields side by side) against each field stepped alone
+    /// by [`ImplicitSolver::step`]: the same bits and inflows, for 1, 2 and 3 fields (one is
+    /// the plain loop, three share the second worker) on 1, 2 and 3 threads, in a cylinder
+    /// with cells taken out (so the plan is updated between steps) and in an open box.
+    #[test]
+    fn fields_stepped_side_by_side_are_each_fields_bits() {
+        let dc = [(2.5e-9, 1.5), (1e-9, 0.2), (8e-9, 0.0)];
+        for base in [cylinder_with_hole(), boxed([13, 9, 7], all_box_faces())] {
+            for nf in 1..=3 {
+                for threads in [1, 2, 3] {
+                    let g = &mut base.clone();
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .unwrap();
+                    let u0: Vec<Vec<f64>> = (0..nf)
+                        .map(|f| {
+                            (0..g.len())
+                                .map(|i| ((i * 7919 + 13 * f + 5) % 101) as f64 / 100.0)
+                                .collect()
+                        })
+                        .collect();
+                    let (mut alone, mut together) = (u0.clone(), u0);
+                    let (mut one, mut all) = (ImplicitSolver::new(), ImplicitSolver::new());
+                    for (step, dt) in [20.0, 3.0, 600.0].into_iter().enumerate() {
+                        if step == 1 {
+                            // a change of codes between steps: both plans are updated
+                            let (c, id) =
+                                (g.index(g.n[0] / 2, g.n[1] / 2, g.n[2] / 2), g.codes_id());
+                            g.set_excluded(&[c], true);
+                            assert_ne!(id, g.codes_id());
+                        }
+                        let want: Vec<f64> = (0..nf)
+                            .map(|f| one.step(g, &mut alone[f], dc[f].0, dt, dc[f].1))
+                            .collect();
+                        let mut got = vec![0.0; nf];
+                        pool.install(|| {
+                            let mut fields: Vec<&mut [f64]> =
+                                together.iter_mut().map(|f| f.as_mut_slice()).collect();
+                            all.steps(g, &mut fields, &dc[..nf], dt, &mut got)
+                        });
+                        for f in 0..nf {
+                            assert_eq!(want[f].to_bits(), got[f].to_bits(), "field {f}: inflow");
+                            for i in 0..g.len() {
+                                assert_eq!(
+                                    alone[f][i].to_bits(),
+                                    together[f][i].to_bits(),
+                                    "{nf} fields, {threads} threads, step {step}, field {f}, cell {i}"
+                                );
+                            }
+                        }
+                    }
+                }
             }
         }
     }
