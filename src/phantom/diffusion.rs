@@ -52,7 +52,9 @@
 //! contracts) and the best the CPU has is picked at run time; all variants are tested
 //! against the generic sweep.
 
+use super::gel_pass::{plane_gel_of, PlaneGel};
 use super::grid::{Grid, INSIDE_BIT, SIDE_INTERIOR, SIDE_OPEN, SIDE_SEALED};
+use crate::gas::Gas;
 use rayon::prelude::*;
 
 /// Stencil weight of a side code: sealed 0, interior 1, open 2 (half-cell distance).
@@ -350,7 +352,16 @@ fn explicit_step_with(
     isa: Isa,
 ) -> f64 {
     let mut inflow = [0.0];
-    explicit_steps_into_with(grid, &[u], &mut [out], &[(d, cb)], dt, &mut inflow, isa);
+    explicit_steps_into_with(
+        grid,
+        &[u],
+        &mut [out],
+        &[(d, cb)],
+        dt,
+        &mut inflow,
+        None,
+        isa,
+    );
     inflow[0]
 }
 
@@ -426,10 +437,28 @@ pub fn explicit_steps_into(
     dt: f64,
     inflow: &mut [f64],
 ) {
-    explicit_steps_into_with(grid, src, dst, dc, dt, inflow, Isa::detect())
+    explicit_steps_into_with(grid, src, dst, dc, dt, inflow, None, Isa::detect())
 }
 
-/// [`explicit_steps_into`] with the interior stencil compiled for `isa`.
+/// [`explicit_steps_into`] that also passes the gel over each plane it has just written, while
+/// the plane is in cache: `gel.1[k]` gets [`super::gel_pass::plane_gel`] of the new values of
+/// z-plane `k` (every field; `gel.0[g]` = R_u·T/L_g), the same bits as a pass over the fields
+/// after the step.
+pub(super) fn explicit_steps_into_passing_gel(
+    grid: &Grid,
+    src: &[&[f64]],
+    dst: &mut [&mut [f64]],
+    dc: &[(f64, f64)],
+    dt: f64,
+    inflow: &mut [f64],
+    gel: (&[f64; Gas::ALL.len()], &mut [PlaneGel]),
+) {
+    explicit_steps_into_with(grid, src, dst, dc, dt, inflow, Some(gel), Isa::detect())
+}
+
+/// [`explicit_steps_into`] with the interior stencil compiled for `isa`, and the gel's pass of
+/// each new plane when `gel` is given ([`explicit_steps_into_passing_gel`]).
+#[allow(clippy::too_many_arguments)]
 fn explicit_steps_into_with(
     grid: &Grid,
     src: &[&[f64]],
@@ -437,6 +466,7 @@ fn explicit_steps_into_with(
     dc: &[(f64, f64)],
     dt: f64,
     inflow: &mut [f64],
+    gel: Option<(&[f64; Gas::ALL.len()], &mut [PlaneGel])>,
     isa: Isa,
 ) {
     let nf = src.len();
@@ -451,14 +481,29 @@ fn explicit_steps_into_with(
             planes[k].push(p);
         }
     }
-    planes
-        .into_par_iter()
-        .enumerate()
-        .for_each(|(k, mut outs)| {
-            for (f, out) in outs.iter_mut().enumerate() {
-                step_plane_from(grid, src[f], k, out, r[f], dc[f].1, isa);
-            }
-        });
+    let step = |k: usize, outs: &mut Vec<&mut [f64]>| {
+        for (f, out) in outs.iter_mut().enumerate() {
+            step_plane_from(grid, src[f], k, out, r[f], dc[f].1, isa);
+        }
+    };
+    match gel {
+        None => planes
+            .into_par_iter()
+            .enumerate()
+            .for_each(|(k, mut outs)| step(k, &mut outs)),
+        Some((kg, slots)) => {
+            assert_eq!(slots.len(), nz);
+            planes
+                .into_par_iter()
+                .zip(slots.par_iter_mut())
+                .enumerate()
+                .for_each(|(k, (mut outs, slot))| {
+                    step(k, &mut outs);
+                    let f: Vec<&[f64]> = outs.iter().map(|o| &**o).collect();
+                    *slot = plane_gel_of(&grid.codes[0][k * plane..(k + 1) * plane], &f, kg);
+                })
+        }
+    }
 }
 
 /// [`explicit_steps_in_place`] with the interior stencil compiled for `isa`.

@@ -25,6 +25,24 @@ pub(super) struct PlaneGel {
     pub(super) min_c: f64,
 }
 
+impl Default for PlaneGel {
+    /// A plane with no inside cell.
+    fn default() -> PlaneGel {
+        PlaneGel {
+            max_tension: f64::NEG_INFINITY,
+            sums: [0.0; Gas::ALL.len()],
+            min_c: f64::INFINITY,
+        }
+    }
+}
+
+/// Whether two passes of a plane are the same bits (the first `ng` sums).
+pub(super) fn same_plane_gel(a: &PlaneGel, b: &PlaneGel, ng: usize) -> bool {
+    a.max_tension.to_bits() == b.max_tension.to_bits()
+        && a.min_c.to_bits() == b.min_c.to_bits()
+        && (0..ng).all(|g| a.sums[g].to_bits() == b.sums[g].to_bits())
+}
+
 /// [`PlaneGel`] of z-plane `kz` of the first `ng` fields, with `k[g]` = R_u·T/L_g.
 pub(super) fn plane_gel(
     grid: &Grid,
@@ -32,12 +50,20 @@ pub(super) fn plane_gel(
     k: &[f64; Gas::ALL.len()],
     kz: usize,
 ) -> PlaneGel {
+    let (codes, f) = plane_slices(grid, fields, kz);
+    plane_gel_of(codes, &f, k)
+}
+
+/// [`PlaneGel`] of one plane given as its x-codes (`codes`) and each field's values there
+/// (`f[g]`, as long as `codes`): what [`plane_gel`] computes, for a plane the caller holds
+/// (the explicit step's fresh output, [`super::diffusion::explicit_steps_into`]).
+pub(super) fn plane_gel_of(codes: &[u8], f: &[&[f64]], k: &[f64; Gas::ALL.len()]) -> PlaneGel {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") {
         // SAFETY: the CPU has AVX2 (checked above)
-        return unsafe { plane_gel_avx2(grid, fields, k, kz) };
+        return unsafe { plane_gel_avx2(codes, f, k) };
     }
-    plane_gel_portable(grid, fields, k, kz)
+    plane_gel_portable(codes, f, k)
 }
 
 /// Running per-lane state of a plane.
@@ -105,39 +131,34 @@ impl Lanes {
     }
 }
 
-/// Plane `kz`'s codes and fields, and the length of its whole groups of [`LANES`] cells.
+/// Plane `kz`'s codes and fields.
 fn plane_slices<'a>(
     grid: &'a Grid,
     fields: &'a [Vec<f64>],
     kz: usize,
-) -> (&'a [u8], Vec<&'a [f64]>, usize) {
+) -> (&'a [u8], Vec<&'a [f64]>) {
     let plane = grid.n[0] * grid.n[1];
     let z = kz * plane;
     let codes = &grid.codes[0][z..z + plane];
     let f = fields.iter().map(|f| &f[z..z + plane]).collect();
-    (codes, f, plane - plane % LANES)
+    (codes, f)
 }
 
-/// [`plane_gel`] without vector instructions (the reference of the vector build's bits).
-fn plane_gel_portable(
-    grid: &Grid,
-    fields: &[Vec<f64>],
-    k: &[f64; Gas::ALL.len()],
-    kz: usize,
-) -> PlaneGel {
-    let (codes, f, full) = plane_slices(grid, fields, kz);
+/// [`plane_gel_of`] without vector instructions (the reference of the vector build's bits).
+fn plane_gel_portable(codes: &[u8], f: &[&[f64]], k: &[f64; Gas::ALL.len()]) -> PlaneGel {
+    let full = codes.len() - codes.len() % LANES;
     let ng = f.len();
     let mut lanes = Lanes::new();
     let mut c = [0.0; Gas::ALL.len()];
     for q0 in (0..full).step_by(LANES) {
         for l in 0..LANES {
-            for (cg, fg) in c.iter_mut().zip(&f) {
+            for (cg, fg) in c.iter_mut().zip(f) {
                 *cg = fg[q0 + l];
             }
             lanes.cell(l, codes[q0 + l] & INSIDE_BIT != 0, &c[..ng], &k[..ng]);
         }
     }
-    lanes.finish(codes, &f, &k[..ng], full)
+    lanes.finish(codes, f, &k[..ng], full)
 }
 
 /// [`plane_gel`] with AVX2: lane `l` of each vector is cell `q0 + l`.
@@ -146,14 +167,9 @@ fn plane_gel_portable(
 /// The CPU must have AVX2.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
-unsafe fn plane_gel_avx2(
-    grid: &Grid,
-    fields: &[Vec<f64>],
-    k: &[f64; Gas::ALL.len()],
-    kz: usize,
-) -> PlaneGel {
+unsafe fn plane_gel_avx2(codes: &[u8], f: &[&[f64]], k: &[f64; Gas::ALL.len()]) -> PlaneGel {
     use std::arch::x86_64::*;
-    let (codes, f, full) = plane_slices(grid, fields, kz);
+    let full = codes.len() - codes.len() % LANES;
     let ng = f.len();
     let zero = _mm256_setzero_pd();
     let pos_inf = _mm256_set1_pd(f64::INFINITY);
@@ -162,7 +178,10 @@ unsafe fn plane_gel_avx2(
     let kv: [__m256d; Gas::ALL.len()] = std::array::from_fn(|g| _mm256_set1_pd(k[g]));
     let mut sums = [zero; Gas::ALL.len()];
     let mut max_t = neg_inf;
-    let mut min_c = pos_inf;
+    // the lowest value per gas, each in its own chain (one chain through every gas would
+    // bound the loop); combined below, which gives the one chain's bits unless the lowest
+    // value is a zero (then ±0 depend on the order: the plane is passed again in one chain)
+    let mut min_g = [pos_inf; Gas::ALL.len()];
     for q0 in (0..full).step_by(LANES) {
         // the four cells' inside bits as an all-ones / all-zeros mask per lane
         let c4 = u32::from_le_bytes([codes[q0], codes[q0 + 1], codes[q0 + 2], codes[q0 + 3]]);
@@ -175,6 +194,68 @@ unsafe fn plane_gel_avx2(
             sums[g] = _mm256_add_pd(sums[g], _mm256_and_pd(inside, c));
             t = _mm256_add_pd(t, _mm256_mul_pd(c, kv[g]));
             // min(x, acc) gives acc when x is NaN or equal: the scalar `if x < acc`
+            min_g[g] = _mm256_min_pd(_mm256_blendv_pd(pos_inf, c, inside), min_g[g]);
+        }
+        max_t = _mm256_max_pd(_mm256_blendv_pd(neg_inf, t, inside), max_t);
+    }
+    let mut min_c = pos_inf;
+    for m in &min_g[..ng] {
+        min_c = _mm256_min_pd(*m, min_c);
+    }
+    let mut lowest = [0.0; LANES];
+    // SAFETY: four f64 into a four-element array
+    unsafe { _mm256_storeu_pd(lowest.as_mut_ptr(), min_c) };
+    if lowest.contains(&0.0) {
+        // SAFETY: the CPU has AVX2 (this function's own requirement)
+        return unsafe { plane_gel_avx2_one_chain(codes, f, k) };
+    }
+    let mut lanes = Lanes::new();
+    for g in 0..ng {
+        // SAFETY: four f64 into a four-element array
+        unsafe { _mm256_storeu_pd(lanes.sums[g].as_mut_ptr(), sums[g]) };
+    }
+    // SAFETY: as above
+    unsafe {
+        _mm256_storeu_pd(lanes.max_t.as_mut_ptr(), max_t);
+        _mm256_storeu_pd(lanes.min_c.as_mut_ptr(), min_c);
+    }
+    lanes.finish(codes, f, &k[..ng], full)
+}
+
+/// [`plane_gel_avx2`] with the lowest value in one chain through every gas, cell by cell (the
+/// portable build's order): for a plane whose lowest value is a zero, where the order decides
+/// between −0 and +0.
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn plane_gel_avx2_one_chain(
+    codes: &[u8],
+    f: &[&[f64]],
+    k: &[f64; Gas::ALL.len()],
+) -> PlaneGel {
+    use std::arch::x86_64::*;
+    let full = codes.len() - codes.len() % LANES;
+    let ng = f.len();
+    let zero = _mm256_setzero_pd();
+    let pos_inf = _mm256_set1_pd(f64::INFINITY);
+    let neg_inf = _mm256_set1_pd(f64::NEG_INFINITY);
+    let bit = _mm256_set1_epi64x(INSIDE_BIT as i64);
+    let kv: [__m256d; Gas::ALL.len()] = std::array::from_fn(|g| _mm256_set1_pd(k[g]));
+    let mut sums = [zero; Gas::ALL.len()];
+    let mut max_t = neg_inf;
+    let mut min_c = pos_inf;
+    for q0 in (0..full).step_by(LANES) {
+        let c4 = u32::from_le_bytes([codes[q0], codes[q0 + 1], codes[q0 + 2], codes[q0 + 3]]);
+        let bytes = _mm256_cvtepu8_epi64(_mm_cvtsi32_si128(c4 as i32));
+        let inside = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bytes, bit), bit));
+        let mut t = zero;
+        for g in 0..ng {
+            // SAFETY: q0 + 3 < full ≤ the plane's length
+            let c = unsafe { _mm256_loadu_pd(f[g].as_ptr().add(q0)) };
+            sums[g] = _mm256_add_pd(sums[g], _mm256_and_pd(inside, c));
+            t = _mm256_add_pd(t, _mm256_mul_pd(c, kv[g]));
             min_c = _mm256_min_pd(_mm256_blendv_pd(pos_inf, c, inside), min_c);
         }
         max_t = _mm256_max_pd(_mm256_blendv_pd(neg_inf, t, inside), max_t);
@@ -189,7 +270,7 @@ unsafe fn plane_gel_avx2(
         _mm256_storeu_pd(lanes.max_t.as_mut_ptr(), max_t);
         _mm256_storeu_pd(lanes.min_c.as_mut_ptr(), min_c);
     }
-    lanes.finish(codes, &f, &k[..ng], full)
+    lanes.finish(codes, f, &k[..ng], full)
 }
 
 #[cfg(test)]
@@ -226,12 +307,34 @@ mod tests {
         let inside: Vec<usize> = (0..g.len()).filter(|&i| g.inside(i)).collect();
         with_nan[1][inside[5]] = f64::NAN;
         with_nan[0][inside[9]] = -0.0;
-        let k = [2.0, 3.0, 0.5];
+        // the lowest value a zero, −0 and +0 in several orders among cells and gases (the
+        // per-gas minima then need the plane passed again in one chain)
+        let mut zeros: Vec<Vec<f64>> = fields
+            .iter()
+            .map(|f| f.iter().map(|x| x.abs() + 1.0).collect())
+            .collect();
+        for (n, &q) in inside.iter().enumerate().step_by(5) {
+            zeros[n % 3][q] = if n % 2 == 0 { -0.0 } else { 0.0 };
+            zeros[(n + 1) % 3][q] = if n % 3 == 0 { 0.0 } else { -0.0 };
+        }
+        // in every plane, one vector lane meets +0 of gas 1 in a cell before −0 of gas 0 (one
+        // chain keeps +0, the gases' own minima combined would give −0)
         let plane = g.n[0] * g.n[1];
-        for fields in [&fields, &with_nan] {
+        for kz in 0..g.n[2] {
+            let lane0: Vec<usize> = (kz * plane..kz * plane + plane - plane % LANES)
+                .filter(|&q| (q - kz * plane).is_multiple_of(LANES) && g.inside(q))
+                .collect();
+            if let [a, .., b] = lane0[..] {
+                zeros[1][a] = 0.0;
+                zeros[0][b] = -0.0;
+            }
+        }
+        let k = [2.0, 3.0, 0.5];
+        for fields in [&fields, &with_nan, &zeros] {
             for ng in 1..=3 {
                 for kz in 0..g.n[2] {
-                    let want = plane_gel_portable(&g, &fields[..ng], &k, kz);
+                    let (codes, f) = plane_slices(&g, &fields[..ng], kz);
+                    let want = plane_gel_portable(codes, &f, &k);
                     let got = plane_gel(&g, &fields[..ng], &k, kz);
                     assert_eq!(want.max_tension.to_bits(), got.max_tension.to_bits());
                     assert_eq!(want.min_c.to_bits(), got.min_c.to_bits());
@@ -261,7 +364,13 @@ mod tests {
                         }
                     }
                     assert_eq!(mx.to_bits(), got.max_tension.to_bits(), "plane {kz}");
-                    assert_eq!(mn.to_bits(), got.min_c.to_bits(), "plane {kz}");
+                    // the lanes' order, not the cells', decides between −0 and +0 (the
+                    // portable build's bits, checked above, are the reference there)
+                    assert!(
+                        mn.to_bits() == got.min_c.to_bits() || (mn == 0.0 && got.min_c == 0.0),
+                        "plane {kz}: {mn} against {}",
+                        got.min_c
+                    );
                     for gg in 0..ng {
                         if sums[gg].is_nan() {
                             assert!(got.sums[gg].is_nan());

@@ -23,7 +23,7 @@
 use super::bubble::{Balance, Bubble, BubbleFate};
 use super::diffusion;
 use super::displacement::{self, Displaced};
-use super::gel_pass::{plane_gel, PlaneGel};
+use super::gel_pass::{plane_gel, same_plane_gel, PlaneGel};
 use super::grid::{Face, Grid};
 use super::nucleation::{Nucleus, NucleusPool};
 use super::params::{BubblePlacement, PhantomParams};
@@ -460,6 +460,23 @@ pub struct Simulation<'a> {
     round_at: Option<f64>,
     /// Whether [`Self::bubble_fluxes`] may take `round_at`'s round (a test turns it off).
     reuse_frame_round: bool,
+    /// The gel's pass of each z-plane ([`plane_gel`]) as the last explicit step left it, when
+    /// that step ended at a frame and passed its planes while they were in cache
+    /// ([`diffusion::explicit_steps_into_passing_gel`]); valid while `gel_fresh`, except the
+    /// planes `gel_dirty` (first, last) that the exchange, the displacement or a nucleus wrote
+    /// since ([`Self::mark_gel`]), which the frame passes again ([`Self::gel_state`]).
+    gel_planes: Vec<PlaneGel>,
+    gel_fresh: bool,
+    gel_dirty: (usize, usize),
+    /// Whether the next diffusion step ends at a frame with the gel's state (set by the loop).
+    pass_gel_next: bool,
+    /// Whether an explicit step out of place may pass the gel for the frame (a test turns it
+    /// off), and whether each frame checks those planes against a pass of its own (tests).
+    fuse_gel_pass: bool,
+    check_fused_gel: bool,
+    /// Frames that took the step's pass of the gel (a test's check that the path is taken).
+    #[cfg(test)]
+    fused_frames: std::sync::atomic::AtomicUsize,
     /// Per bubble: the gel it displaces ([`displacement`]).
     pub(super) displaced: Vec<Displaced>,
     /// Change of the grid's gas by displacement since the balance reference, mol: gel pushed
@@ -599,6 +616,14 @@ impl<'a> Simulation<'a> {
             round: FluxRound::default(),
             round_at: None,
             reuse_frame_round: true,
+            gel_planes: Vec::new(),
+            gel_fresh: false,
+            gel_dirty: (usize::MAX, 0),
+            pass_gel_next: false,
+            fuse_gel_pass: true,
+            check_fused_gel: false,
+            #[cfg(test)]
+            fused_frames: Default::default(),
             steps_state: Vec::new(),
             displaced: Vec::new(),
             displaced_gas: 0.0,
@@ -631,6 +656,7 @@ impl<'a> Simulation<'a> {
     /// Mutable concentration field (for tests that set an initial state).
     pub fn field_mut(&mut self, g: usize) -> &mut [f64] {
         self.tension_bound = None;
+        self.gel_fresh = false;
         &mut self.fields[g]
     }
 
@@ -962,6 +988,11 @@ impl<'a> Simulation<'a> {
             dt_prev = dt_physics;
             let t1 = t + dt;
             self.exchange(&fluxes, dt, t1, &mut log.events);
+            // a frame with the gel's state at the end of this step (as [`Self::observe`]
+            // decides; a run that ends early passes the whole gel at its last frame)
+            self.pass_gel_next = self.fuse_gel_pass
+                && ((self.params.numerics.record_gel && t1 >= log.next_record - 1e-9)
+                    || t1 >= end - 1e-9);
             let scheme;
             (field_dt, loading_dt, scheme) = self.gel_step(
                 profile,
@@ -1526,6 +1557,8 @@ impl<'a> Simulation<'a> {
                 .copied()
                 .filter(|idx| new_cells.binary_search(idx).is_err())
                 .collect();
+            self.mark_gel(take.iter().chain(&give).copied());
+            self.mark_gel(remapped.iter().map(|(idx, _)| *idx));
             // cells grown over leave the gel with their gas
             for &idx in &take {
                 for f in self.fields.iter_mut() {
@@ -1581,6 +1614,7 @@ impl<'a> Simulation<'a> {
     /// then takes the rest from the wider sphere of radius ρ the same way; if even that runs dry
     /// the bubble receives only what is there, and the next step's flux sees the emptied cells).
     fn deposit(&mut self, g: usize, kernel: &[(usize, f64)], dn: f64) -> f64 {
+        self.mark_gel(kernel.iter().map(|&(idx, _)| idx));
         let h3 = self.grid.cell_volume();
         let f = &mut self.fields[g];
         let per_volume = dn / h3;
@@ -1638,6 +1672,7 @@ impl<'a> Simulation<'a> {
         extrapolate: bool,
     ) -> (bool, f64) {
         let implicit = self.explicit_limit.iter().any(|lim| dt > *lim);
+        self.gel_fresh = false;
         let h3 = self.grid.cell_volume();
         let estimate = tol_pa.is_finite();
         let ng = self.gases.len();
@@ -1764,6 +1799,8 @@ impl<'a> Simulation<'a> {
     /// the cells the step does not write, those outside the gel, hold the values they would
     /// hold in place.
     fn explicit_steps_out_of_place(&mut self, dc: &[(f64, f64)], dt: f64, inflow: &mut [f64]) {
+        let pass_gel = std::mem::take(&mut self.pass_gel_next);
+        let k = self.gel_factors();
         let id = self.grid.codes_id();
         if self.back.len() != self.fields.len() || self.back_codes != id {
             self.back.resize_with(self.fields.len(), Vec::new);
@@ -1776,9 +1813,26 @@ impl<'a> Simulation<'a> {
         {
             let src: Vec<&[f64]> = self.fields.iter().map(|f| f.as_slice()).collect();
             let mut dst: Vec<&mut [f64]> = self.back.iter_mut().map(|f| f.as_mut_slice()).collect();
-            diffusion::explicit_steps_into(&self.grid, &src, &mut dst, dc, dt, inflow);
+            if pass_gel {
+                self.gel_planes.resize(self.grid.n[2], PlaneGel::default());
+                diffusion::explicit_steps_into_passing_gel(
+                    &self.grid,
+                    &src,
+                    &mut dst,
+                    dc,
+                    dt,
+                    inflow,
+                    (&k, &mut self.gel_planes),
+                );
+            } else {
+                diffusion::explicit_steps_into(&self.grid, &src, &mut dst, dc, dt, inflow);
+            }
         }
         std::mem::swap(&mut self.fields, &mut self.back);
+        if pass_gel {
+            self.gel_fresh = true;
+            self.gel_dirty = (usize::MAX, 0);
+        }
     }
 
     /// Gas `g`'s implicit step over [t, t + dt] Richardson-extrapolated, 2·u_½ − u_1 from two
@@ -2009,6 +2063,7 @@ impl<'a> Simulation<'a> {
             return;
         }
         let w = diffusion::PerfusionWeights::new(k, dt);
+        self.gel_fresh = false;
         let h3 = self.grid.cell_volume();
         for g in 0..self.gases.len() {
             let gas = self.gases[g];
@@ -2094,14 +2149,35 @@ impl<'a> Simulation<'a> {
     fn gel_state(&self, ambient: f64) -> (f64, Vec<f64>, f64) {
         use rayon::prelude::*;
         let ng = self.fields.len();
-        let mut k = [0.0; Gas::ALL.len()];
-        for (kg, l) in k.iter_mut().zip(&self.ostwald) {
-            *kg = self.rt / l;
-        }
-        let planes: Vec<PlaneGel> = (0..self.grid.n[2])
-            .into_par_iter()
-            .map(|kz| plane_gel(&self.grid, &self.fields, &k, kz))
-            .collect();
+        let k = self.gel_factors();
+        let nz = self.grid.n[2];
+        let pass = |kz: usize| plane_gel(&self.grid, &self.fields, &k, kz);
+        let planes: Vec<PlaneGel> = if self.gel_fresh && self.gel_planes.len() == nz {
+            // the last step's pass, with the planes written since passed again
+            let (lo, hi) = self.gel_dirty;
+            let mut planes = self.gel_planes.clone();
+            if lo <= hi {
+                planes[lo..=hi]
+                    .par_iter_mut()
+                    .enumerate()
+                    .for_each(|(m, p)| *p = pass(lo + m));
+            }
+            #[cfg(test)]
+            self.fused_frames
+                .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+            if self.check_fused_gel {
+                for (kz, p) in planes.iter().enumerate() {
+                    assert!(
+                        same_plane_gel(p, &pass(kz), ng),
+                        "plane {kz} at t = {}",
+                        self.time
+                    );
+                }
+            }
+            planes
+        } else {
+            (0..nz).into_par_iter().map(pass).collect()
+        };
         let mut max_t = f64::NEG_INFINITY;
         let mut min_c = f64::INFINITY;
         let mut sums = vec![0.0; ng];
@@ -2118,6 +2194,28 @@ impl<'a> Simulation<'a> {
             sums.into_iter().map(|x| x * v).collect(),
             min_c,
         )
+    }
+
+    /// R_u·T/L_g per gas: the factor of a concentration's gas tension ([`plane_gel`]).
+    fn gel_factors(&self) -> [f64; Gas::ALL.len()] {
+        let mut k = [0.0; Gas::ALL.len()];
+        for (kg, l) in k.iter_mut().zip(&self.ostwald) {
+            *kg = self.rt / l;
+        }
+        k
+    }
+
+    /// The cells `idx` are written outside the diffusion step: the z-planes they lie in are
+    /// passed again at the next frame ([`Self::gel_state`]).
+    fn mark_gel(&mut self, idx: impl Iterator<Item = usize>) {
+        if !self.gel_fresh {
+            return;
+        }
+        let plane = self.grid.n[0] * self.grid.n[1];
+        for i in idx {
+            let kz = i / plane;
+            self.gel_dirty = (self.gel_dirty.0.min(kz), self.gel_dirty.1.max(kz));
+        }
     }
 
     /// Send a frame to the observer; with the gel's state (`gel`, [`Numerics::record_gel`])
@@ -2634,6 +2732,14 @@ fn assert_same_frame_bits(a: &[Frame], b: &[Frame]) {
     assert_eq!(a.len(), b.len());
     for (a, b) in a.iter().zip(b) {
         assert_eq!(a.time.to_bits(), b.time.to_bits());
+        assert_eq!(
+            a.max_supersaturation.to_bits(),
+            b.max_supersaturation.to_bits(),
+            "t = {}",
+            a.time
+        );
+        let bits = |m: &[f64]| m.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&a.grid_moles), bits(&b.grid_moles), "t = {}", a.time);
         assert_eq!(a.bubbles.len(), b.bubbles.len());
         for (x, y) in a.bubbles.iter().zip(&b.bubbles) {
             assert_eq!(x.radius.to_bits(), y.radius.to_bits(), "t = {}", a.time);
@@ -2821,6 +2927,55 @@ mod out_of_place_tests {
                     assert_eq!(f[idx].to_bits(), g[idx].to_bits(), "cell {idx}");
                 }
             }
+        }
+    }
+}
+
+#[cfg(test)]
+mod fused_gel_tests {
+    use super::*;
+
+    /// The gel's pass of a frame taken from the explicit step that wrote the planes (with the
+    /// planes the corrector, the displacement and a nucleus wrote since passed again) gives
+    /// the bits of a pass of its own: three bubbles that grow over cells and give them back,
+    /// two threads (the step out of place), frames at every step and every 0.7 s. Every such
+    /// frame is also checked against a pass of its own inside the run (`check_fused_gel`), and
+    /// the frames and summaries of runs with and without it are compared bit by bit.
+    #[test]
+    fn passing_the_gel_in_the_step_keeps_the_frames_bits() {
+        let profile = grow_then_recompress(90.0);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        for interval in [0.0, 0.7] {
+            let mut params = three_bubbles_in_an_open_box(1e-4);
+            params.numerics.record_interval = interval;
+            let run = |fuse: bool| {
+                let mut sim = Simulation::new(&params, &profile).unwrap();
+                sim.fuse_gel_pass = fuse;
+                sim.check_fused_gel = fuse;
+                let start_codes = sim.grid.codes_id();
+                let mut rec = Recorder::default();
+                let summary = pool.install(|| sim.run(&profile, &mut rec)).unwrap();
+                assert_ne!(sim.grid.codes_id(), start_codes, "no cell changed hands");
+                let fused = sim.fused_frames.load(std::sync::atomic::Ordering::Relaxed);
+                (summary, rec.frames, fused)
+            };
+            let (s0, f0, none) = run(false);
+            let (s1, f1, fused) = run(true);
+            assert_eq!(none, 0);
+            assert!(fused > f1.len() / 2, "{fused} of {} frames", f1.len());
+            assert_eq!(s0.steps, s1.steps);
+            assert_eq!(
+                s0.gas_balance_error.to_bits(),
+                s1.gas_balance_error.to_bits()
+            );
+            assert_eq!(
+                s0.min_concentration.to_bits(),
+                s1.min_concentration.to_bits()
+            );
+            assert_same_frame_bits(&f0, &f1);
         }
     }
 }
