@@ -168,9 +168,34 @@ fn plane_gel_portable(codes: &[u8], f: &[&[f64]], k: &[f64; Gas::ALL.len()]) -> 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn plane_gel_avx2(codes: &[u8], f: &[&[f64]], k: &[f64; Gas::ALL.len()]) -> PlaneGel {
+    // SAFETY (all four): the CPU has AVX2 (this function's own requirement)
+    match f.len() {
+        1 => unsafe { plane_gel_avx2_n::<1>(codes, f, k) },
+        2 => unsafe { plane_gel_avx2_n::<2>(codes, f, k) },
+        3 => unsafe { plane_gel_avx2_n::<3>(codes, f, k) },
+        _ => unsafe { plane_gel_avx2_n::<4>(codes, f, k) },
+    }
+}
+
+/// [`plane_gel_avx2`] for `N` gases (`f.len() == N`; the gases' loop unrolled).
+///
+/// # Safety
+/// The CPU must have AVX2.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2")]
+unsafe fn plane_gel_avx2_n<const N: usize>(
+    codes: &[u8],
+    f: &[&[f64]],
+    k: &[f64; Gas::ALL.len()],
+) -> PlaneGel {
     use std::arch::x86_64::*;
     let full = codes.len() - codes.len() % LANES;
-    let ng = f.len();
+    assert_eq!(f.len(), N);
+    let ng = N;
+    let fp: [*const f64; N] = std::array::from_fn(|g| {
+        assert!(f[g].len() >= full);
+        f[g].as_ptr()
+    });
     let zero = _mm256_setzero_pd();
     let pos_inf = _mm256_set1_pd(f64::INFINITY);
     let neg_inf = _mm256_set1_pd(f64::NEG_INFINITY);
@@ -184,13 +209,14 @@ unsafe fn plane_gel_avx2(codes: &[u8], f: &[&[f64]], k: &[f64; Gas::ALL.len()]) 
     let mut min_g = [pos_inf; Gas::ALL.len()];
     for q0 in (0..full).step_by(LANES) {
         // the four cells' inside bits as an all-ones / all-zeros mask per lane
-        let c4 = u32::from_le_bytes([codes[q0], codes[q0 + 1], codes[q0 + 2], codes[q0 + 3]]);
+        // SAFETY: q0 + 3 < full ≤ codes.len(); the four codes read as one little-endian word
+        let c4 = u32::from_le(unsafe { codes.as_ptr().add(q0).cast::<u32>().read_unaligned() });
         let bytes = _mm256_cvtepu8_epi64(_mm_cvtsi32_si128(c4 as i32));
         let inside = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bytes, bit), bit));
         let mut t = zero;
-        for g in 0..ng {
-            // SAFETY: q0 + 3 < full ≤ the plane's length
-            let c = unsafe { _mm256_loadu_pd(f[g].as_ptr().add(q0)) };
+        for g in 0..N {
+            // SAFETY: q0 + 3 < full ≤ every field's plane length (checked above)
+            let c = unsafe { _mm256_loadu_pd(fp[g].add(q0)) };
             sums[g] = _mm256_add_pd(sums[g], _mm256_and_pd(inside, c));
             t = _mm256_add_pd(t, _mm256_mul_pd(c, kv[g]));
             // min(x, acc) gives acc when x is NaN or equal: the scalar `if x < acc`
