@@ -9,7 +9,10 @@
 //!   [`explicit_steps_in_place`], the same bits without a second field (z-plane blocks in
 //!   parallel, each keeping the old planes it still needs in per-thread buffers), or on
 //!   small grids with more than one thread [`explicit_steps_into`] a second set of fields
-//!   (`sim::OUT_OF_PLACE_BYTES`);
+//!   (`sim::OUT_OF_PLACE_BYTES`), which also passes the gel for a frame over each plane it
+//!   has just written (`explicit_steps_into_passing_gel`). A row's interior span takes the
+//!   plain 7-point stencil; its other cells the per-cell terms, side by side where a run of
+//!   them shares its face codes (`uniform_span`);
 //! - [`implicit_step`]: locally one-dimensional backward Euler (x, y, then z tridiagonal
 //!   solves, Thomas algorithm), unconditionally stable and positivity-preserving, used when
 //!   long holds allow large steps. For a box with uniform D the three 1-D operators commute,
@@ -39,6 +42,8 @@
 //!   order, as the generic sweep does), then the y lines the same way on the plane itself.
 //! - **z**, in column chunks (in parallel) sized so a chunk's nz planes stay in L2 between
 //!   the forward and backward pass.
+//! - Several gases: [`ImplicitSolver::steps`] solves them side by side (one plan, a table per
+//!   gas), each the bits of its own step.
 //!
 //! Every row (x: a plane's x position, y: a plane's y position, z: a whole plane, in pieces
 //! of one y position) is cut at plan time into `Run`s along its contiguous index: stretches
