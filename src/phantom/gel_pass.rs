@@ -205,7 +205,7 @@ unsafe fn plane_gel_avx2_n<const N: usize>(
     let mut max_t = neg_inf;
     // the lowest value per gas, each in its own chain (one chain through every gas would
     // bound the loop); combined below, which gives the one chain's bits unless the lowest
-    // value is a zero (then ±0 depend on the order: the plane is passed again in one chain)
+    // value is a zero (then ±0 depend on the order: the plane is passed again by the portable build)
     let mut min_g = [pos_inf; Gas::ALL.len()];
     for q0 in (0..full).step_by(LANES) {
         // the four cells' inside bits as an all-ones / all-zeros mask per lane
@@ -232,59 +232,8 @@ unsafe fn plane_gel_avx2_n<const N: usize>(
     // SAFETY: four f64 into a four-element array
     unsafe { _mm256_storeu_pd(lowest.as_mut_ptr(), min_c) };
     if lowest.contains(&0.0) {
-        // SAFETY: the CPU has AVX2 (this function's own requirement)
-        return unsafe { plane_gel_avx2_one_chain(codes, f, k) };
-    }
-    let mut lanes = Lanes::new();
-    for g in 0..ng {
-        // SAFETY: four f64 into a four-element array
-        unsafe { _mm256_storeu_pd(lanes.sums[g].as_mut_ptr(), sums[g]) };
-    }
-    // SAFETY: as above
-    unsafe {
-        _mm256_storeu_pd(lanes.max_t.as_mut_ptr(), max_t);
-        _mm256_storeu_pd(lanes.min_c.as_mut_ptr(), min_c);
-    }
-    lanes.finish(codes, f, &k[..ng], full)
-}
-
-/// [`plane_gel_avx2`] with the lowest value in one chain through every gas, cell by cell (the
-/// portable build's order): for a plane whose lowest value is a zero, where the order decides
-/// between −0 and +0.
-///
-/// # Safety
-/// The CPU must have AVX2.
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-unsafe fn plane_gel_avx2_one_chain(
-    codes: &[u8],
-    f: &[&[f64]],
-    k: &[f64; Gas::ALL.len()],
-) -> PlaneGel {
-    use std::arch::x86_64::*;
-    let full = codes.len() - codes.len() % LANES;
-    let ng = f.len();
-    let zero = _mm256_setzero_pd();
-    let pos_inf = _mm256_set1_pd(f64::INFINITY);
-    let neg_inf = _mm256_set1_pd(f64::NEG_INFINITY);
-    let bit = _mm256_set1_epi64x(INSIDE_BIT as i64);
-    let kv: [__m256d; Gas::ALL.len()] = std::array::from_fn(|g| _mm256_set1_pd(k[g]));
-    let mut sums = [zero; Gas::ALL.len()];
-    let mut max_t = neg_inf;
-    let mut min_c = pos_inf;
-    for q0 in (0..full).step_by(LANES) {
-        let c4 = u32::from_le_bytes([codes[q0], codes[q0 + 1], codes[q0 + 2], codes[q0 + 3]]);
-        let bytes = _mm256_cvtepu8_epi64(_mm_cvtsi32_si128(c4 as i32));
-        let inside = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_and_si256(bytes, bit), bit));
-        let mut t = zero;
-        for g in 0..ng {
-            // SAFETY: q0 + 3 < full ≤ the plane's length
-            let c = unsafe { _mm256_loadu_pd(f[g].as_ptr().add(q0)) };
-            sums[g] = _mm256_add_pd(sums[g], _mm256_and_pd(inside, c));
-            t = _mm256_add_pd(t, _mm256_mul_pd(c, kv[g]));
-            min_c = _mm256_min_pd(_mm256_blendv_pd(pos_inf, c, inside), min_c);
-        }
-        max_t = _mm256_max_pd(_mm256_blendv_pd(neg_inf, t, inside), max_t);
+        // the portable build keeps the one chain: its bits are this kernel's otherwise
+        return plane_gel_portable(codes, f, k);
     }
     let mut lanes = Lanes::new();
     for g in 0..ng {
