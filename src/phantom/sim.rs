@@ -2978,6 +2978,72 @@ mod fused_gel_tests {
             assert_same_frame_bits(&f0, &f1);
         }
     }
+
+    /// The same with nuclei that activate after a dive (new bubbles take their gas from the
+    /// gel between the step and the frame) and with perfusion (which drops the step's pass).
+    #[test]
+    fn passing_the_gel_keeps_the_bits_with_nuclei_and_perfusion() {
+        use crate::phantom::nucleation::critical_radius::{CriticalRadius, SizeDistribution};
+        use crate::units::{ATM_PA, PSI_PA};
+        let top = ATM_PA + 130.0 * PSI_PA;
+        let (down, up) = ((top - ATM_PA) / 6.9e4, (top - ATM_PA) / 8.9e4);
+        let profile = PressureHistory::with_gas(
+            "dive",
+            vec![
+                0.0,
+                down,
+                down + 120.0,
+                down + 120.0 + up,
+                down + 150.0 + up,
+            ],
+            vec![ATM_PA, top, top, ATM_PA, ATM_PA],
+            crate::gas::GasMix::AIR,
+            0.0,
+        )
+        .unwrap();
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        for perfusion in [0.0, 1e-3] {
+            let mut params = PhantomParams::box_phantom([1.5e-3; 3], 100e-6);
+            params.min_radius = 0.0;
+            params.nucleation = std::sync::Arc::new(CriticalRadius {
+                number_density: 2e10,
+                distribution: SizeDistribution::Exponential { slope: 4e6 },
+                margin: None,
+                seed: 7,
+                skin_compression: None,
+            });
+            params.numerics.record_interval = 0.0;
+            params.numerics.max_content_change = 0.1;
+            params.numerics.bubble_tolerance = 0.02;
+            params.perfusion_rate = perfusion;
+            let run = |fuse: bool| {
+                let mut sim = Simulation::new(&params, &profile).unwrap();
+                sim.fuse_gel_pass = fuse;
+                sim.check_fused_gel = fuse;
+                let mut rec = Recorder::default();
+                let summary = pool.install(|| sim.run(&profile, &mut rec)).unwrap();
+                let fused = sim.fused_frames.load(std::sync::atomic::Ordering::Relaxed);
+                (summary, rec.frames, fused, sim.bubbles.len())
+            };
+            let (s0, f0, _, _) = run(false);
+            let (s1, f1, fused, bubbles) = run(true);
+            assert!(bubbles > 0, "the dive must nucleate bubbles");
+            if perfusion > 0.0 {
+                assert_eq!(fused, 0);
+            } else {
+                assert!(fused > f1.len() / 2, "{fused} of {} frames", f1.len());
+            }
+            assert_eq!(s0.steps, s1.steps);
+            assert_eq!(
+                s0.gas_balance_error.to_bits(),
+                s1.gas_balance_error.to_bits()
+            );
+            assert_same_frame_bits(&f0, &f1);
+        }
+    }
 }
 
 #[cfg(test)]
