@@ -504,8 +504,12 @@ fn explicit_steps_into_with(
                 .enumerate()
                 .for_each(|(k, (mut outs, slot))| {
                     step(k, &mut outs);
-                    let f: Vec<&[f64]> = outs.iter().map(|o| &**o).collect();
-                    *slot = plane_gel_of(&grid.codes[0][k * plane..(k + 1) * plane], &f, kg);
+                    let mut f: [&[f64]; Gas::ALL.len()] = [&[]; Gas::ALL.len()];
+                    for (f, o) in f.iter_mut().zip(&outs) {
+                        *f = o;
+                    }
+                    let codes = &grid.codes[0][k * plane..(k + 1) * plane];
+                    *slot = plane_gel_of(codes, &f[..nf], kg);
                 })
         }
     }
@@ -1353,12 +1357,10 @@ pub struct ImplicitSolver {
     plan: Option<LinePlan>,
     /// Set when the grid's segments are too long for the table: the generic sweep is used.
     generic: Option<u64>,
-    table: Tables,
     scratch: Vec<f64>,
-    /// The x-open cells' values after the x sweep (as `grid.open_cells[0]`), for the inflow.
-    xvals: Vec<f64>,
-    /// The table and x-open values of the second and later fields of [`Self::steps`].
-    others: Vec<(Tables, Vec<f64>)>,
+    /// Per field of [`Self::steps`] (the first also [`Self::step`]'s): the factor table and the
+    /// x-open cells' values after the x sweep (as `grid.open_cells[0]`), for the inflow.
+    per_field: Vec<(Tables, Vec<f64>)>,
     /// Plans brought up to date by [`LinePlan::update`] (not built anew).
     #[cfg(test)]
     updates: usize,
@@ -1387,8 +1389,12 @@ impl ImplicitSolver {
             }
             return inflow;
         }
+        if self.per_field.is_empty() {
+            self.per_field.push(Default::default());
+        }
         let plan = self.plan.as_ref().expect("refreshed");
-        planned_step(grid, plan, &mut self.table, &mut self.xvals, u, r, cb, isa)
+        let (table, xvals) = &mut self.per_field[0];
+        planned_step(grid, plan, table, xvals, u, r, cb, isa)
     }
 
     /// Several fields' steps over the same grid, field `f` with diffusivity and boundary value
@@ -1417,41 +1423,27 @@ impl ImplicitSolver {
     ) {
         let nf = fields.len();
         assert!(dc.len() == nf && inflow.len() == nf);
-        if nf < 2 || !self.refresh(grid) {
+        if !self.refresh(grid) {
+            // the generic sweep, field by field
             for f in 0..nf {
                 inflow[f] = self.step_with(grid, fields[f], dc[f].0, dt, dc[f].1, isa);
             }
             return;
         }
-        if self.others.len() < nf - 1 {
-            self.others.resize_with(nf - 1, Default::default);
+        if self.per_field.len() < nf {
+            self.per_field.resize_with(nf, Default::default);
         }
         let plan = self.plan.as_ref().expect("refreshed");
         let h2 = grid.h * grid.h;
-        let (first, rest) = fields.split_at_mut(1);
-        let (table, xvals) = (&mut self.table, &mut self.xvals);
-        let others = &mut self.others[..nf - 1];
-        let (a, b) = rayon::join(
-            || {
-                let u = &mut *first[0];
+        fields
+            .par_iter_mut()
+            .zip(self.per_field.par_iter_mut())
+            .zip(dc.par_iter())
+            .zip(inflow.par_iter_mut())
+            .for_each(|(((u, (table, xvals)), &(d, cb)), inflow)| {
                 assert_eq!(u.len(), grid.len());
-                planned_step(grid, plan, table, xvals, u, dc[0].0 * dt / h2, dc[0].1, isa)
-            },
-            || {
-                let mut out = Vec::with_capacity(nf - 1);
-                rest.par_iter_mut()
-                    .zip(others.par_iter_mut())
-                    .zip(&dc[1..])
-                    .map(|((u, (table, xvals)), &(d, cb))| {
-                        assert_eq!(u.len(), grid.len());
-                        planned_step(grid, plan, table, xvals, u, d * dt / h2, cb, isa)
-                    })
-                    .collect_into_vec(&mut out);
-                out
-            },
-        );
-        inflow[0] = a;
-        inflow[1..].copy_from_slice(&b);
+                *inflow = planned_step(grid, plan, table, xvals, u, d * dt / h2, cb, isa);
+            });
     }
 
     /// Bring the plan level with the grid's codes; false when the grid takes the generic
@@ -2628,8 +2620,8 @@ mod planned_tests {
     }
 
     /// [`ImplicitSolver::steps`] (the fields side by side) against each field stepped alone
-    /// by [`ImplicitSolver::step`]: the same bits and inflows, for 1, 2 and 3 fields (one is
-    /// the plain loop, three share the second worker) on 1, 2 and 3 threads, in a cylinder
+    /// by [`ImplicitSolver::step`]: the same bits and inflows, for 1, 2 and 3 fields
+    /// (more fields than threads, too) on 1, 2 and 3 threads, in a cylinder
     /// with cells taken out (so the plan is updated between steps) and in an open box.
     #[test]
     fn fields_stepped_side_by_side_are_each_fields_bits() {

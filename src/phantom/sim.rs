@@ -1688,52 +1688,43 @@ impl<'a> Simulation<'a> {
             // the descent's extrapolation is over: give its field-sized buffer back
             self.extra = Vec::new();
         }
-        if !implicit && !estimate {
-            // every gas in one parallel pass, each the same bits as stepped alone
+        if !estimate && !(implicit && extrapolate) {
+            // every gas at once, each the same bits as stepped alone: the explicit step in one
+            // parallel pass with the open faces at their start value, the implicit steps side
+            // by side with the open faces at their end value
+            let tb = if implicit { t + dt } else { t };
             let mut dc = [(0.0, 0.0); Gas::ALL.len()];
             for (g, dc) in dc[..ng].iter_mut().enumerate() {
-                let cb =
-                    self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], t) / self.rt;
-                *dc = (self.diffusivity[g], cb);
-            }
-            let mut inflow = [0.0; Gas::ALL.len()];
-            if self.fields_bytes() <= self.out_of_place_bytes && rayon::current_num_threads() > 1 {
-                self.explicit_steps_out_of_place(&dc[..ng], dt, &mut inflow[..ng]);
-            } else {
-                let mut fields: Vec<&mut [f64]> =
-                    self.fields.iter_mut().map(|f| f.as_mut_slice()).collect();
-                diffusion::explicit_steps_in_place(
-                    &self.grid,
-                    &mut fields,
-                    &dc[..ng],
-                    dt,
-                    &mut inflow[..ng],
-                );
-            }
-            for (g, x) in inflow[..ng].iter().enumerate() {
-                self.inflow += x * h3;
-                self.step_flow[g] = x * h3;
-            }
-            return (false, 0.0);
-        }
-        if implicit && !extrapolate && !estimate {
-            // every gas at once, side by side: the same bits as one after the other
-            let mut dc = [(0.0, 0.0); Gas::ALL.len()];
-            for (g, dc) in dc[..ng].iter_mut().enumerate() {
-                let cb = self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], t + dt)
+                let cb = self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], tb)
                     / self.rt;
                 *dc = (self.diffusivity[g], cb);
             }
             let mut inflow = [0.0; Gas::ALL.len()];
-            let mut fields: Vec<&mut [f64]> =
-                self.fields.iter_mut().map(|f| f.as_mut_slice()).collect();
-            self.implicit
-                .steps(&self.grid, &mut fields, &dc[..ng], dt, &mut inflow[..ng]);
+            let out_of_place =
+                self.fields_bytes() <= self.out_of_place_bytes && rayon::current_num_threads() > 1;
+            if !implicit && out_of_place {
+                self.explicit_steps_out_of_place(&dc[..ng], dt, &mut inflow[..ng]);
+            } else {
+                let mut fields: Vec<&mut [f64]> =
+                    self.fields.iter_mut().map(|f| f.as_mut_slice()).collect();
+                if implicit {
+                    self.implicit
+                        .steps(&self.grid, &mut fields, &dc[..ng], dt, &mut inflow[..ng]);
+                } else {
+                    diffusion::explicit_steps_in_place(
+                        &self.grid,
+                        &mut fields,
+                        &dc[..ng],
+                        dt,
+                        &mut inflow[..ng],
+                    );
+                }
+            }
             for (g, x) in inflow[..ng].iter().enumerate() {
                 self.inflow += x * h3;
                 self.step_flow[g] = x * h3;
             }
-            return (true, err);
+            return (implicit, 0.0);
         }
         for g in 0..ng {
             let gas = self.gases[g];
