@@ -1688,7 +1688,8 @@ impl<'a> Simulation<'a> {
             // the descent's extrapolation is over: give its field-sized buffer back
             self.extra = Vec::new();
         }
-        if !estimate && !(implicit && extrapolate) {
+        // (the field's estimate and the extrapolated descent step gas by gas, below)
+        if !(estimate || implicit && extrapolate) {
             // every gas at once, each the same bits as stepped alone: the explicit step in one
             // parallel pass with the open faces at their start value, the implicit steps side
             // by side with the open faces at their end value
