@@ -2927,47 +2927,68 @@ mod out_of_place_tests {
 mod fused_gel_tests {
     use super::*;
 
-    /// The gel's pass of a frame taken from the explicit step that wrote the planes (with the
-    /// planes the corrector, the displacement and a nucleus wrote since passed again) gives
-    /// the bits of a pass of its own: three bubbles that grow over cells and give them back,
-    /// two threads (the step out of place), frames at every step and every 0.7 s. Every such
-    /// frame is also checked against a pass of its own inside the run (`check_fused_gel`), and
-    /// the frames and summaries of runs with and without it are compared bit by bit.
-    #[test]
-    fn passing_the_gel_in_the_step_keeps_the_frames_bits() {
-        let profile = grow_then_recompress(90.0);
+    /// What a run gives these tests: the summary, the frames, the frames that took the step's
+    /// gel pass, the bubbles at the end and whether any cell changed hands.
+    type Outcome = (RunSummary, Vec<Frame>, usize, usize, bool);
+
+    /// `params` through `profile` on two threads (so the explicit step runs out of place), with
+    /// the step's gel pass on (each such frame also checked against a pass of its own inside
+    /// the run) or off.
+    fn run(params: &PhantomParams, profile: &PressureHistory, fuse: bool) -> Outcome {
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(2)
             .build()
             .unwrap();
+        let mut sim = Simulation::new(params, profile).unwrap();
+        sim.fuse_gel_pass = fuse;
+        sim.check_fused_gel = fuse;
+        let start_codes = sim.grid.codes_id();
+        let mut rec = Recorder::default();
+        let summary = pool.install(|| sim.run(profile, &mut rec)).unwrap();
+        let fused = sim.fused_frames.load(std::sync::atomic::Ordering::Relaxed);
+        let moved = sim.grid.codes_id() != start_codes;
+        (summary, rec.frames, fused, sim.bubbles.len(), moved)
+    }
+
+    /// The runs with and without the step's gel pass give the same bits; with it, most frames
+    /// took the step's pass (`taken`) or none did.
+    fn assert_same_runs(plain: &Outcome, fused: &Outcome, taken: bool) {
+        assert_eq!(plain.2, 0);
+        if taken {
+            assert!(
+                fused.2 > fused.1.len() / 2,
+                "{} of {} frames",
+                fused.2,
+                fused.1.len()
+            );
+        } else {
+            assert_eq!(fused.2, 0);
+        }
+        assert_eq!(plain.0.steps, fused.0.steps);
+        assert_eq!(
+            plain.0.gas_balance_error.to_bits(),
+            fused.0.gas_balance_error.to_bits()
+        );
+        assert_eq!(
+            plain.0.min_concentration.to_bits(),
+            fused.0.min_concentration.to_bits()
+        );
+        assert_same_frame_bits(&plain.1, &fused.1);
+    }
+
+    /// The gel's pass of a frame taken from the explicit step that wrote the planes (with the
+    /// planes the corrector and the displacement wrote since passed again) gives the bits of a
+    /// pass of its own: three bubbles that grow over cells and give them back, frames at every
+    /// step and every 0.7 s.
+    #[test]
+    fn passing_the_gel_in_the_step_keeps_the_frames_bits() {
+        let profile = grow_then_recompress(90.0);
         for interval in [0.0, 0.7] {
             let mut params = three_bubbles_in_an_open_box(1e-4);
             params.numerics.record_interval = interval;
-            let run = |fuse: bool| {
-                let mut sim = Simulation::new(&params, &profile).unwrap();
-                sim.fuse_gel_pass = fuse;
-                sim.check_fused_gel = fuse;
-                let start_codes = sim.grid.codes_id();
-                let mut rec = Recorder::default();
-                let summary = pool.install(|| sim.run(&profile, &mut rec)).unwrap();
-                assert_ne!(sim.grid.codes_id(), start_codes, "no cell changed hands");
-                let fused = sim.fused_frames.load(std::sync::atomic::Ordering::Relaxed);
-                (summary, rec.frames, fused)
-            };
-            let (s0, f0, none) = run(false);
-            let (s1, f1, fused) = run(true);
-            assert_eq!(none, 0);
-            assert!(fused > f1.len() / 2, "{fused} of {} frames", f1.len());
-            assert_eq!(s0.steps, s1.steps);
-            assert_eq!(
-                s0.gas_balance_error.to_bits(),
-                s1.gas_balance_error.to_bits()
-            );
-            assert_eq!(
-                s0.min_concentration.to_bits(),
-                s1.min_concentration.to_bits()
-            );
-            assert_same_frame_bits(&f0, &f1);
+            let (plain, fused) = (run(&params, &profile, false), run(&params, &profile, true));
+            assert!(fused.4, "no cell changed hands");
+            assert_same_runs(&plain, &fused, true);
         }
     }
 
@@ -2993,10 +3014,6 @@ mod fused_gel_tests {
             0.0,
         )
         .unwrap();
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(2)
-            .build()
-            .unwrap();
         for perfusion in [0.0, 1e-3] {
             let mut params = PhantomParams::box_phantom([1.5e-3; 3], 100e-6);
             params.min_radius = 0.0;
@@ -3011,29 +3028,10 @@ mod fused_gel_tests {
             params.numerics.max_content_change = 0.1;
             params.numerics.bubble_tolerance = 0.02;
             params.perfusion_rate = perfusion;
-            let run = |fuse: bool| {
-                let mut sim = Simulation::new(&params, &profile).unwrap();
-                sim.fuse_gel_pass = fuse;
-                sim.check_fused_gel = fuse;
-                let mut rec = Recorder::default();
-                let summary = pool.install(|| sim.run(&profile, &mut rec)).unwrap();
-                let fused = sim.fused_frames.load(std::sync::atomic::Ordering::Relaxed);
-                (summary, rec.frames, fused, sim.bubbles.len())
-            };
-            let (s0, f0, _, _) = run(false);
-            let (s1, f1, fused, bubbles) = run(true);
-            assert!(bubbles > 0, "the dive must nucleate bubbles");
-            if perfusion > 0.0 {
-                assert_eq!(fused, 0);
-            } else {
-                assert!(fused > f1.len() / 2, "{fused} of {} frames", f1.len());
-            }
-            assert_eq!(s0.steps, s1.steps);
-            assert_eq!(
-                s0.gas_balance_error.to_bits(),
-                s1.gas_balance_error.to_bits()
-            );
-            assert_same_frame_bits(&f0, &f1);
+            let (plain, fused) = (run(&params, &profile, false), run(&params, &profile, true));
+            assert!(fused.3 > 0, "the dive must nucleate bubbles");
+            // perfusion writes every cell after the step: the frames pass the gel themselves
+            assert_same_runs(&plain, &fused, perfusion == 0.0);
         }
     }
 }
