@@ -3,9 +3,12 @@
 //! half a cell from the outermost centres; sealed faces carry no flux.
 //!
 //! Two schemes, both conservative to round-off (the interior face fluxes cancel in pairs):
-//! - [`explicit_step`]: forward Euler, used when the step the physics asks for is below the
-//!   positivity limit dt ≤ h²/(D·w_max) (w_max the largest stencil weight sum, 6 inside,
-//!   up to 9 in a corner with three open faces); the simulation uses
+//! - [`explicit_step`]: forward Euler for the interior sides, the open sides' term
+//!   2r·(C_b − C') taken implicitly in the cell itself (a division per boundary cell,
+//!   [`open_sides_implicit`]), used when the step the physics asks for is below the
+//!   positivity limit dt ≤ h²/(6D) (6 the largest number of interior sides; with explicit
+//!   open sides, counted 2 each, it was h²/(9D) in a corner with three open faces, which
+//!   held every grid with an open corner to ⅔ of the step); the simulation uses
 //!   [`explicit_steps_in_place`], the same bits without a second field (z-plane blocks in
 //!   parallel, each keeping the old planes it still needs in per-thread buffers), or on
 //!   small grids with more than one thread [`explicit_steps_into`] a second set of fields
@@ -72,10 +75,44 @@ fn weight(code: u8) -> f64 {
     }
 }
 
-/// Largest stencil weight sum over the inside cells (the explicit positivity limit is
-/// dt ≤ h²/(D·this)).
-pub fn max_weight_sum(grid: &Grid) -> f64 {
-    let mut m: f64 = 0.0;
+/// Largest number of interior sides of an inside cell (6 wherever a cell has all its
+/// neighbours; at least 1). The explicit step takes open sides implicitly
+/// ([`open_sides_implicit`]) and sealed ones carry nothing, so this alone sets its limit.
+pub fn max_interior_sides(grid: &Grid) -> f64 {
+    let mut m: u32 = 1;
+    for idx in 0..grid.len() {
+        if !grid.inside(idx) {
+            continue;
+        }
+        let mut n = 0;
+        for d in 0..3 {
+            let c = grid.codes[d][idx];
+            n += u32::from(c & 3 == SIDE_INTERIOR) + u32::from((c >> 2) & 3 == SIDE_INTERIOR);
+        }
+        m = m.max(n);
+    }
+    f64::from(m)
+}
+
+/// The largest stable, positivity-preserving explicit step, s: dt ≤ h²/(D·n) with n the
+/// largest number of interior sides ([`max_interior_sides`]). Each cell's new value is then a
+/// combination of old values and C_b with non-negative weights (C − r·n·C + r·Σ C_n, divided
+/// by 1 + s with its open sides' s·C_b added), and the step's matrix
+/// (I + S)⁻¹(I + r·L_interior) has no eigenvalue beyond ±1. Before 26 Nov 2026 the open
+/// sides were explicit and counted 2 each, which made a corner with three open faces (9)
+/// set the limit for the whole grid: ⅔ of this.
+pub fn explicit_limit(grid: &Grid, d: f64) -> f64 {
+    grid.h * grid.h / (d * max_interior_sides(grid))
+}
+
+/// h²/(D·w_max), w_max the largest stencil weight sum of an inside cell with an open side
+/// counted 2 (9 in a corner with three open faces, 6 where every side is interior): the
+/// forward-Euler limit of the step with explicit open sides, as it was before 26 Nov 2026,
+/// and still the unit of [`super::params::Numerics::implicit_cost_ratio`], so that a step is
+/// implicit from the same length as before on every grid (the verification figures near
+/// bubbles were set with it).
+pub fn implicit_cost_unit(grid: &Grid, d: f64) -> f64 {
+    let mut w: f64 = 0.0;
     for idx in 0..grid.len() {
         if !grid.inside(idx) {
             continue;
@@ -85,14 +122,9 @@ pub fn max_weight_sum(grid: &Grid) -> f64 {
             let c = grid.codes[d][idx];
             s += weight(c & 3) + weight((c >> 2) & 3);
         }
-        m = m.max(s);
+        w = w.max(s);
     }
-    m
-}
-
-/// The largest stable, positivity-preserving forward-Euler step, s.
-pub fn explicit_limit(grid: &Grid, d: f64) -> f64 {
-    grid.h * grid.h / (d * max_weight_sum(grid))
+    grid.h * grid.h / (d * w)
 }
 
 /// One forward-Euler step from `u` into `out` with r = D·dt/h². Cells outside the gel (outside
@@ -166,6 +198,7 @@ fn stencil_plane(
     let generic = |q: usize| -> f64 {
         let ui = c[q];
         let mut acc = 0.0;
+        let mut open = 0;
         for (dir, codes) in codes.iter().enumerate() {
             let code = codes[q];
             let m = code & 3;
@@ -177,7 +210,7 @@ fn stencil_plane(
                     _ => zm[q],
                 } - ui;
             } else if m == SIDE_OPEN {
-                acc += 2.0 * (cb - ui);
+                open += 1;
             }
             if p == SIDE_INTERIOR {
                 acc += match dir {
@@ -186,10 +219,10 @@ fn stencil_plane(
                     _ => zp[q],
                 } - ui;
             } else if p == SIDE_OPEN {
-                acc += 2.0 * (cb - ui);
+                open += 1;
             }
         }
-        ui + r * acc
+        open_sides_implicit(ui, r * acc, OpenSides::new(open, r, cb))
     };
     let centre = 1.0 - 6.0 * r;
     for j in 0..ny {
@@ -275,6 +308,7 @@ fn uniform_span(
     let b = a + o.len();
     let u = &c[a..b];
     o.fill(0.0);
+    let mut open = 0;
     for (d, code) in code.into_iter().enumerate() {
         for (side, plus) in [(code & 3, false), ((code >> 2) & 3, true)] {
             if side == SIDE_INTERIOR {
@@ -291,19 +325,56 @@ fn uniform_span(
                     *o += n - u;
                 }
             } else if side == SIDE_OPEN {
-                for (o, &u) in o.iter_mut().zip(u) {
-                    *o += 2.0 * (cb - u);
-                }
+                open += 1;
             }
         }
     }
-    for (o, &u) in o.iter_mut().zip(u) {
-        *o = u + r * *o;
+    let sides = OpenSides::new(open, r, cb);
+    if open == 0 {
+        for (o, &u) in o.iter_mut().zip(u) {
+            *o = u + r * *o;
+        }
+    } else {
+        for (o, &u) in o.iter_mut().zip(u) {
+            *o = open_sides_implicit(u, r * *o, sides);
+        }
     }
 }
 
-/// The boundary inflow of an explicit step from `u` (the field before the step), summed in
-/// the order of `grid.open_cells`.
+/// A cell's open sides in the explicit step ([`open_sides_implicit`]): s = 2r·(their number)
+/// and s·C_b.
+#[derive(Clone, Copy)]
+struct OpenSides {
+    s: f64,
+    s_cb: f64,
+}
+
+impl OpenSides {
+    #[inline(always)]
+    fn new(open: u32, r: f64, cb: f64) -> OpenSides {
+        let s = (2 * open) as f64 * r;
+        OpenSides { s, s_cb: s * cb }
+    }
+}
+
+/// A cell's value after the explicit step, from its old value `ui` and the interior sides'
+/// forward-Euler change `r_acc` = r·Σ(C_n − C), with its open sides (C_b at half a cell,
+/// weight 2) taken implicitly: C' = C + r·Σ(C_n − C) + s·(C_b − C'), i.e.
+/// C' = (C + r·Σ(C_n − C) + s·C_b)/(1 + s), s = 2r·(open sides). The open sides then add
+/// nothing to the positivity limit ([`explicit_limit`]), which the interior sides alone set,
+/// and the step still conserves gas exactly: what enters is s·(C_b − C') ([`explicit_inflows`]
+/// from the new values). A cell with no open side is C + r·Σ(C_n − C).
+#[inline(always)]
+fn open_sides_implicit(ui: f64, r_acc: f64, sides: OpenSides) -> f64 {
+    if sides.s == 0.0 {
+        ui + r_acc
+    } else {
+        (ui + r_acc + sides.s_cb) / (1.0 + sides.s)
+    }
+}
+
+/// The boundary inflow of an explicit step, from `u` the field after the step (its open sides
+/// are implicit: [`open_sides_implicit`]), summed in the order of `grid.open_cells`.
 fn explicit_inflow(grid: &Grid, u: &[f64], r: f64, cb: f64) -> f64 {
     let mut inflow = 0.0;
     for cells in &grid.open_cells {
@@ -479,7 +550,6 @@ fn explicit_steps_into_with(
     let [nx, ny, nz] = grid.n;
     let plane = nx * ny;
     let r: Vec<f64> = dc.iter().map(|(d, _)| d * dt / (grid.h * grid.h)).collect();
-    explicit_inflows(grid, src, &r, dc, inflow);
     let mut planes: Vec<Vec<&mut [f64]>> = (0..nz).map(|_| Vec::with_capacity(nf)).collect();
     for u in dst.iter_mut() {
         for (k, p) in u.chunks_mut(plane).enumerate() {
@@ -513,6 +583,9 @@ fn explicit_steps_into_with(
                 })
         }
     }
+    // from the new values (the open sides are implicit)
+    let fields: Vec<&[f64]> = dst.iter().map(|u| &**u).collect();
+    explicit_inflows(grid, &fields, &r, dc, inflow);
 }
 
 /// [`explicit_steps_in_place`] with the interior stencil compiled for `isa`.
@@ -529,11 +602,6 @@ fn explicit_steps_in_place_with(
     let [nx, ny, nz] = grid.n;
     let plane = nx * ny;
     let r: Vec<f64> = dc.iter().map(|(d, _)| d * dt / (grid.h * grid.h)).collect();
-    // from the old values, before they are overwritten
-    {
-        let fields: Vec<&[f64]> = fields.iter().map(|u| &**u).collect();
-        explicit_inflows(grid, &fields, &r, dc, inflow);
-    }
     let threads = rayon::current_num_threads().max(1);
     let blocks = if threads == 1 {
         1
@@ -591,6 +659,9 @@ fn explicit_steps_in_place_with(
                 });
             });
     });
+    // from the new values (the open sides are implicit)
+    let fields: Vec<&[f64]> = fields.iter().map(|u| &**u).collect();
+    explicit_inflows(grid, &fields, &r, dc, inflow);
 }
 
 /// One block of [`explicit_steps_in_place`] for one field: planes `k0..` in `slab`, going
@@ -2381,9 +2452,10 @@ mod planned_tests {
 
     /// The explicit step against a per-cell reference written here: the plain 7-point form
     /// centre·C + r·Σ(neighbours) inside each row's interior span, and outside it the sum of
-    /// the six sides' terms in x−, x+, y−, y+, z−, z+ order (an interior side C_n − C, an open
-    /// one 2(C_b − C)), C + r·sum: the same bits, out of place and in place, on boxes (open on
-    /// every face, on two, sealed) and on a cylinder with excluded cells.
+    /// the interior sides' terms C_n − C in x−, x+, y−, y+, z−, z+ order, C + r·sum, with the
+    /// open sides implicit, (C + r·sum + s·C_b)/(1 + s), s = 2r·(open sides): the same bits,
+    /// out of place and in place, on boxes (open on every face, on two, sealed) and on a
+    /// cylinder with excluded cells. The inflow is Σ s·(C_b − C') over the open cells.
     #[test]
     fn explicit_step_matches_a_per_cell_reference() {
         let reference = |g: &Grid, u: &[f64], r: f64, cb: f64| -> Vec<f64> {
@@ -2406,7 +2478,7 @@ mod planned_tests {
                     *o = (1.0 - 6.0 * r) * u[idx] + r * s;
                     continue;
                 }
-                let mut acc = 0.0;
+                let (mut acc, mut open) = (0.0, 0.0);
                 for (d, st) in strides.iter().enumerate() {
                     let code = g.codes[d][idx];
                     for (side, nb) in [
@@ -2416,11 +2488,17 @@ mod planned_tests {
                         if side == SIDE_INTERIOR {
                             acc += u[nb] - u[idx];
                         } else if side == SIDE_OPEN {
-                            acc += 2.0 * (cb - u[idx]);
+                            open += 1.0;
                         }
                     }
                 }
-                *o = u[idx] + r * acc;
+                // C' = C + r·acc + s·(C_b − C') with s = 2r·(open sides)
+                let s = 2.0 * open * r;
+                *o = if open > 0.0 {
+                    (u[idx] + r * acc + s * cb) / (1.0 + s)
+                } else {
+                    u[idx] + r * acc
+                };
             }
             out
         };
@@ -2451,7 +2529,7 @@ mod planned_tests {
             }
             // three fields with their own D and boundary value in one pass, with 1 and 3
             // threads: each the reference's bits, its inflow the sum over the open faces
-            // r·2·(C_b − C) written out here
+            // r·2·(C_b − C') (C' the new value) written out here
             let dc = [(d, cb), (0.4 * d, 0.3), (0.9 * d, 2.0)];
             let us: Vec<Vec<f64>> = (0..3)
                 .map(|f| {
@@ -2485,7 +2563,7 @@ mod planned_tests {
                     let mut flow = 0.0;
                     for cells in &g.open_cells {
                         for &(idx, cnt) in cells {
-                            flow += r * 2.0 * cnt as f64 * (dc[f].1 - us[f][idx as usize]);
+                            flow += r * 2.0 * cnt as f64 * (dc[f].1 - want[idx as usize]);
                         }
                     }
                     assert_eq!(flow.to_bits(), inflow[f].to_bits(), "field {f}: inflow");

@@ -171,8 +171,9 @@ pub enum StepLimit {
     Breakpoint,
     /// The end of the profile.
     End,
-    /// Cut to the explicit limit: between it and `implicit_cost_ratio` times it, the explicit
-    /// step is the cheaper.
+    /// Cut to the explicit limit: between it and the implicit threshold (`implicit_cost_ratio`
+    /// times [`diffusion::implicit_cost_unit`]) the explicit step is the cheaper and the more
+    /// accurate.
     ExplicitLimit,
 }
 
@@ -411,6 +412,10 @@ pub struct Simulation<'a> {
     diffusivity: Vec<f64>,
     ostwald: Vec<f64>,
     explicit_limit: Vec<f64>,
+    /// The shortest step taken implicitly, s: `implicit_cost_ratio` ×
+    /// [`diffusion::implicit_cost_unit`] (the smallest over the gases); a step between the
+    /// explicit limit and this is cut to the limit.
+    implicit_threshold: f64,
     pub(super) fields: Vec<Vec<f64>>,
     /// The field before the step, for the field's error estimate (allocated when that is on).
     scratch: Vec<f64>,
@@ -531,6 +536,11 @@ impl<'a> Simulation<'a> {
             .iter()
             .map(|d| diffusion::explicit_limit(&grid, *d))
             .collect();
+        let implicit_threshold = params.numerics.implicit_cost_ratio
+            * diffusivity
+                .iter()
+                .map(|d| diffusion::implicit_cost_unit(&grid, *d))
+                .fold(f64::INFINITY, f64::min);
         let fields: Vec<Vec<f64>> = gases
             .iter()
             .zip(&ostwald)
@@ -602,6 +612,7 @@ impl<'a> Simulation<'a> {
             diffusivity,
             ostwald,
             explicit_limit,
+            implicit_threshold,
             fields,
             bubbles,
             rt,
@@ -1240,9 +1251,9 @@ impl<'a> Simulation<'a> {
         let d = dt.min(end - t);
         lower(&mut dt, d, StepLimit::End);
         dt = dt.max(1e-9);
-        // An implicit step costs about ten explicit ones (benches/kernel.rs): below that
-        // ratio, the explicit limit itself is the cheaper (and more accurate) step.
-        if dt > lim && dt < num.implicit_cost_ratio * lim {
+        // Below the implicit threshold the explicit limit itself is the cheaper and the more
+        // accurate step (`Numerics::implicit_cost_ratio`).
+        if dt > lim && dt < self.implicit_threshold {
             dt = lim;
             limit = StepLimit::ExplicitLimit;
         }
@@ -1691,9 +1702,9 @@ impl<'a> Simulation<'a> {
         // (the field's estimate and the extrapolated descent step gas by gas, below)
         if !(estimate || implicit && extrapolate) {
             // every gas at once, each the same bits as stepped alone: the explicit step in one
-            // parallel pass with the open faces at their start value, the implicit steps side
-            // by side with the open faces at their end value
-            let tb = if implicit { t + dt } else { t };
+            // parallel pass, the implicit steps side by side; the open faces at their value at
+            // the end of the step in both (both take the open faces' term implicitly)
+            let tb = t + dt;
             let mut dc = [(0.0, 0.0); Gas::ALL.len()];
             for (g, dc) in dc[..ng].iter_mut().enumerate() {
                 let cb = self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], tb)
@@ -1736,13 +1747,15 @@ impl<'a> Simulation<'a> {
             }
             let inflow = if implicit && extrapolate {
                 self.extrapolated_step(profile, g, t, dt)
-            } else if implicit {
-                let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t + dt) / self.rt;
-                self.implicit
-                    .step(&self.grid, &mut self.fields[g], d, dt, cb)
             } else {
-                let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t) / self.rt;
-                diffusion::explicit_step_in_place(&self.grid, &mut self.fields[g], d, dt, cb)
+                // the open faces at their end value (both schemes take their term implicitly)
+                let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t + dt) / self.rt;
+                if implicit {
+                    self.implicit
+                        .step(&self.grid, &mut self.fields[g], d, dt, cb)
+                } else {
+                    diffusion::explicit_step_in_place(&self.grid, &mut self.fields[g], d, dt, cb)
+                }
             };
             if estimate {
                 let ratio = if self.last_dt > 0.0 {
@@ -1859,7 +1872,10 @@ impl<'a> Simulation<'a> {
     /// [t, t + dt], from each gas's flow through the open faces in this step and the last
     /// (`last_flow`, over `last_flow_dt`; updated here, and cleared when this step ends at a
     /// breakpoint of the profile, where the pressure's rate changes). Returns the next step
-    /// it allows (∞ without history or with the estimate off).
+    /// it allows: ∞ without history or with the estimate off, and after a breakpoint at most
+    /// the explicit limit if the gel has open faces, the step the run starts with (the flow's
+    /// rate jumps there, and the estimate has no history to see it: the steps then grow again
+    /// from the limit by at most 2× per step until it has).
     ///
     /// [`Numerics::loading_tolerance`]: super::params::Numerics::loading_tolerance
     fn loading_step(
@@ -1894,6 +1910,14 @@ impl<'a> Simulation<'a> {
         }
         if profile.next_breakpoint(t) <= t + dt + 1e-9 {
             *last_flow_dt = 0.0;
+            if self.grid.open_cells.iter().any(|c| !c.is_empty()) {
+                let lim = self
+                    .explicit_limit
+                    .iter()
+                    .cloned()
+                    .fold(f64::INFINITY, f64::min);
+                next = next.min(lim);
+            }
         } else {
             *last_flow_dt = dt;
             last_flow.copy_from_slice(flow);

@@ -309,18 +309,19 @@ fn field_error(rel: &[f64], n: usize, tau: f64) -> f64 {
 }
 
 /// Item 2: the centre of an open 21³ cube against the Fourier series, within 1 % of the initial
-/// difference, with the explicit scheme (steps at half the positivity limit h²/(9D)) and the
-/// implicit one (steps up to L²/(1000 D), 4.4 times that limit; backward Euler is first order
-/// in time, so its error grows with the step).
+/// difference, with the explicit scheme (steps at the positivity limit h²/(6D), as runs take
+/// them; the open faces implicit) and the implicit one (steps up to L²/(1000 D), 2.6 times that
+/// limit; backward Euler is first order in time, so its error grows with the step).
 #[test]
 fn diffusion_in_an_open_cube_matches_the_fourier_series() {
     let (n, h) = (21usize, 1e-4);
     let l = n as f64 * h;
-    let explicit_limit = h * h / (9.0 * DIFF_D); // corner cell: three open faces (weight 2 each)
+    // six interior sides; the open faces are implicit (`diffusion::explicit_limit`)
+    let explicit_limit = h * h / (6.0 * DIFF_D);
     let taus = [0.02, 0.04, 0.07, 0.1, 0.15, 0.25];
     let centre = (n / 2) + n * ((n / 2) + n * (n / 2));
     for (scheme, max_step) in [
-        ("explicit", 0.5 * explicit_limit),
+        ("explicit", explicit_limit),
         ("implicit", l * l / (1000.0 * DIFF_D)),
     ] {
         let runs = open_cube(n, h, max_step, &taus);
@@ -354,8 +355,9 @@ fn diffusion_in_an_open_cube_matches_the_fourier_series() {
         assert!(slab_series(0.5, taus[0]).powi(3) > 0.9 && runs.last().unwrap().0[centre] < 0.2);
         match scheme {
             "explicit" => assert_eq!(steps.1, 0, "explicit run took implicit steps"),
+            // (the explicit ones: the short last step before each of the six times)
             _ => assert!(
-                steps.1 > 20 * steps.0.max(1),
+                steps.1 > 10 * steps.0.max(1),
                 "implicit run mostly explicit: {steps:?}"
             ),
         }
@@ -366,9 +368,11 @@ fn diffusion_in_an_open_cube_matches_the_fourier_series() {
 /// no step cap (1 day) and `field_tolerance` 1e-3, 1e-4 and 1e-5, against the same grid run
 /// with explicit steps at a quarter of the positivity limit (time error only, ~100× below the
 /// controlled runs'): the largest error over the field at τ ≥ 0.1 shrinks as the tolerance
-/// does (2.4–2.5× per decade when written: 0.0052, 0.0021, 0.0008 at τ = 0.1; backward
+/// does (2.6× per decade when written: 0.0049, 0.0019, 0.0007 at τ ≥ 0.1; backward
 /// Euler is first order and the controlled steps go as √tol: ×10 tighter is about ×3 more
-/// steps and ×3 less error), and the centre stays within the fixed-step test's bounds of the Fourier series.
+/// steps and ×3 less error, but below the explicit limit h²/(6D) the steps are explicit, not
+/// controlled, so the count grows less at the tightest tolerance: 63, 133, 249 steps when
+/// written), and the centre stays within the fixed-step test's bounds of the Fourier series.
 #[test]
 fn field_error_control_sizes_the_steps_on_the_open_cube() {
     let (n, h) = (15usize, 1e-4);
@@ -404,7 +408,7 @@ fn field_error_control_sizes_the_steps_on_the_open_cube() {
     }
     for w in rows.windows(2) {
         assert!(w[1].0 < 0.6 * w[0].0, "error did not shrink: {rows:?}");
-        assert!(w[1].1 > 2 * w[0].1, "steps did not grow: {rows:?}");
+        assert!(2 * w[1].1 > 3 * w[0].1, "steps did not grow: {rows:?}");
     }
 }
 
