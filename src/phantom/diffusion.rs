@@ -2336,6 +2336,56 @@ mod tests {
             .all(|(i, x)| !g.inside(i) || (*x >= lo - 1e-12 && *x <= hi + 1e-12)));
     }
 
+    /// The explicit limit with implicit open faces, h²/(6D), is the real stability bound and no
+    /// more: on a box open on every face (corners with three open faces, where forward Euler
+    /// with explicit open faces needed h²/(9D)), 300 steps at the limit from the checkerboard
+    /// ±1 (the mode the bound is about) and from a rough field never raise the largest
+    /// |C − C_b| (the maximum principle, hence stability in the max norm), while 300 steps at
+    /// 1.1× the limit grow the checkerboard beyond its start (|1 − 12r| > 1 for r > 1/6).
+    #[test]
+    fn explicit_steps_at_the_limit_are_stable_and_beyond_it_are_not() {
+        let size = [1.6e-3, 1.2e-3, 1.0e-3];
+        let g = Grid::new(Shape::Box { size }, 1e-4, Shape::Box { size }.faces()).unwrap();
+        let (d, cb) = (2.5e-9, 0.0);
+        let limit = explicit_limit(&g, d);
+        assert!((limit / (g.h * g.h / (6.0 * d)) - 1.0).abs() < 1e-12);
+        let [nx, ny, _] = g.n;
+        let checker: Vec<f64> = (0..g.len())
+            .map(|i| {
+                let (x, y, z) = (i % nx, (i / nx) % ny, i / (nx * ny));
+                if (x + y + z) % 2 == 0 {
+                    1.0
+                } else {
+                    -1.0
+                }
+            })
+            .collect();
+        let rough: Vec<f64> = (0..g.len())
+            .map(|i| ((i * 7919 + 13) % 101) as f64 / 50.0 - 1.0)
+            .collect();
+        let largest = |u: &[f64]| {
+            (0..g.len())
+                .filter(|&i| g.inside(i))
+                .map(|i| (u[i] - cb).abs())
+                .fold(0.0f64, f64::max)
+        };
+        for start in [&checker, &rough] {
+            let mut u = start.clone();
+            let mut last = largest(&u);
+            for _ in 0..300 {
+                explicit_step_in_place(&g, &mut u, d, limit, cb);
+                let now = largest(&u);
+                assert!(now <= last * (1.0 + 1e-12), "{now} after {last}");
+                last = now;
+            }
+        }
+        let mut u = checker.clone();
+        for _ in 0..300 {
+            explicit_step_in_place(&g, &mut u, d, 1.1 * limit, cb);
+        }
+        assert!(largest(&u) > 10.0, "1.1× the limit: {}", largest(&u));
+    }
+
     #[test]
     fn implicit_line_solve_matches_dense_solve() {
         // A 1-D open line (5 cells) along x solved as a dense system independently.
