@@ -83,7 +83,7 @@ pub struct Numerics {
     /// `max_step` and the other limits alone). Default infinite (off): on the Fig. 5 dive the
     /// error left is the bubbles' (README, "Time stepping"), and the estimate doubles the cost
     /// of an implicit step. On the open cube 1e-3 / 1e-4 / 1e-5 give a largest time error of
-    /// 0.52 / 0.21 / 0.08 % of the initial difference at τ = 0.1 (`tests/integration/verification.rs`).
+    /// 0.49 / 0.19 / 0.07 % of the initial difference at τ ≥ 0.1 (`tests/integration/verification.rs`).
     pub field_tolerance: f64,
     /// Error tolerance of the gel's loading per step, dimensionless: the estimated local error
     /// of each gas's flow through the open faces over one step, as a fraction of what the gel
