@@ -75,23 +75,28 @@ fn weight(code: u8) -> f64 {
     }
 }
 
-/// Largest number of interior sides of an inside cell (6 wherever a cell has all its
-/// neighbours; at least 1). The explicit step takes open sides implicitly
-/// ([`open_sides_implicit`]) and sealed ones carry nothing, so this alone sets its limit.
-pub fn max_interior_sides(grid: &Grid) -> f64 {
-    let mut m: u32 = 1;
+/// The largest over the inside cells of the sum of `side(code)` over their six sides.
+fn max_side_sum(grid: &Grid, side: impl Fn(u8) -> f64) -> f64 {
+    let mut m: f64 = 0.0;
     for idx in 0..grid.len() {
         if !grid.inside(idx) {
             continue;
         }
-        let mut n = 0;
+        let mut n = 0.0;
         for d in 0..3 {
             let c = grid.codes[d][idx];
-            n += u32::from(c & 3 == SIDE_INTERIOR) + u32::from((c >> 2) & 3 == SIDE_INTERIOR);
+            n += side(c & 3) + side((c >> 2) & 3);
         }
         m = m.max(n);
     }
-    f64::from(m)
+    m
+}
+
+/// Largest number of interior sides of an inside cell (6 wherever a cell has all its
+/// neighbours; at least 1). The explicit step takes open sides implicitly
+/// ([`open_sides_implicit`]) and sealed ones carry nothing, so this alone sets its limit.
+pub fn max_interior_sides(grid: &Grid) -> f64 {
+    max_side_sum(grid, |c| f64::from(u8::from(c == SIDE_INTERIOR))).max(1.0)
 }
 
 /// The largest stable, positivity-preserving explicit step, s: dt ≤ h²/(D·n) with n the
@@ -112,19 +117,7 @@ pub fn explicit_limit(grid: &Grid, d: f64) -> f64 {
 /// implicit from the same length as before on every grid (the verification figures near
 /// bubbles were set with it).
 pub fn implicit_cost_unit(grid: &Grid, d: f64) -> f64 {
-    let mut w: f64 = 0.0;
-    for idx in 0..grid.len() {
-        if !grid.inside(idx) {
-            continue;
-        }
-        let mut s = 0.0;
-        for d in 0..3 {
-            let c = grid.codes[d][idx];
-            s += weight(c & 3) + weight((c >> 2) & 3);
-        }
-        w = w.max(s);
-    }
-    grid.h * grid.h / (d * w)
+    grid.h * grid.h / (d * max_side_sum(grid, weight))
 }
 
 /// One forward-Euler step from `u` into `out` with r = D·dt/h². Cells outside the gel (outside
