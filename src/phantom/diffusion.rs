@@ -440,8 +440,21 @@ thread_local! {
     static OLD_PLANES: std::cell::RefCell<Vec<f64>> =
         const { std::cell::RefCell::new(Vec::new()) };
     /// The calling thread's halo of [`explicit_step_in_place`]: per block, the old plane below
-    /// its first plane and the one above its last.
-    static HALO: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
+    /// its first plane and the one above its last. Taken out for the step and put back after
+    /// (not borrowed across it: while the thread waits in the step's parallel pass, rayon may
+    /// run another simulation's step on it, which then finds it empty and uses its own).
+    static HALO: std::cell::Cell<Vec<f64>> = const { std::cell::Cell::new(Vec::new()) };
+    /// The calling thread's per-plane inflows of the explicit steps (plane k, field f at
+    /// k·nf + f), taken out and put back as `HALO`.
+    static PLANE_FLOWS: std::cell::Cell<Vec<f64>> = const { std::cell::Cell::new(Vec::new()) };
+}
+
+/// [`PLANE_FLOWS`] taken out, zeroed to `len`.
+fn take_plane_flows(len: usize) -> Vec<f64> {
+    let mut v = PLANE_FLOWS.take();
+    v.clear();
+    v.resize(len, 0.0);
+    v
 }
 
 /// [`explicit_step_in_place`] with the interior stencil compiled for `isa`.
@@ -527,7 +540,7 @@ fn explicit_steps_into_with(
         }
     }
     // per plane, every field's inflow
-    let mut per_plane = vec![0.0; nz * nf];
+    let mut per_plane = take_plane_flows(nz * nf);
     let step = |k: usize, outs: &mut Vec<&mut [f64]>, flows: &mut [f64]| {
         for (f, out) in outs.iter_mut().enumerate() {
             flows[f] = step_plane_from(grid, src[f], k, out, r[f], dc[f].1, isa);
@@ -558,6 +571,7 @@ fn explicit_steps_into_with(
         }
     }
     sum_planes(&per_plane, inflow);
+    PLANE_FLOWS.set(per_plane);
 }
 
 /// Every field's inflow, `inflow[f]`, as the sum of its planes' (`per_plane[k·nf + f]`, nf =
@@ -594,9 +608,9 @@ fn explicit_steps_in_place_with(
     let block = nz.div_ceil(blocks);
     let blocks = nz.div_ceil(block);
     // per plane, every field's inflow
-    let mut per_plane = vec![0.0; nz * nf];
-    HALO.with(|halo| {
-        let mut halo = halo.borrow_mut();
+    let mut per_plane = take_plane_flows(nz * nf);
+    let mut halo = HALO.take();
+    {
         let per_field = 2 * blocks * plane;
         if halo.len() < nf * per_field {
             halo.resize(nf * per_field, 0.0);
@@ -645,8 +659,10 @@ fn explicit_steps_in_place_with(
                     }
                 });
             });
-    });
+    }
+    HALO.set(halo);
     sum_planes(&per_plane, inflow);
+    PLANE_FLOWS.set(per_plane);
 }
 
 /// One block of [`explicit_steps_in_place`] for field `f` (r and C_b in `rc`): planes `k0..` in
@@ -2682,6 +2698,73 @@ mod planned_tests {
             .collect();
         g.set_excluded(&cells, true);
         assert_in_place_same_bits(&g);
+    }
+
+    /// Many simulations' explicit steps at once, each with its own parallel passes, as a batch
+    /// runner nests them (runs in parallel, the grid loops parallel inside): every run's fields
+    /// and inflow are the bits of the same steps run alone. (A thread waiting in one step's
+    /// pass may run another step; the per-thread halo and plane inflows are therefore taken out
+    /// for a step, not borrowed across its pass. This test did not make the old borrow fail in
+    /// three tries, so it guards the bits, not that.)
+    #[test]
+    fn nested_explicit_steps_in_a_batch_are_each_runs_bits() {
+        let size = [3.2e-3, 3.0e-3, 2.4e-3];
+        let g = Grid::new(Shape::Box { size }, 1e-4, Shape::Box { size }.faces()).unwrap();
+        let dc = [(2.5e-9, 1.5), (1e-9, 0.5)];
+        let dt = 0.9 * explicit_limit(&g, 2.5e-9);
+        let start = |run: usize, f: usize| -> Vec<f64> {
+            (0..g.len())
+                .map(|i| ((i * 7919 + 13 * f + 31 * run) % 101) as f64 / 100.0)
+                .collect()
+        };
+        let steps = |run: usize, into: bool| -> (Vec<Vec<f64>>, [f64; 2]) {
+            let mut us: Vec<Vec<f64>> = (0..2).map(|f| start(run, f)).collect();
+            let mut inflow = [0.0; 2];
+            for _ in 0..6 {
+                if into {
+                    let src = us.clone();
+                    let src: Vec<&[f64]> = src.iter().map(|u| u.as_slice()).collect();
+                    let mut dst: Vec<&mut [f64]> =
+                        us.iter_mut().map(|u| u.as_mut_slice()).collect();
+                    explicit_steps_into(&g, &src, &mut dst, &dc, dt, &mut inflow);
+                } else {
+                    let mut fields: Vec<&mut [f64]> =
+                        us.iter_mut().map(|u| u.as_mut_slice()).collect();
+                    explicit_steps_in_place(&g, &mut fields, &dc, dt, &mut inflow);
+                }
+            }
+            (us, inflow)
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(2)
+            .build()
+            .unwrap();
+        for into in [false, true] {
+            let alone: Vec<_> = (0..64)
+                .map(|run| pool.install(|| steps(run, into)))
+                .collect();
+            let batch: Vec<_> = pool.install(|| {
+                (0..64)
+                    .into_par_iter()
+                    .map(|run| steps(run, into))
+                    .collect()
+            });
+            for (run, (a, b)) in alone.iter().zip(&batch).enumerate() {
+                assert_eq!(
+                    a.1.map(f64::to_bits),
+                    b.1.map(f64::to_bits),
+                    "run {run}: inflow"
+                );
+                for f in 0..2 {
+                    assert!(
+                        (0..g.len())
+                            .filter(|&i| g.inside(i))
+                            .all(|i| a.0[f][i].to_bits() == b.0[f][i].to_bits()),
+                        "run {run}, field {f}"
+                    );
+                }
+            }
+        }
     }
 
     /// Several in-place steps in a row (the per-thread buffers reused, grids of different
