@@ -924,6 +924,14 @@ impl<'a> Simulation<'a> {
         self.run_from(profile, observer, None)
     }
 
+    /// The smallest explicit limit over the gases, s.
+    fn smallest_explicit_limit(&self) -> f64 {
+        self.explicit_limit
+            .iter()
+            .cloned()
+            .fold(f64::INFINITY, f64::min)
+    }
+
     /// [`Self::run`], or its continuation from a checkpoint's loop state (`resume`: the
     /// simulation was rebuilt by [`super::checkpoint::Checkpoint::resume`]; the initial state is
     /// not recorded again). After every complete step the run goes on from, the observer may
@@ -937,12 +945,8 @@ impl<'a> Simulation<'a> {
         let end = profile.duration_s();
         let nb = self.bubbles.len();
         let ng = self.gases.len();
-        // the smallest explicit limit over the gases: fixed for the run
-        let lim = self
-            .explicit_limit
-            .iter()
-            .cloned()
-            .fold(f64::INFINITY, f64::min);
+        // fixed for the run
+        let lim = self.smallest_explicit_limit();
         let LoopState {
             mut log,
             mut dt_prev,
@@ -1911,12 +1915,7 @@ impl<'a> Simulation<'a> {
         if profile.next_breakpoint(t) <= t + dt + 1e-9 {
             *last_flow_dt = 0.0;
             if self.grid.open_cells.iter().any(|c| !c.is_empty()) {
-                let lim = self
-                    .explicit_limit
-                    .iter()
-                    .cloned()
-                    .fold(f64::INFINITY, f64::min);
-                next = next.min(lim);
+                next = next.min(self.smallest_explicit_limit());
             }
         } else {
             *last_flow_dt = dt;
