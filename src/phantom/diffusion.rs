@@ -117,7 +117,13 @@ pub fn explicit_limit(grid: &Grid, d: f64) -> f64 {
 /// implicit from the same length as before on every grid (the verification figures near
 /// bubbles were set with it).
 pub fn implicit_cost_unit(grid: &Grid, d: f64) -> f64 {
-    grid.h * grid.h / (d * max_side_sum(grid, weight))
+    grid.h * grid.h / (d * max_weight_sum(grid))
+}
+
+/// w_max of [`implicit_cost_unit`]: the largest stencil weight sum of an inside cell, an open
+/// side counted 2.
+pub fn max_weight_sum(grid: &Grid) -> f64 {
+    max_side_sum(grid, weight)
 }
 
 /// One forward-Euler step from `u` into `out` with r = D·dt/h². Cells outside the gel (outside

@@ -532,14 +532,18 @@ impl<'a> Simulation<'a> {
             ostwald.push(p.ostwald);
         }
         let rt = GAS_CONSTANT * params.temperature;
-        let explicit_limit = diffusivity
-            .iter()
-            .map(|d| diffusion::explicit_limit(&grid, *d))
-            .collect();
+        // `diffusion::explicit_limit` and `implicit_cost_unit` of every gas, each scan of the
+        // grid done once
+        let (sides, weights) = (
+            diffusion::max_interior_sides(&grid),
+            diffusion::max_weight_sum(&grid),
+        );
+        let h2 = grid.h * grid.h;
+        let explicit_limit = diffusivity.iter().map(|d| h2 / (d * sides)).collect();
         let implicit_threshold = params.numerics.implicit_cost_ratio
             * diffusivity
                 .iter()
-                .map(|d| diffusion::implicit_cost_unit(&grid, *d))
+                .map(|d| h2 / (d * weights))
                 .fold(f64::INFINITY, f64::min);
         let fields: Vec<Vec<f64>> = gases
             .iter()
