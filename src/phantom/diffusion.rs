@@ -95,35 +95,52 @@ fn max_side_sum(grid: &Grid, side: impl Fn(u8) -> f64) -> f64 {
 /// Largest number of interior sides of an inside cell (6 wherever a cell has all its
 /// neighbours; at least 1). The explicit step takes open sides implicitly
 /// ([`open_sides_implicit`]) and sealed ones carry nothing, so this alone sets its limit.
-pub fn max_interior_sides(grid: &Grid) -> f64 {
+fn max_interior_sides(grid: &Grid) -> f64 {
     max_side_sum(grid, |c| f64::from(u8::from(c == SIDE_INTERIOR))).max(1.0)
 }
 
-/// The largest stable, positivity-preserving explicit step, s: dt ≤ h²/(D·n) with n the
-/// largest number of interior sides ([`max_interior_sides`]). Each cell's new value is then a
-/// combination of old values and C_b with non-negative weights (C − r·n·C + r·Σ C_n, divided
-/// by 1 + s with its open sides' s·C_b added), and the step's matrix
-/// (I + S)⁻¹(I + r·L_interior) has no eigenvalue beyond ±1. Before 26 Nov 2026 the open
-/// sides were explicit and counted 2 each, which made a corner with three open faces (9)
-/// set the limit for the whole grid: ⅔ of this.
+/// The two scans of a grid behind the step limits ([`max_interior_sides`] and the largest
+/// stencil weight sum w_max, an open side counted 2), done once for a run's every gas.
+#[derive(Debug, Clone, Copy)]
+pub struct LimitScans {
+    interior_sides: f64,
+    weight_sum: f64,
+}
+
+impl LimitScans {
+    /// The scans of `grid` as its codes are now.
+    pub fn of(grid: &Grid) -> LimitScans {
+        LimitScans {
+            interior_sides: max_interior_sides(grid),
+            weight_sum: max_side_sum(grid, weight),
+        }
+    }
+
+    /// The largest stable, positivity-preserving explicit step, s: dt ≤ h²/(D·n) with n the
+    /// largest number of interior sides. Each cell's new value is then a combination of old
+    /// values and C_b with non-negative weights (C − r·n·C + r·Σ C_n, divided by 1 + s with its
+    /// open sides' s·C_b added), and the step's matrix (I + S)⁻¹(I + r·L_interior) has no
+    /// eigenvalue beyond ±1. Before 26 Nov 2026 the open sides were explicit and counted 2
+    /// each, which made a corner with three open faces (9) set the limit for the whole grid:
+    /// ⅔ of this.
+    pub fn explicit_limit(&self, h: f64, d: f64) -> f64 {
+        h * h / (d * self.interior_sides)
+    }
+
+    /// h²/(D·w_max), w_max the largest stencil weight sum of an inside cell with an open side
+    /// counted 2 (9 in a corner with three open faces, 6 where every side is interior): the
+    /// forward-Euler limit of the step with explicit open sides, as it was before 26 Nov 2026,
+    /// and still the unit of [`super::params::Numerics::implicit_cost_ratio`], so that a step
+    /// is implicit from the same length as before on every grid (the verification figures
+    /// near bubbles were set with it).
+    pub fn implicit_cost_unit(&self, h: f64, d: f64) -> f64 {
+        h * h / (d * self.weight_sum)
+    }
+}
+
+/// [`LimitScans::explicit_limit`] of `grid` for diffusivity `d`, s.
 pub fn explicit_limit(grid: &Grid, d: f64) -> f64 {
-    grid.h * grid.h / (d * max_interior_sides(grid))
-}
-
-/// h²/(D·w_max), w_max the largest stencil weight sum of an inside cell with an open side
-/// counted 2 (9 in a corner with three open faces, 6 where every side is interior): the
-/// forward-Euler limit of the step with explicit open sides, as it was before 26 Nov 2026,
-/// and still the unit of [`super::params::Numerics::implicit_cost_ratio`], so that a step is
-/// implicit from the same length as before on every grid (the verification figures near
-/// bubbles were set with it).
-pub fn implicit_cost_unit(grid: &Grid, d: f64) -> f64 {
-    grid.h * grid.h / (d * max_weight_sum(grid))
-}
-
-/// w_max of [`implicit_cost_unit`]: the largest stencil weight sum of an inside cell, an open
-/// side counted 2.
-pub fn max_weight_sum(grid: &Grid) -> f64 {
-    max_side_sum(grid, weight)
+    LimitScans::of(grid).explicit_limit(grid.h, d)
 }
 
 /// One forward-Euler step from `u` into `out` with r = D·dt/h². Cells outside the gel (outside

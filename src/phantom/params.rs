@@ -117,7 +117,7 @@ pub struct Numerics {
     /// costs about a third of the run.
     pub record_gel: bool,
     /// Cost of an implicit step in explicit steps: a step between the explicit limit and this
-    /// many times [`super::diffusion::implicit_cost_unit`] (the explicit limit as it was before
+    /// many times [`super::diffusion::LimitScans::implicit_cost_unit`] (the explicit limit as it was before
     /// 26 Nov 2026, when the open sides were explicit: h²/(9D) on a grid with an open corner,
     /// ⅔ of today's limit there, the same on a sealed grid) is cut to the explicit limit
     /// instead. The unit was kept so that steps are implicit from the same length as before:

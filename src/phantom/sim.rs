@@ -172,7 +172,7 @@ pub enum StepLimit {
     /// The end of the profile.
     End,
     /// Cut to the explicit limit: between it and the implicit threshold (`implicit_cost_ratio`
-    /// times [`diffusion::implicit_cost_unit`]) the explicit step is the cheaper and the more
+    /// times [`diffusion::LimitScans::implicit_cost_unit`]) the explicit step is the cheaper and the more
     /// accurate.
     ExplicitLimit,
 }
@@ -413,7 +413,7 @@ pub struct Simulation<'a> {
     ostwald: Vec<f64>,
     explicit_limit: Vec<f64>,
     /// The shortest step taken implicitly, s: `implicit_cost_ratio` ×
-    /// [`diffusion::implicit_cost_unit`] (the smallest over the gases); a step between the
+    /// [`diffusion::LimitScans::implicit_cost_unit`] (the smallest over the gases); a step between the
     /// explicit limit and this is cut to the limit.
     implicit_threshold: f64,
     pub(super) fields: Vec<Vec<f64>>,
@@ -532,18 +532,15 @@ impl<'a> Simulation<'a> {
             ostwald.push(p.ostwald);
         }
         let rt = GAS_CONSTANT * params.temperature;
-        // `diffusion::explicit_limit` and `implicit_cost_unit` of every gas, each scan of the
-        // grid done once
-        let (sides, weights) = (
-            diffusion::max_interior_sides(&grid),
-            diffusion::max_weight_sum(&grid),
-        );
-        let h2 = grid.h * grid.h;
-        let explicit_limit = diffusivity.iter().map(|d| h2 / (d * sides)).collect();
+        let scans = diffusion::LimitScans::of(&grid);
+        let explicit_limit = diffusivity
+            .iter()
+            .map(|d| scans.explicit_limit(grid.h, *d))
+            .collect();
         let implicit_threshold = params.numerics.implicit_cost_ratio
             * diffusivity
                 .iter()
-                .map(|d| h2 / (d * weights))
+                .map(|d| scans.implicit_cost_unit(grid.h, *d))
                 .fold(f64::INFINITY, f64::min);
         let fields: Vec<Vec<f64>> = gases
             .iter()
