@@ -115,8 +115,11 @@ pub struct Grid {
     /// stay within it. The explicit kernel visits no cell of the row outside it.
     pub inside_extents: Vec<(u32, u32)>,
     /// Cells taken out of the gel by bubbles ([`Grid::set_excluded`]): while excluded a cell is
-    /// outside the phantom for the solvers, and its neighbours' faces toward it are sealed.
-    excluded: std::collections::HashSet<u32>,
+    /// outside the phantom for the solvers, and its neighbours' faces toward it are sealed. One
+    /// bit per cell (bit `idx % 64` of word `idx / 64`), empty until a cell is first excluded:
+    /// the remap and the sink kernels ask about every cell near a bubble, which a hashed set
+    /// made a tenth of the Fig. 5 dive's displacement phase.
+    excluded: Vec<u64>,
     /// The codes the mask gave each cell that exclusion has changed, to restore them.
     base_codes: std::collections::HashMap<u32, [u8; 3]>,
     /// Identity of the current face codes: a fresh number from a process-wide counter at
@@ -270,7 +273,7 @@ impl Grid {
             codes_id,
             changes: Default::default(),
             changes_from: codes_id,
-            excluded: Default::default(),
+            excluded: Vec::new(),
             base_codes: Default::default(),
             interior_spans: vec![(0u32, 0u32); n[1] * n[2]],
             inside_extents: vec![(0u32, 0u32); n[1] * n[2]],
@@ -343,25 +346,29 @@ impl Grid {
             let base = self.base_of(idx);
             self.base_codes.entry(idx as u32).or_insert(base);
         }
+        if self.excluded.is_empty() {
+            self.excluded = vec![0; self.len().div_ceil(64)];
+        }
         for &idx in cells {
+            let bit = 1u64 << (idx % 64);
             if excluded {
-                self.excluded.insert(idx as u32);
+                self.excluded[idx / 64] |= bit;
             } else {
-                self.excluded.remove(&(idx as u32));
+                self.excluded[idx / 64] &= !bit;
             }
         }
         for &idx in &touched {
             let base = self.base_codes[&(idx as u32)];
             for d in 0..3 {
-                self.codes[d][idx] = if self.excluded.contains(&(idx as u32)) {
+                self.codes[d][idx] = if self.is_excluded(idx) {
                     0
                 } else {
                     let mut m = base[d] & 3;
                     let mut p = (base[d] >> 2) & 3;
-                    if m == SIDE_INTERIOR && self.excluded.contains(&((idx - strides[d]) as u32)) {
+                    if m == SIDE_INTERIOR && self.is_excluded(idx - strides[d]) {
                         m = SIDE_SEALED;
                     }
-                    if p == SIDE_INTERIOR && self.excluded.contains(&((idx + strides[d]) as u32)) {
+                    if p == SIDE_INTERIOR && self.is_excluded(idx + strides[d]) {
                         p = SIDE_SEALED;
                     }
                     m | (p << 2) | (base[d] & INSIDE_BIT)
@@ -380,24 +387,45 @@ impl Grid {
     /// The cells taken out of the gel by bubbles, in index order (the grid's codes and interior
     /// spans are a function of this set and the mask: a checkpoint saves only the set).
     pub fn excluded_cells(&self) -> Vec<usize> {
-        let mut cells: Vec<usize> = self.excluded.iter().map(|&c| c as usize).collect();
-        cells.sort_unstable();
+        let mut cells = Vec::new();
+        for (w, &word) in self.excluded.iter().enumerate() {
+            let mut bits = word;
+            while bits != 0 {
+                cells.push(w * 64 + bits.trailing_zeros() as usize);
+                bits &= bits - 1;
+            }
+        }
         cells
     }
 
     /// Whether cell `idx` is taken out of the gel by a bubble.
+    #[inline]
     pub fn is_excluded(&self, idx: usize) -> bool {
-        self.excluded.contains(&(idx as u32))
+        self.excluded
+            .get(idx / 64)
+            .is_some_and(|w| w & (1u64 << (idx % 64)) != 0)
     }
 
-    /// Whether cell `idx` is inside the phantom as the mask made it (excluded or not).
+    /// Whether cell `idx` is inside the phantom as the mask made it (excluded or not). Exclusion
+    /// keeps a cell's inside bit except on the excluded cell itself: only that one needs the
+    /// mask's codes.
+    #[inline]
     pub fn inside_phantom(&self, idx: usize) -> bool {
-        self.base_of(idx)[0] & INSIDE_BIT != 0
+        if self.is_excluded(idx) {
+            self.base_of(idx)[0] & INSIDE_BIT != 0
+        } else {
+            self.inside(idx)
+        }
     }
 
-    /// Whether cell `idx` has a side on an open face.
+    /// Whether cell `idx` has a side on an open face. Exclusion only seals interior sides, so
+    /// the current codes answer for every cell but an excluded one.
     pub fn has_open_side(&self, idx: usize) -> bool {
-        let base = self.base_of(idx);
+        let base = if self.is_excluded(idx) {
+            self.base_of(idx)
+        } else {
+            [self.codes[0][idx], self.codes[1][idx], self.codes[2][idx]]
+        };
         (0..3).any(|d| base[d] & 3 == SIDE_OPEN || (base[d] >> 2) & 3 == SIDE_OPEN)
     }
 
@@ -564,10 +592,29 @@ impl Grid {
         p: [f64; 3],
         fallback: &[f64],
         out: &mut [f64],
-        mut value: impl FnMut(usize, &mut [f64]) -> bool,
+        value: impl FnMut(usize, &mut [f64]) -> bool,
     ) {
         let nf = out.len();
         assert!(nf <= MAX_FIELDS && fallback.len() == nf);
+        // the sums in registers for the usual counts of gases (the same operations for any)
+        match nf {
+            1 => self.interpolate_n::<1>(p, fallback, out, value),
+            2 => self.interpolate_n::<2>(p, fallback, out, value),
+            3 => self.interpolate_n::<3>(p, fallback, out, value),
+            _ => self.interpolate_n::<MAX_FIELDS>(p, fallback, out, value),
+        }
+    }
+
+    /// [`Self::interpolate_many`] for at most `N` fields (`out.len()` of them).
+    #[inline(always)]
+    fn interpolate_n<const N: usize>(
+        &self,
+        p: [f64; 3],
+        fallback: &[f64],
+        out: &mut [f64],
+        mut value: impl FnMut(usize, &mut [f64]) -> bool,
+    ) {
+        let nf = out.len();
         let mut i0 = [0usize; 3];
         let mut t = [0.0f64; 3];
         for a in 0..3 {
@@ -576,8 +623,8 @@ impl Grid {
             i0[a] = base;
             t[a] = f - base as f64;
         }
-        let mut sum = [0.0; MAX_FIELDS];
-        let mut v = [0.0; MAX_FIELDS];
+        let mut sum = [0.0; N];
+        let mut v = [0.0; N];
         let mut wsum = 0.0;
         for dk in 0..2 {
             let wk = if dk == 0 { 1.0 - t[2] } else { t[2] };
@@ -590,7 +637,7 @@ impl Grid {
                         continue;
                     }
                     if value(self.index(i0[0] + di, i0[1] + dj, i0[2] + dk), &mut v[..nf]) {
-                        for (s, x) in sum.iter_mut().zip(&v[..nf]) {
+                        for (s, x) in sum[..nf].iter_mut().zip(&v[..nf]) {
                             *s += w * x;
                         }
                         wsum += w;
@@ -598,7 +645,7 @@ impl Grid {
                 }
             }
         }
-        for (o, (s, fb)) in out.iter_mut().zip(sum.iter().zip(fallback)) {
+        for (o, (s, fb)) in out.iter_mut().zip(sum[..nf].iter().zip(fallback)) {
             *o = if wsum > 1e-12 { s / wsum } else { *fb };
         }
     }
