@@ -1134,6 +1134,11 @@ impl LinePlan {
         let mut longest = self.n_longest;
         let mut line: Vec<u16> = Vec::new();
         let mut line_codes: Vec<u8> = Vec::new();
+        // per direction, the rows of runs ([`Self::row`]) holding a value that changed: only
+        // those are cut again (a row's runs are a function of its values)
+        let row_len = [xs, nx, nx];
+        let mut dirty: [Vec<bool>; 3] =
+            std::array::from_fn(|d| vec![false; self.row_start[d].len().saturating_sub(1)]);
         for dir in 0..3 {
             // the axes across the lines of `dir`
             let (a, b) = match dir {
@@ -1172,10 +1177,14 @@ impl LinePlan {
                         } else {
                             table_index(cc, codes[cell(q - k as usize)], k as usize, max_len)
                         };
-                        let old = &mut index[at(q)];
-                        longest -= usize::from(ends.contains(old));
-                        longest += usize::from(ends.contains(&v));
-                        *old = v;
+                        let p = at(q);
+                        let old = &mut index[p];
+                        if *old != v {
+                            longest -= usize::from(ends.contains(old));
+                            longest += usize::from(ends.contains(&v));
+                            *old = v;
+                            dirty[dir][p / row_len[dir]] = true;
+                        }
                     }
                 }
             }
@@ -1184,9 +1193,11 @@ impl LinePlan {
             return false;
         }
         self.n_longest = longest;
-        self.rerun(grid, 0, |r| (lo[2]..=hi[2]).contains(&(r / nx)));
-        self.rerun(grid, 1, |r| (lo[2]..=hi[2]).contains(&(r / ny)));
-        self.rerun(grid, 2, |r| (lo[1]..=hi[1]).contains(&(r % ny)));
+        for (dir, dirty) in dirty.iter().enumerate() {
+            if dirty.contains(&true) {
+                self.rerun(grid, dir, |r| dirty[r]);
+            }
+        }
         self.codes_id = grid.codes_id();
         true
     }
