@@ -63,7 +63,10 @@ pub fn covered_cells(grid: &Grid, centre: [f64; 3], r: f64) -> Vec<usize> {
         let z = (k as f64 + 0.5) * h - centre[2];
         for j in lo[1]..=hi[1] {
             let y = (j as f64 + 0.5) * h - centre[1];
-            for i in lo[0]..=hi[0] {
+            let Some((i0, i1)) = grid.row_within(centre, r, (y, z), (lo[0], hi[0])) else {
+                continue;
+            };
+            for i in i0..=i1 {
                 let x = (i as f64 + 0.5) * h - centre[0];
                 if x * x + y * y + z * z < r * r {
                     let idx = grid.index(i, j, k);
@@ -103,7 +106,10 @@ pub fn remap(
             let z = (k as f64 + 0.5) * h - centre[2];
             for j in lo[1]..=hi[1] {
                 let y = (j as f64 + 0.5) * h - centre[1];
-                for i in lo[0]..=hi[0] {
+                let Some((i0, i1)) = grid.row_within(centre, reach, (y, z), (lo[0], hi[0])) else {
+                    continue;
+                };
+                for i in i0..=i1 {
                     let x = (i as f64 + 0.5) * h - centre[0];
                     let d2 = x * x + y * y + z * z;
                     if d2 < r_new * r_new || d2 > reach * reach {

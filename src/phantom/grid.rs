@@ -677,6 +677,31 @@ impl Grid {
         (lo, hi)
     }
 
+    /// The part `lo..=hi` (within `range`, inclusive) of the x-row whose cell centres lie at
+    /// offsets `y`, `z` from `p` that may hold centres within distance `a` of `p`: a cell
+    /// wider on each side than the disc's chord, so that a caller's exact test still decides
+    /// (the same cells in the same order as the whole range). None when no centre can.
+    #[inline]
+    pub fn row_within(
+        &self,
+        p: [f64; 3],
+        a: f64,
+        (y, z): (f64, f64),
+        range: (usize, usize),
+    ) -> Option<(usize, usize)> {
+        let left = a * a * (1.0 + 1e-9) - (y * y + z * z);
+        if !(left >= 0.0) {
+            return None;
+        }
+        let half = left.sqrt() + self.h;
+        let lo = ((p[0] - half) / self.h - 0.5).floor().max(range.0 as f64) as usize;
+        let hi = ((p[0] + half) / self.h - 0.5).ceil().min(range.1 as f64);
+        if hi < lo as f64 {
+            return None;
+        }
+        Some((lo, hi as usize))
+    }
+
     /// Weights of a spherically symmetric kernel of radius `a` centred at `p`, over inside
     /// cells, summing to one: w ∝ (1 − (d/a)²)² for cell-centre distance d < a. Falls back to
     /// the nearest inside cell if the kernel catches none.
@@ -689,7 +714,10 @@ impl Grid {
             let z = (k as f64 + 0.5) * h - p[2];
             for j in lo[1]..=hi[1] {
                 let y = (j as f64 + 0.5) * h - p[1];
-                for i in lo[0]..=hi[0] {
+                let Some((i0, i1)) = self.row_within(p, a, (y, z), (lo[0], hi[0])) else {
+                    continue;
+                };
+                for i in i0..=i1 {
                     let x = (i as f64 + 0.5) * h - p[0];
                     let q = (x * x + y * y + z * z) / (a * a);
                     if q < 1.0 {
