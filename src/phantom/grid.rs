@@ -760,6 +760,36 @@ impl Grid {
 mod tests {
     use super::*;
 
+    proptest::proptest! {
+        /// `row_within` keeps every cell of the box whose centre is within `a` of `p` (the
+        /// exact test its callers apply, both strict and inclusive), for any centre, radius
+        /// and row, including rows that graze the sphere and spheres reaching past the grid.
+        #[test]
+        fn row_within_keeps_every_cell_of_the_chord(
+            px in -1.0f64..25.0, py in -1.0f64..25.0, pz in -1.0f64..13.0,
+            a in 0.01f64..9.0,
+        ) {
+            let h = 1e-4;
+            let g = Grid::new(Shape::Box { size: [24.0 * h, 24.0 * h, 12.0 * h] }, h, &[]).unwrap();
+            let (p, a) = ([px * h, py * h, pz * h], a * h);
+            let (lo, hi) = g.cell_range(p, a);
+            for k in lo[2]..=hi[2] {
+                let z = (k as f64 + 0.5) * h - p[2];
+                for j in lo[1]..=hi[1] {
+                    let y = (j as f64 + 0.5) * h - p[1];
+                    let kept = g.row_within(p, a, (y, z), (lo[0], hi[0]));
+                    for i in lo[0]..=hi[0] {
+                        let x = (i as f64 + 0.5) * h - p[0];
+                        if x * x + y * y + z * z <= a * a {
+                            let (i0, i1) = kept.expect("a row with a cell inside was dropped");
+                            proptest::prop_assert!(i0 <= i && i <= i1, "cell {i} outside {i0}..={i1}");
+                        }
+                    }
+                }
+            }
+        }
+    }
+
     /// Every face of the shape once, at the distance worked out by hand.
     #[test]
     fn distances_to_faces_are_each_face_once() {
