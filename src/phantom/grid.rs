@@ -619,7 +619,8 @@ impl Grid {
         let mut t = [0.0f64; 3];
         for a in 0..3 {
             let f = (p[a] / self.h - 0.5).clamp(0.0, (self.n[a] - 1) as f64);
-            let base = (f.floor() as usize).min(self.n[a] - 2);
+            // f ≥ 0 (or NaN, which both give 0): truncation is its floor, without a libm call
+            let base = (f as usize).min(self.n[a] - 2);
             i0[a] = base;
             t[a] = f - base as f64;
         }
