@@ -167,6 +167,33 @@ fn plane_gel_portable(codes: &[u8], f: &[&[f64]], k: &[f64; Gas::ALL.len()]) -> 
     lanes.finish(codes, f, &k[..ng], full)
 }
 
+/// `$kernel::<N>(codes, f, k)` for N = the number of fields `f` holds (4 for more than three).
+#[cfg(target_arch = "x86_64")]
+macro_rules! by_gas_count {
+    ($kernel:ident, $codes:expr, $f:expr, $k:expr) => {
+        // SAFETY: the caller's instruction set is the kernel's
+        match $f.len() {
+            1 => unsafe { $kernel::<1>($codes, $f, $k) },
+            2 => unsafe { $kernel::<2>($codes, $f, $k) },
+            3 => unsafe { $kernel::<3>($codes, $f, $k) },
+            _ => unsafe { $kernel::<4>($codes, $f, $k) },
+        }
+    };
+}
+
+/// The cells a vector kernel takes in whole groups of [`LANES`] (the rest go through
+/// [`Lanes::finish`]) and its `N` fields' pointers, each checked to hold them.
+#[cfg(target_arch = "x86_64")]
+fn vector_planes<const N: usize>(codes: &[u8], f: &[&[f64]]) -> (usize, [*const f64; N]) {
+    let full = codes.len() - codes.len() % LANES;
+    assert_eq!(f.len(), N);
+    let fp = std::array::from_fn(|g| {
+        assert!(f[g].len() >= full);
+        f[g].as_ptr()
+    });
+    (full, fp)
+}
+
 /// [`plane_gel`] with AVX2: lane `l` of each vector is cell `q0 + l`.
 ///
 /// # Safety
@@ -174,13 +201,8 @@ fn plane_gel_portable(codes: &[u8], f: &[&[f64]], k: &[f64; Gas::ALL.len()]) -> 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2")]
 unsafe fn plane_gel_avx2(codes: &[u8], f: &[&[f64]], k: &[f64; Gas::ALL.len()]) -> PlaneGel {
-    // SAFETY (all four): the CPU has AVX2 (this function's own requirement)
-    match f.len() {
-        1 => unsafe { plane_gel_avx2_n::<1>(codes, f, k) },
-        2 => unsafe { plane_gel_avx2_n::<2>(codes, f, k) },
-        3 => unsafe { plane_gel_avx2_n::<3>(codes, f, k) },
-        _ => unsafe { plane_gel_avx2_n::<4>(codes, f, k) },
-    }
+    // SAFETY: the CPU has AVX2 (this function's own requirement)
+    by_gas_count!(plane_gel_avx2_n, codes, f, k)
 }
 
 /// [`plane_gel`] with AVX-512F: the eight lanes in one vector (lane `l` is cell `q0 + l`),
@@ -194,13 +216,8 @@ unsafe fn plane_gel_avx2(codes: &[u8], f: &[&[f64]], k: &[f64; Gas::ALL.len()]) 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx512f")]
 unsafe fn plane_gel_avx512(codes: &[u8], f: &[&[f64]], k: &[f64; Gas::ALL.len()]) -> PlaneGel {
-    // SAFETY (all four): the CPU has AVX-512F (this function's own requirement)
-    match f.len() {
-        1 => unsafe { plane_gel_avx512_n::<1>(codes, f, k) },
-        2 => unsafe { plane_gel_avx512_n::<2>(codes, f, k) },
-        3 => unsafe { plane_gel_avx512_n::<3>(codes, f, k) },
-        _ => unsafe { plane_gel_avx512_n::<4>(codes, f, k) },
-    }
+    // SAFETY: the CPU has AVX-512F (this function's own requirement)
+    by_gas_count!(plane_gel_avx512_n, codes, f, k)
 }
 
 /// [`plane_gel_avx512`] for `N` gases (`f.len() == N`; the gases' loop unrolled).
@@ -215,13 +232,8 @@ unsafe fn plane_gel_avx512_n<const N: usize>(
     k: &[f64; Gas::ALL.len()],
 ) -> PlaneGel {
     use std::arch::x86_64::*;
-    let full = codes.len() - codes.len() % LANES;
-    assert_eq!(f.len(), N);
+    let (full, fp) = vector_planes::<N>(codes, f);
     let ng = N;
-    let fp: [*const f64; N] = std::array::from_fn(|g| {
-        assert!(f[g].len() >= full);
-        f[g].as_ptr()
-    });
     let zero = _mm512_setzero_pd();
     let bit = _mm512_set1_epi64(i64::from(INSIDE_BIT));
     let kv: [__m512d; N] = std::array::from_fn(|g| _mm512_set1_pd(k[g]));
@@ -278,13 +290,8 @@ unsafe fn plane_gel_avx2_n<const N: usize>(
     k: &[f64; Gas::ALL.len()],
 ) -> PlaneGel {
     use std::arch::x86_64::*;
-    let full = codes.len() - codes.len() % LANES;
-    assert_eq!(f.len(), N);
+    let (full, fp) = vector_planes::<N>(codes, f);
     let ng = N;
-    let fp: [*const f64; N] = std::array::from_fn(|g| {
-        assert!(f[g].len() >= full);
-        f[g].as_ptr()
-    });
     let zero = _mm256_setzero_pd();
     let pos_inf = _mm256_set1_pd(f64::INFINITY);
     let neg_inf = _mm256_set1_pd(f64::NEG_INFINITY);

@@ -587,6 +587,7 @@ impl Grid {
     /// them, at most [`MAX_FIELDS`]): the corners and weights are found once. `value(idx, v)`
     /// writes the fields' values at cell `idx` into `v` and returns false for a corner to drop.
     /// Each field's result is the same bits as [`Self::interpolate_by`] of that field alone.
+    #[inline(always)]
     pub fn interpolate_many(
         &self,
         p: [f64; 3],
