@@ -383,8 +383,9 @@ struct FluxRound {
     which: Vec<usize>,
     /// Per bubble (all of them; only `which` filled): the gel tension and the fluxes.
     out: Vec<(f64, [f64; Gas::ALL.len()])>,
-    /// The parallel round's results in the order of `which`.
-    res: Vec<(f64, [f64; Gas::ALL.len()])>,
+    /// The parallel round's value of every gas at each sampled point, all bubbles' points
+    /// one after the other ([`Simulation::sphere_means_of`]).
+    vals: Vec<[f64; Gas::ALL.len()]>,
 }
 
 /// One bubble's exchange within a step, from the predictor ([`Simulation::exchange`]) to the
@@ -821,7 +822,7 @@ impl<'a> Simulation<'a> {
             profile,
             &round.which,
             &mut round.out,
-            &mut round.res,
+            &mut round.vals,
         );
         round
     }
@@ -836,49 +837,129 @@ impl<'a> Simulation<'a> {
         profile: &PressureHistory,
         which: &[usize],
         out: &mut [(f64, [f64; Gas::ALL.len()])],
-        res: &mut Vec<(f64, [f64; Gas::ALL.len()])>,
+        vals: &mut Vec<[f64; Gas::ALL.len()]>,
     ) {
-        use rayon::prelude::*;
         if self.spheres.len() > SPHERE_CACHE {
             self.spheres.clear();
         }
         let points: usize = which.iter().map(|&i| self.prepare_sphere(i)).sum();
         let ng = self.gases.len();
-        let this = &*self;
-        let one = |i: usize| {
-            let mut j = [0.0; Gas::ALL.len()];
-            let t = this.fluxes(i, ambient, profile, &mut j[..ng]);
-            (t, j)
-        };
-        if which.len() > 1 && points >= PARALLEL_SPHERE_POINTS && !serial_fluxes() {
-            which.par_iter().map(|&i| one(i)).collect_into_vec(res);
-            for (&i, r) in which.iter().zip(res.iter()) {
-                out[i] = *r;
+        if points >= PARALLEL_SPHERE_POINTS && !serial_fluxes() && rayon::current_num_threads() > 1
+        {
+            let cb = self.inspired_concentrations(profile);
+            let means = self.sphere_means_of(which, &cb, vals);
+            for (&i, cbar) in which.iter().zip(&means) {
+                let mut j = [0.0; Gas::ALL.len()];
+                let t = self.fluxes_from_means(i, ambient, &cbar[..ng], &mut j[..ng]);
+                out[i] = (t, j);
             }
         } else {
             for &i in which {
-                out[i] = one(i);
+                let mut j = [0.0; Gas::ALL.len()];
+                let t = self.fluxes(i, ambient, profile, &mut j[..ng]);
+                out[i] = (t, j);
             }
         }
+    }
+
+    /// Every gas's concentration in equilibrium with the inspired gas now, mol/m³ (the value a
+    /// sampled point with no inside cell about it takes).
+    fn inspired_concentrations(&self, profile: &PressureHistory) -> [f64; Gas::ALL.len()] {
+        let mut cb = [0.0; Gas::ALL.len()];
+        for (g, cb) in cb[..self.gases.len()].iter_mut().enumerate() {
+            *cb = self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], self.time)
+                / self.rt;
+        }
+        cb
+    }
+
+    /// [`Self::sphere_means`] of each bubble of `which` on its coupling sphere (prepared), the
+    /// points of all of them sampled in one parallel pass into `vals` (balanced over the
+    /// threads whatever the bubbles' sizes), then each bubble's summed in point order: the
+    /// same operations on the same values, the same bits as one by one.
+    fn sphere_means_of(
+        &self,
+        which: &[usize],
+        fallback: &[f64; Gas::ALL.len()],
+        vals: &mut Vec<[f64; Gas::ALL.len()]>,
+    ) -> Vec<[f64; Gas::ALL.len()]> {
+        use rayon::prelude::*;
+        /// Points per parallel task.
+        const CHUNK: usize = 256;
+        let ng = self.gases.len();
+        let (grid, fields) = (&self.grid, &self.fields[..ng]);
+        // per bubble: its first point in `vals`, centre, radius and sphere
+        let mut segs = Vec::with_capacity(which.len());
+        let mut total = 0;
+        for &i in which {
+            let rho = self.coupling_radius(i);
+            let sphere = &self.spheres[&self.sphere_size(rho)];
+            segs.push((total, self.bubbles[i].position, rho, sphere.as_slice()));
+            total += sphere.len();
+        }
+        vals.clear();
+        vals.resize(total, [0.0; Gas::ALL.len()]);
+        vals.par_chunks_mut(CHUNK)
+            .enumerate()
+            .for_each(|(c, chunk)| {
+                let first = c * CHUNK;
+                let mut s = segs.partition_point(|seg| seg.0 <= first) - 1;
+                for (q, v) in chunk.iter_mut().enumerate() {
+                    let idx = first + q;
+                    while s + 1 < segs.len() && segs[s + 1].0 <= idx {
+                        s += 1;
+                    }
+                    let (start, c, rho, sphere) = segs[s];
+                    let u = sphere[idx - start];
+                    let p = [c[0] + rho * u[0], c[1] + rho * u[1], c[2] + rho * u[2]];
+                    grid.interpolate_many(p, &fallback[..ng], &mut v[..ng], |idx, v| {
+                        if !grid.inside(idx) {
+                            return false;
+                        }
+                        for (v, f) in v.iter_mut().zip(fields) {
+                            *v = f[idx];
+                        }
+                        true
+                    });
+                }
+            });
+        segs.iter()
+            .map(|&(start, _, _, sphere)| {
+                let mut sum = [0.0; Gas::ALL.len()];
+                for at in &vals[start..start + sphere.len()] {
+                    for (s, a) in sum.iter_mut().zip(&at[..ng]) {
+                        *s += a;
+                    }
+                }
+                let mut mean = [0.0; Gas::ALL.len()];
+                for (o, s) in mean[..ng].iter_mut().zip(sum) {
+                    *o = s / sphere.len() as f64;
+                }
+                mean
+            })
+            .collect()
     }
 
     /// Gas fluxes into bubble `i` (mol/s per gas) and the gel tension at its coupling sphere.
     /// The bubble's coupling sphere must have been prepared ([`Self::prepare_sphere`]).
     fn fluxes(&self, i: usize, ambient: f64, profile: &PressureHistory, j: &mut [f64]) -> f64 {
-        let (position, r, r0) = {
+        let ng = self.gases.len();
+        let rho = self.coupling_radius(i);
+        let mut cbar = [0.0; Gas::ALL.len()];
+        let cb = self.inspired_concentrations(profile);
+        self.sphere_means(self.bubbles[i].position, rho, &cb[..ng], &mut cbar[..ng]);
+        self.fluxes_from_means(i, ambient, &cbar[..ng], j)
+    }
+
+    /// [`Self::fluxes`] from the means `cbar` (one per gas) over bubble `i`'s coupling sphere.
+    fn fluxes_from_means(&self, i: usize, ambient: f64, cbar: &[f64], j: &mut [f64]) -> f64 {
+        let (r, r0) = {
             let b = &self.bubbles[i];
-            (b.position, b.radius, b.initial_radius)
+            (b.radius, b.initial_radius)
         };
         let ng = self.gases.len();
         let rho = self.coupling_radius(i);
         let mut tension = self.params.bubble_fixed_gases;
-        let mut cbar = [0.0; Gas::ALL.len()];
-        let mut cb = [0.0; Gas::ALL.len()];
-        for g in 0..ng {
-            cb[g] = self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], self.time)
-                / self.rt;
-        }
-        self.sphere_means(position, rho, &cb[..ng], &mut cbar[..ng]);
         for g in 0..ng {
             tension += cbar[g] * self.rt / self.ostwald[g];
         }
@@ -2815,6 +2896,52 @@ mod parallel_fluxes_tests {
         assert!(r0 + r1 + 4.0 * h > 0.6e-3, "{r0} {r1}");
         assert_eq!(serial.len(), parallel.len());
         assert_same_frame_bits(&serial, &parallel);
+    }
+
+    /// The spheres' means sampled in one parallel pass over all bubbles' points (balanced in
+    /// chunks that straddle bubbles) are each bubble's own `sphere_means`, bit for bit: three
+    /// bubbles of different sizes (spheres of 64 to a few thousand points, more than
+    /// `PARALLEL_SPHERE_POINTS` in all) in a gel whose two fields vary from cell to cell.
+    #[test]
+    fn the_spheres_sampled_together_are_each_spheres_mean() {
+        let h = 1e-4;
+        let params = three_bubbles_in_an_open_box(h);
+        let profile = PressureHistory::with_gas(
+            "flat",
+            vec![0.0, 10.0],
+            vec![1e5, 1e5],
+            GasMix { o2: 0.21, he: 0.0 },
+            0.0,
+        )
+        .unwrap();
+        let mut sim = Simulation::new(&params, &profile).unwrap();
+        for g in 0..sim.gases.len() {
+            for (idx, c) in sim.field_mut(g).iter_mut().enumerate() {
+                *c = 1.0 + ((idx * 7919 + 31 * g) % 997) as f64 / 997.0;
+            }
+        }
+        for (b, r) in sim.bubbles.iter_mut().zip([3e-5, 4e-4, 9e-4]) {
+            b.radius = r;
+        }
+        let which: Vec<usize> = (0..sim.bubbles.len()).collect();
+        let points: usize = which.iter().map(|&i| sim.prepare_sphere(i)).sum();
+        assert!(points > PARALLEL_SPHERE_POINTS, "{points}");
+        let cb = sim.inspired_concentrations(&profile);
+        let ng = sim.gases.len();
+        let mut vals = Vec::new();
+        let together = sim.sphere_means_of(&which, &cb, &mut vals);
+        for &i in &which {
+            let mut alone = [0.0; Gas::ALL.len()];
+            let (c, rho) = (sim.bubbles[i].position, sim.coupling_radius(i));
+            sim.sphere_means(c, rho, &cb[..ng], &mut alone[..ng]);
+            for g in 0..ng {
+                assert_eq!(
+                    alone[g].to_bits(),
+                    together[i][g].to_bits(),
+                    "bubble {i} gas {g}"
+                );
+            }
+        }
     }
 }
 
