@@ -386,6 +386,8 @@ struct FluxRound {
     /// The parallel round's value of every gas at each sampled point, all bubbles' points
     /// one after the other ([`Simulation::sphere_means_of`]).
     vals: Vec<[f64; Gas::ALL.len()]>,
+    /// The parallel round's sphere means, one per bubble of `which`.
+    means: Vec<[f64; Gas::ALL.len()]>,
 }
 
 /// One bubble's exchange within a step, from the predictor ([`Simulation::exchange`]) to the
@@ -753,20 +755,10 @@ impl<'a> Simulation<'a> {
     fn sphere_means(&self, c: [f64; 3], rho: f64, fallback: &[f64], out: &mut [f64]) {
         let sphere = &self.spheres[&self.sphere_size(rho)];
         let ng = out.len();
-        let (grid, fields) = (&self.grid, &self.fields[..ng]);
         let mut sum = [0.0; Gas::ALL.len()];
         let mut at = [0.0; Gas::ALL.len()];
-        for u in sphere {
-            let p = [c[0] + rho * u[0], c[1] + rho * u[1], c[2] + rho * u[2]];
-            grid.interpolate_many(p, fallback, &mut at[..ng], |idx, v| {
-                if !grid.inside(idx) {
-                    return false;
-                }
-                for (v, f) in v.iter_mut().zip(fields) {
-                    *v = f[idx];
-                }
-                true
-            });
+        for &u in sphere {
+            self.sphere_point(c, rho, u, fallback, &mut at[..ng]);
             for (s, a) in sum.iter_mut().zip(&at[..ng]) {
                 *s += a;
             }
@@ -774,6 +766,23 @@ impl<'a> Simulation<'a> {
         for (o, s) in out.iter_mut().zip(sum) {
             *o = s / sphere.len() as f64;
         }
+    }
+
+    /// Every gas's field (`out.len()` of them) interpolated at the point `c + rho·u` of a
+    /// coupling sphere, from inside cells only (`fallback` where none is about it).
+    #[inline(always)]
+    fn sphere_point(&self, c: [f64; 3], rho: f64, u: [f64; 3], fallback: &[f64], out: &mut [f64]) {
+        let (grid, fields) = (&self.grid, &self.fields[..out.len()]);
+        let p = [c[0] + rho * u[0], c[1] + rho * u[1], c[2] + rho * u[2]];
+        grid.interpolate_many(p, fallback, out, |idx, v| {
+            if !grid.inside(idx) {
+                return false;
+            }
+            for (v, f) in v.iter_mut().zip(fields) {
+                *v = f[idx];
+            }
+            true
+        });
     }
 
     /// Points of the Fibonacci sphere [`Self::sphere_means`] samples at radius `rho`:
@@ -822,7 +831,7 @@ impl<'a> Simulation<'a> {
             profile,
             &round.which,
             &mut round.out,
-            &mut round.vals,
+            (&mut round.vals, &mut round.means),
         );
         round
     }
@@ -837,7 +846,10 @@ impl<'a> Simulation<'a> {
         profile: &PressureHistory,
         which: &[usize],
         out: &mut [(f64, [f64; Gas::ALL.len()])],
-        vals: &mut Vec<[f64; Gas::ALL.len()]>,
+        (vals, means): (
+            &mut Vec<[f64; Gas::ALL.len()]>,
+            &mut Vec<[f64; Gas::ALL.len()]>,
+        ),
     ) {
         if self.spheres.len() > SPHERE_CACHE {
             self.spheres.clear();
@@ -847,8 +859,8 @@ impl<'a> Simulation<'a> {
         if points >= PARALLEL_SPHERE_POINTS && !serial_fluxes() && rayon::current_num_threads() > 1
         {
             let cb = self.inspired_concentrations(profile);
-            let means = self.sphere_means_of(which, &cb, vals);
-            for (&i, cbar) in which.iter().zip(&means) {
+            self.sphere_means_of(which, &cb, vals, means);
+            for (&i, cbar) in which.iter().zip(means.iter()) {
                 let mut j = [0.0; Gas::ALL.len()];
                 let t = self.fluxes_from_means(i, ambient, &cbar[..ng], &mut j[..ng]);
                 out[i] = (t, j);
@@ -882,12 +894,12 @@ impl<'a> Simulation<'a> {
         which: &[usize],
         fallback: &[f64; Gas::ALL.len()],
         vals: &mut Vec<[f64; Gas::ALL.len()]>,
-    ) -> Vec<[f64; Gas::ALL.len()]> {
+        means: &mut Vec<[f64; Gas::ALL.len()]>,
+    ) {
         use rayon::prelude::*;
         /// Points per parallel task.
         const CHUNK: usize = 256;
         let ng = self.gases.len();
-        let (grid, fields) = (&self.grid, &self.fields[..ng]);
         // per bubble: its first point in `vals`, centre, radius and sphere
         let mut segs = Vec::with_capacity(which.len());
         let mut total = 0;
@@ -910,34 +922,23 @@ impl<'a> Simulation<'a> {
                         s += 1;
                     }
                     let (start, c, rho, sphere) = segs[s];
-                    let u = sphere[idx - start];
-                    let p = [c[0] + rho * u[0], c[1] + rho * u[1], c[2] + rho * u[2]];
-                    grid.interpolate_many(p, &fallback[..ng], &mut v[..ng], |idx, v| {
-                        if !grid.inside(idx) {
-                            return false;
-                        }
-                        for (v, f) in v.iter_mut().zip(fields) {
-                            *v = f[idx];
-                        }
-                        true
-                    });
+                    self.sphere_point(c, rho, sphere[idx - start], &fallback[..ng], &mut v[..ng]);
                 }
             });
-        segs.iter()
-            .map(|&(start, _, _, sphere)| {
-                let mut sum = [0.0; Gas::ALL.len()];
-                for at in &vals[start..start + sphere.len()] {
-                    for (s, a) in sum.iter_mut().zip(&at[..ng]) {
-                        *s += a;
-                    }
+        means.clear();
+        means.extend(segs.iter().map(|&(start, _, _, sphere)| {
+            let mut sum = [0.0; Gas::ALL.len()];
+            for at in &vals[start..start + sphere.len()] {
+                for (s, a) in sum.iter_mut().zip(&at[..ng]) {
+                    *s += a;
                 }
-                let mut mean = [0.0; Gas::ALL.len()];
-                for (o, s) in mean[..ng].iter_mut().zip(sum) {
-                    *o = s / sphere.len() as f64;
-                }
-                mean
-            })
-            .collect()
+            }
+            let mut mean = [0.0; Gas::ALL.len()];
+            for (o, s) in mean[..ng].iter_mut().zip(sum) {
+                *o = s / sphere.len() as f64;
+            }
+            mean
+        }));
     }
 
     /// Gas fluxes into bubble `i` (mol/s per gas) and the gel tension at its coupling sphere.
@@ -2928,8 +2929,8 @@ mod parallel_fluxes_tests {
         assert!(points > PARALLEL_SPHERE_POINTS, "{points}");
         let cb = sim.inspired_concentrations(&profile);
         let ng = sim.gases.len();
-        let mut vals = Vec::new();
-        let together = sim.sphere_means_of(&which, &cb, &mut vals);
+        let (mut vals, mut together) = (Vec::new(), Vec::new());
+        sim.sphere_means_of(&which, &cb, &mut vals, &mut together);
         for &i in &which {
             let mut alone = [0.0; Gas::ALL.len()];
             let (c, rho) = (sim.bubbles[i].position, sim.coupling_radius(i));
