@@ -254,13 +254,7 @@ fn stencil_plane(
         let row = j + ny * k;
         let base = j * nx;
         let (i0, i1) = grid.interior_spans[row];
-        let (e0, e1) = grid.inside_extents[row];
-        let (e0, e1) = (e0 as usize, e1 as usize);
-        let (i0, i1) = if i1 > i0 {
-            (i0 as usize, i1 as usize)
-        } else {
-            (e1, e1)
-        };
+        let (i0, i1) = (i0 as usize, i1 as usize);
         if i1 > i0 {
             // all six neighbours exist and are inside: plain 7-point stencil, branch-free; first,
             // so that the row's other cells find their neighbours' cache lines loaded
@@ -274,35 +268,25 @@ fn stencil_plane(
                 Isa::Avx512 => unsafe { stencil_span_avx512(zm, c, zp, o, a, nx, centre, r) },
             }
         }
-        for (lo, hi) in [(e0, i0), (i1, e1)] {
-            // runs of cells with the same codes: one branch-free pass per side
-            let mut i = lo;
-            while i < hi {
-                let q = base + i;
-                let code = [codes[0][q], codes[1][q], codes[2][q]];
-                let mut j = i + 1;
-                while j < hi && (0..3).all(|d| codes[d][base + j] == code[d]) {
-                    j += 1;
+        // runs of inside cells with the same codes: one branch-free pass per side
+        for &(i, j) in &grid.edge_runs[row] {
+            let (i, j) = (i as usize, j as usize);
+            let q = base + i;
+            let code = [codes[0][q], codes[1][q], codes[2][q]];
+            if j - i >= UNIFORM_RUN {
+                let (o, a) = (&mut out[base + i..base + j], base + i);
+                inflow += match isa {
+                    Isa::Portable => uniform_span(zm, c, zp, o, a, nx, code, r, cb),
+                    // SAFETY: `Isa::detect` found the instruction set on this CPU
+                    #[cfg(target_arch = "x86_64")]
+                    Isa::Avx2 => unsafe { uniform_span_avx2(zm, c, zp, o, a, nx, code, r, cb) },
+                    #[cfg(target_arch = "x86_64")]
+                    Isa::Avx512 => unsafe { uniform_span_avx512(zm, c, zp, o, a, nx, code, r, cb) },
+                };
+            } else {
+                for q in base + i..base + j {
+                    out[q] = generic(q, &mut inflow);
                 }
-                if code[0] & INSIDE_BIT == 0 {
-                } else if j - i >= UNIFORM_RUN {
-                    let (o, a) = (&mut out[base + i..base + j], base + i);
-                    inflow += match isa {
-                        Isa::Portable => uniform_span(zm, c, zp, o, a, nx, code, r, cb),
-                        // SAFETY: `Isa::detect` found the instruction set on this CPU
-                        #[cfg(target_arch = "x86_64")]
-                        Isa::Avx2 => unsafe { uniform_span_avx2(zm, c, zp, o, a, nx, code, r, cb) },
-                        #[cfg(target_arch = "x86_64")]
-                        Isa::Avx512 => unsafe {
-                            uniform_span_avx512(zm, c, zp, o, a, nx, code, r, cb)
-                        },
-                    };
-                } else {
-                    for q in base + i..base + j {
-                        out[q] = generic(q, &mut inflow);
-                    }
-                }
-                i = j;
             }
         }
     }

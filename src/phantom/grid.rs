@@ -114,6 +114,12 @@ pub struct Grid {
     /// inside the phantom's shape (empty when none is); cells a bubble takes out of the gel
     /// stay within it. The explicit kernel visits no cell of the row outside it.
     pub inside_extents: Vec<(u32, u32)>,
+    /// Per x-row (index j + ny·k): the row's inside cells outside its interior span
+    /// ([`Grid::interior_spans`]), those of [e0, i0) then those of [i1, e1) from
+    /// [`Grid::inside_extents`], cut into maximal runs [a, b) of cells with the same codes in
+    /// all three directions. The explicit kernel's path for cells with a side that is not
+    /// interior; kept with the codes (it was found at every step: a third of that path's time).
+    pub edge_runs: Vec<Vec<(u32, u32)>>,
     /// Cells taken out of the gel by bubbles ([`Grid::set_excluded`]): while excluded a cell is
     /// outside the phantom for the solvers, and its neighbours' faces toward it are sealed. One
     /// bit per cell (bit `idx % 64` of word `idx / 64`), empty until a cell is first excluded:
@@ -277,6 +283,7 @@ impl Grid {
             base_codes: Default::default(),
             interior_spans: vec![(0u32, 0u32); n[1] * n[2]],
             inside_extents: vec![(0u32, 0u32); n[1] * n[2]],
+            edge_runs: vec![Vec::new(); n[1] * n[2]],
             n,
             h,
             shape,
@@ -291,6 +298,7 @@ impl Grid {
             if let (Some(i0), Some(i1)) = ((0..n[0]).find(inside), (0..n[0]).rev().find(inside)) {
                 grid.inside_extents[row] = (i0 as u32, i1 as u32 + 1);
             }
+            grid.edge_runs[row] = grid.edge_runs_of(row);
         }
         Ok(grid)
     }
@@ -381,6 +389,7 @@ impl Grid {
         rows.dedup();
         for row in rows {
             self.interior_spans[row] = self.interior_span(row);
+            self.edge_runs[row] = self.edge_runs_of(row);
         }
     }
 
@@ -452,6 +461,31 @@ impl Grid {
             }
             None => (0, 0),
         }
+    }
+
+    /// [`Grid::edge_runs`] of x-row `row` from the current codes and interior span.
+    fn edge_runs_of(&self, row: usize) -> Vec<(u32, u32)> {
+        let base = row * self.n[0];
+        let code = |i: usize| [0, 1, 2].map(|d| self.codes[d][base + i]);
+        let (i0, i1) = self.interior_spans[row];
+        let (e0, e1) = self.inside_extents[row];
+        let (i0, i1) = if i1 > i0 { (i0, i1) } else { (e1, e1) };
+        let mut runs = Vec::new();
+        for (lo, hi) in [(e0 as usize, i0 as usize), (i1 as usize, e1 as usize)] {
+            let mut i = lo;
+            while i < hi {
+                let c = code(i);
+                let mut j = i + 1;
+                while j < hi && code(j) == c {
+                    j += 1;
+                }
+                if c[0] & INSIDE_BIT != 0 {
+                    runs.push((i as u32, j as u32));
+                }
+                i = j;
+            }
+        }
+        runs
     }
 
     /// Identity of the current face codes: equal ids mean equal codes (a new id at every
@@ -874,6 +908,79 @@ mod tests {
             m[2] += w * ((kk as f64 + 0.5) * 1e-4 - 5e-4);
         }
         assert!(m.iter().all(|x| x.abs() < 1e-15));
+    }
+
+    /// Every row's edge runs, checked cell by cell from the codes: with the interior span they
+    /// cover the row's inside cells once each, in order; a run's cells share their codes, and
+    /// two runs that touch differ (maximal runs: the explicit kernel's uniform path sees each
+    /// run whole).
+    fn assert_edge_runs_fit_the_codes(g: &Grid) {
+        let nx = g.n[0];
+        for row in 0..g.n[1] * g.n[2] {
+            let code = |i: usize| [0, 1, 2].map(|d| g.codes[d][row * nx + i]);
+            let mut covered = vec![0u8; nx];
+            let (i0, i1) = g.interior_spans[row];
+            for i in i0..i1 {
+                covered[i as usize] += 1;
+            }
+            let mut last: Option<(usize, [u8; 3])> = None;
+            for &(a, b) in &g.edge_runs[row] {
+                let (a, b) = (a as usize, b as usize);
+                assert!(a < b && b <= nx, "row {row}: run {a}..{b}");
+                if let Some((end, c)) = last {
+                    assert!(end <= a, "row {row}: runs out of order");
+                    assert!(end < a || c != code(a), "row {row}: run at {a} not maximal");
+                }
+                for i in a..b {
+                    assert_eq!(code(i), code(a), "row {row}: cell {i} of run {a}..{b}");
+                    covered[i] += 1;
+                }
+                last = Some((b, code(a)));
+            }
+            for (i, &n) in covered.iter().enumerate() {
+                let inside = code(i)[0] & INSIDE_BIT != 0;
+                assert_eq!(
+                    n,
+                    u8::from(inside),
+                    "row {row}, cell {i}: covered {n} times"
+                );
+            }
+        }
+    }
+
+    /// The edge runs of a cylinder with open faces, through cells taken out of the gel at
+    /// random and given back: as the codes say at every state, and after the cells are given
+    /// back those of a grid that never lost them.
+    #[test]
+    fn edge_runs_follow_the_codes_through_exclusions() {
+        use rand::{Rng, SeedableRng};
+        let fresh = Grid::new(
+            Shape::Cylinder {
+                diameter: 1.5e-3,
+                depth: 1e-3,
+            },
+            1e-4,
+            &[Face::Top, Face::Side],
+        )
+        .unwrap();
+        assert_edge_runs_fit_the_codes(&fresh);
+        let mut g = fresh.clone();
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let mut taken = Vec::new();
+        for _ in 0..20 {
+            let cells: Vec<usize> = (0..15)
+                .map(|_| rng.gen_range(0..g.len()))
+                .filter(|&idx| g.inside(idx) && !taken.contains(&idx))
+                .collect::<std::collections::BTreeSet<_>>()
+                .into_iter()
+                .collect();
+            g.set_excluded(&cells, true);
+            taken.extend(cells);
+            assert_edge_runs_fit_the_codes(&g);
+        }
+        g.set_excluded(&taken, false);
+        assert_edge_runs_fit_the_codes(&g);
+        assert_eq!(g.edge_runs, fresh.edge_runs);
     }
 
     #[test]
