@@ -233,12 +233,11 @@ pub enum GridThreads {
 
 /// Grids of fewer cells than this run serially in a batch ([`GridThreads::Auto`]): on a tiny
 /// grid the per-step fork/join of grid-level parallelism costs more than the step (a 512-cell
-/// cube: ~60 % of the run was thread wake-ups). Kept small because serial-inside runs go
-/// through `ThreadPool::install`, whose waiting worker steals further runs of the batch into
-/// the same one-thread pool: on a quiet 2-core machine 8 runs of the 216 000-cell
-/// `benches/small-cube` took 3.59 s serial inside against 1.83 s nested (`cargo bench --bench
-/// small_runs`, 25 Nov 2026), i.e. the runs were serialised. Above this, grid-level
-/// parallelism.
+/// cube: ~60 % of the run was thread wake-ups). At the 216 000-cell `benches/small-cube` the
+/// two are even (8 runs at once, `cargo bench --bench small_runs`, 26 Nov 2026: 1.19–1.22 s
+/// nested, 1.19–1.22 s serial inside); on its 4 mm version (64 000 cells,
+/// `SMALL_RUNS_SIZE_MM=4`) serial inside is the faster, 407 ms against 431 ms. (Until 26 Nov
+/// 2026 serial-inside runs were serialised, [`with_grid_threads`]: 749 ms there.)
 pub const SMALL_GRID_CELLS: f64 = 2.0e5;
 
 impl GridThreads {
@@ -296,6 +295,15 @@ pub fn with_grid_threads<R: Send>(
         return f();
     }
     ONE_THREAD.with(|pool| match pool {
+        // from a worker of another pool (a runner's loop over runs), the run is handed to a
+        // plain thread that waits in `install` without taking work: a worker waiting there
+        // itself would run further runs of the batch inside its wait (rayon's cross-pool
+        // `install`), queueing them behind this one in the same one-thread pool
+        Some(pool) if rayon::current_thread_index().is_some() => std::thread::scope(|s| {
+            s.spawn(|| pool.install(f))
+                .join()
+                .unwrap_or_else(|e| std::panic::resume_unwind(e))
+        }),
         Some(pool) => pool.install(f),
         None => f(),
     })

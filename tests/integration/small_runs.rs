@@ -43,6 +43,46 @@ fn small_runs_serial_and_parallel_grid_loops_give_the_same_bits() {
     }
 }
 
+/// Serial runs started from two workers of a batch run at the same time, each on its own
+/// thread (the first run waits, up to 20 s, until the second has started). Before 26 Nov 2026 a
+/// worker waiting in its one-thread pool's `install` took the second run off its own queue
+/// inside the wait and queued it behind the first in the same pool: the runs of a batch below
+/// `SMALL_GRID_CELLS` went one after the other (`cargo bench --bench small_runs` with
+/// `SMALL_RUNS_SIZE_MM=4`: 8 runs 749 ms serial inside against 407 ms since).
+#[test]
+fn small_runs_serial_runs_of_a_batch_run_side_by_side() {
+    use std::sync::{Condvar, Mutex};
+    use std::time::Duration;
+    let dir = root().join("benches/small-cube");
+    let params = load_phantom(&dir.join("phantom.toml")).unwrap().params;
+    let started = (Mutex::new(0usize), Condvar::new());
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(2)
+        .build()
+        .unwrap();
+    let met: Vec<bool> = pool.install(|| {
+        (0..2)
+            .into_par_iter()
+            .with_max_len(1)
+            .map(|_| {
+                with_grid_threads(GridThreads::Serial, &params, || {
+                    // inside the run: the grid loops' pool is a one-thread pool
+                    assert_eq!(rayon::current_num_threads(), 1);
+                    let (count, cv) = &started;
+                    let mut n = count.lock().unwrap();
+                    *n += 1;
+                    cv.notify_all();
+                    let (n, _) = cv
+                        .wait_timeout_while(n, Duration::from_secs(20), |n| *n < 2)
+                        .unwrap();
+                    *n == 2
+                })
+            })
+            .collect()
+    });
+    assert_eq!(met, [true, true], "the two serial runs did not overlap");
+}
+
 #[test]
 fn small_runs_auto_keeps_big_grids_parallel() {
     let dir = root().join("benches/small-cube");
