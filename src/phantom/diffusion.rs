@@ -269,7 +269,7 @@ fn stencil_plane(
             }
         }
         // runs of inside cells with the same codes: one branch-free pass per side
-        for &(i, j) in &grid.edge_runs[row] {
+        for &(i, j) in grid.edge_runs.of(row) {
             let (i, j) = (i as usize, j as usize);
             let q = base + i;
             let code = [codes[0][q], codes[1][q], codes[2][q]];
