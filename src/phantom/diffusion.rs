@@ -206,6 +206,7 @@ fn stencil_plane(
     r: f64,
     cb: f64,
     isa: Isa,
+    mut save: Option<&mut [f64]>,
 ) -> f64 {
     let [nx, ny, _] = grid.n;
     let plane = nx * ny;
@@ -253,6 +254,11 @@ fn stencil_plane(
     for j in 0..ny {
         let row = j + ny * k;
         let base = j * nx;
+        if let Some(save) = save.as_deref_mut() {
+            // the row above, kept before the pass over this row reads it (it is then in the
+            // core's first-level cache for the stencil's z+ neighbours)
+            save[base..base + nx].copy_from_slice(&zp[base..base + nx]);
+        }
         let (i0, i1) = grid.interior_spans[row];
         let (i0, i1) = (i0 as usize, i1 as usize);
         if i1 > i0 {
@@ -435,7 +441,7 @@ fn step_plane_from(
         &[]
     };
     let c = &u[k * plane..(k + 1) * plane];
-    stencil_plane(grid, k, zm, c, zp, out, r, cb, isa)
+    stencil_plane(grid, k, zm, c, zp, out, r, cb, isa, None)
 }
 
 /// Blocks of z-planes per thread in [`explicit_step_in_place`] (one task each): more balance
@@ -443,7 +449,7 @@ fn step_plane_from(
 const BLOCKS_PER_THREAD: usize = 2;
 
 thread_local! {
-    /// Per thread, the old values of two z-planes ([`explicit_step_in_place`]'s block pass).
+    /// Per thread, the old values of three z-planes ([`explicit_step_in_place`]'s block pass).
     static OLD_PLANES: std::cell::RefCell<Vec<f64>> =
         const { std::cell::RefCell::new(Vec::new()) };
     /// The calling thread's halo of [`explicit_step_in_place`]: per block, the old plane below
@@ -656,8 +662,8 @@ fn explicit_steps_in_place_with(
             .for_each(|(b, (mut slabs, flows))| {
                 OLD_PLANES.with(|t| {
                     let mut t = t.borrow_mut();
-                    if t.len() < 2 * plane {
-                        t.resize(2 * plane, 0.0);
+                    if t.len() < 3 * plane {
+                        t.resize(3 * plane, 0.0);
                     }
                     for (f, slab) in slabs.iter_mut().enumerate() {
                         let halo = &halo[f * per_field..(f + 1) * per_field];
@@ -693,8 +699,10 @@ fn step_block(
     let plane = nx * ny;
     let planes = slab.len() / plane;
     let nf = flows.len() / planes;
-    // the old values of the plane below (from the second plane on) and of the current plane
-    let (mut below, mut cur) = old[..2 * plane].split_at_mut(plane);
+    // the old values of the plane below (from the second plane on), of the current plane and
+    // of the plane above (kept row by row while the current plane is stepped)
+    let (mut below, rest) = old[..3 * plane].split_at_mut(plane);
+    let (mut cur, mut above) = rest.split_at_mut(plane);
     cur.copy_from_slice(&slab[..plane]);
     for q in 0..planes {
         let k = k0 + q;
@@ -713,11 +721,22 @@ fn step_block(
         } else {
             &[]
         };
-        flows[q * nf + f] = stencil_plane(grid, k, zm, cur, zp, &mut done[q * plane..], r, cb, isa);
+        let save = (q + 1 < planes).then_some(&mut *above);
+        flows[q * nf + f] = stencil_plane(
+            grid,
+            k,
+            zm,
+            cur,
+            zp,
+            &mut done[q * plane..],
+            r,
+            cb,
+            isa,
+            save,
+        );
+        // below ← cur, cur ← above (the next plane's old values), above ← the spare
         std::mem::swap(&mut below, &mut cur);
-        if q + 1 < planes {
-            cur.copy_from_slice(&rest[..plane]);
-        }
+        std::mem::swap(&mut cur, &mut above);
     }
 }
 
