@@ -353,13 +353,14 @@ impl Grid {
             open_cells,
             n_inside,
         };
+        let mut runs = Vec::new();
         for row in 0..n[1] * n[2] {
             grid.interior_spans[row] = grid.interior_span(row);
             let inside = |i: &usize| grid.codes[0][row * n[0] + i] & INSIDE_BIT != 0;
             if let (Some(i0), Some(i1)) = ((0..n[0]).find(inside), (0..n[0]).rev().find(inside)) {
                 grid.inside_extents[row] = (i0 as u32, i1 as u32 + 1);
             }
-            let runs = grid.edge_runs_of(row);
+            grid.edge_runs_of(row, &mut runs);
             grid.edge_runs.set(row, &runs);
         }
         Ok(grid)
@@ -449,9 +450,10 @@ impl Grid {
         rows.dedup();
         rows.sort_unstable();
         rows.dedup();
+        let mut runs = Vec::new();
         for row in rows {
             self.interior_spans[row] = self.interior_span(row);
-            let runs = self.edge_runs_of(row);
+            self.edge_runs_of(row, &mut runs);
             self.edge_runs.set(row, &runs);
         }
     }
@@ -526,14 +528,15 @@ impl Grid {
         }
     }
 
-    /// [`Grid::edge_runs`] of x-row `row` from the current codes and interior span.
-    fn edge_runs_of(&self, row: usize) -> Vec<(u32, u32)> {
+    /// [`Grid::edge_runs`] of x-row `row` from the current codes and interior span, into `runs`
+    /// (cleared first; one buffer for all the rows of a build or an exclusion).
+    fn edge_runs_of(&self, row: usize, runs: &mut Vec<(u32, u32)>) {
+        runs.clear();
         let base = row * self.n[0];
         let code = |i: usize| [0, 1, 2].map(|d| self.codes[d][base + i]);
         let (i0, i1) = self.interior_spans[row];
         let (e0, e1) = self.inside_extents[row];
         let (i0, i1) = if i1 > i0 { (i0, i1) } else { (e1, e1) };
-        let mut runs = Vec::new();
         for (lo, hi) in [(e0 as usize, i0 as usize), (i1 as usize, e1 as usize)] {
             let mut i = lo;
             while i < hi {
@@ -548,7 +551,6 @@ impl Grid {
                 i = j;
             }
         }
-        runs
     }
 
     /// Identity of the current face codes: equal ids mean equal codes (a new id at every
