@@ -917,8 +917,8 @@ const MIN_RUN: usize = 8;
 /// stretches. The z sweep walks whole planes: a z row's runs count positions from the start of
 /// its plane, so a plane's runs are its rows' runs one after the other.
 ///
-/// When the codes change in a small box ([`Grid::changed_since`]), [`LinePlan::update`]
-/// recomputes only the lines through it and the rows of runs holding them.
+/// When the codes change in a few cells ([`Grid::changed_since`]), [`LinePlan::update`]
+/// recomputes only the lines through them and the rows of runs holding them.
 #[derive(Debug, Clone, PartialEq, Eq)]
 struct LinePlan {
     /// [`Grid::codes_id`] of the codes the plan was built from.
@@ -1108,122 +1108,181 @@ impl LinePlan {
 
     /// Row `r` of direction `dir`'s indices and the position of its first cell in its runs.
     fn row(&self, grid: &Grid, dir: usize, r: usize) -> (&[u16], u32) {
-        let [nx, ny, _] = grid.n;
-        match dir {
-            0 => {
-                let s = x_row_stride(ny);
-                (&self.index[0][r * s..r * s + ny], 0)
-            }
-            1 => (&self.index[1][r * nx..(r + 1) * nx], 0),
-            _ => (&self.index[2][r * nx..(r + 1) * nx], ((r % ny) * nx) as u32),
-        }
+        row_of(&self.index[dir], grid, dir, r)
     }
 
-    /// Bring the plan to `grid`'s codes, which changed only in the box `lo..=hi` (cells, per
-    /// axis) since the plan's: the lines through the box, then the rows of runs holding them,
-    /// are recomputed. Returns false when the table's stride would change (a segment longer
-    /// than `max_len`, or none of `max_len` cells left): the plan is then unusable, build it anew.
-    fn update(&mut self, grid: &Grid, lo: [usize; 3], hi: [usize; 3]) -> bool {
-        let n = grid.n;
-        let [nx, ny, _] = n;
-        if (0..3).any(|a| lo[a] > hi[a]) {
-            self.codes_id = grid.codes_id();
-            return true;
-        }
-        let strides = [1usize, nx, nx * ny];
-        let xs = x_row_stride(ny);
+    /// Bring the plan to `grid`'s codes, which changed only in `cells` since the plan's (as
+    /// [`Grid::changed_since`] lists them): the lines through those cells, in each direction,
+    /// then the rows of runs holding them, are recomputed (a line's indices depend only on the
+    /// codes along it); the three directions side by side. Returns false when the table's
+    /// stride would change (a segment longer than `max_len`, or none of `max_len` cells left):
+    /// the plan is then unusable, build it anew.
+    fn update(&mut self, grid: &Grid, cells: &[usize]) -> bool {
         let max_len = self.max_len;
-        let ends = longest_ends(max_len);
-        let mut longest = self.n_longest;
-        let mut line: Vec<u16> = Vec::new();
-        let mut line_codes: Vec<u8> = Vec::new();
-        // per direction, the rows of runs ([`Self::row`]) holding a value that changed: only
-        // those are cut again (a row's runs are a function of its values)
-        let row_len = [xs, nx, nx];
-        let mut dirty: [Vec<bool>; 3] =
-            std::array::from_fn(|d| vec![false; self.row_start[d].len().saturating_sub(1)]);
-        for dir in 0..3 {
-            // the axes across the lines of `dir`
-            let (a, b) = match dir {
-                0 => (1, 2),
-                1 => (0, 2),
-                _ => (0, 1),
-            };
-            let (codes, stride, len) = (&grid.codes[dir], strides[dir], n[dir]);
-            for cb in lo[b]..=hi[b] {
-                for ca in lo[a]..=hi[a] {
-                    let mut c = [0usize; 3];
-                    (c[a], c[b]) = (ca, cb);
-                    let first = grid.index(c[0], c[1], c[2]);
-                    let cell = |q: usize| first + q * stride;
-                    // the line's q-th cell in the kernel's layout
-                    let at = |q: usize| {
-                        if dir == 0 {
-                            (cb * nx + q) * xs + ca
-                        } else {
-                            cell(q)
-                        }
-                    };
-                    // pass 1 on the line's codes, gathered contiguous
-                    line_codes.clear();
-                    line_codes.extend((0..len).map(|q| codes[cell(q)]));
-                    line.clear();
-                    line.resize(len, 0);
-                    if positions(&line_codes, &mut line, 1).is_none_or(|m| m > max_len) {
-                        return false;
-                    }
-                    let index = &mut self.index[dir];
-                    for (q, &k) in line.iter().enumerate() {
-                        let cc = codes[cell(q)];
-                        let v = if cc & INSIDE_BIT == 0 {
-                            0
-                        } else {
-                            table_index(cc, codes[cell(q - k as usize)], k as usize, max_len)
-                        };
-                        let p = at(q);
-                        let old = &mut index[p];
-                        if *old != v {
-                            longest -= usize::from(ends.contains(old));
-                            longest += usize::from(ends.contains(&v));
-                            *old = v;
-                            dirty[dir][p / row_len[dir]] = true;
-                        }
-                    }
+        let LinePlan {
+            index,
+            runs,
+            row_start,
+            ..
+        } = self;
+        let dirs: Vec<_> = index
+            .iter_mut()
+            .zip(runs)
+            .zip(row_start)
+            .enumerate()
+            .collect();
+        let changes: Vec<Option<isize>> = dirs
+            .into_par_iter()
+            .map(|(dir, ((index, runs), row_start))| {
+                let dirty = update_lines(grid, dir, cells, max_len, index)?;
+                if dirty.1.contains(&true) {
+                    rerun(grid, dir, index, runs, row_start, max_len, &dirty.1);
                 }
-            }
+                Some(dirty.0)
+            })
+            .collect();
+        let mut longest = self.n_longest as isize;
+        for change in changes {
+            let Some(change) = change else {
+                return false;
+            };
+            longest += change;
         }
-        if longest == 0 {
+        if longest <= 0 {
             return false;
         }
-        self.n_longest = longest;
-        for (dir, dirty) in dirty.iter().enumerate() {
-            if dirty.contains(&true) {
-                self.rerun(grid, dir, |r| dirty[r]);
-            }
-        }
+        self.n_longest = longest as usize;
         self.codes_id = grid.codes_id();
         true
     }
+}
 
-    /// Recompute the runs of direction `dir`'s rows for which `changed` holds; copy the others.
-    fn rerun(&mut self, grid: &Grid, dir: usize, changed: impl Fn(usize) -> bool) {
-        let old = std::mem::take(&mut self.runs[dir]);
-        let old_start = std::mem::take(&mut self.row_start[dir]);
-        let rows = old_start.len() - 1;
-        let mut runs = Vec::with_capacity(old.len() + 64);
-        let mut row_start = Vec::with_capacity(rows + 1);
-        row_start.push(0);
-        for r in 0..rows {
-            if changed(r) {
-                let (row, offset) = self.row(grid, dir, r);
-                row_runs(row, offset, self.max_len, &mut runs);
-            } else {
-                runs.extend_from_slice(&old[old_start[r] as usize..old_start[r + 1] as usize]);
-            }
-            row_start.push(runs.len() as u32);
+/// Row `r` of direction `dir`'s indices `index` (in the kernel's layout, [`LinePlan::index`])
+/// and the position of its first cell in its runs.
+fn row_of<'a>(index: &'a [u16], grid: &Grid, dir: usize, r: usize) -> (&'a [u16], u32) {
+    let [nx, ny, _] = grid.n;
+    match dir {
+        0 => {
+            let s = x_row_stride(ny);
+            (&index[r * s..r * s + ny], 0)
         }
-        self.runs[dir] = runs;
-        self.row_start[dir] = row_start;
+        1 => (&index[r * nx..(r + 1) * nx], 0),
+        _ => (&index[r * nx..(r + 1) * nx], ((r % ny) * nx) as u32),
+    }
+}
+
+/// [`LinePlan::update`] of direction `dir`'s indices: every line of `dir` through a cell of
+/// `cells` computed again from the grid's codes. Returns the change of the count of segments
+/// of `max_len` cells ([`LinePlan::n_longest`]) and which rows of runs ([`row_of`]) hold a
+/// changed index, or `None` when a segment is now longer than `max_len`.
+fn update_lines(
+    grid: &Grid,
+    dir: usize,
+    cells: &[usize],
+    max_len: usize,
+    index: &mut [u16],
+) -> Option<(isize, Vec<bool>)> {
+    let n = grid.n;
+    let [nx, ny, nz] = n;
+    let plane = nx * ny;
+    let stride = [1usize, nx, plane][dir];
+    let (codes, len) = (&grid.codes[dir], n[dir]);
+    let xs = x_row_stride(ny);
+    let ends = longest_ends(max_len);
+    // rows of runs: x, nx per plane of ny (padded to xs) cells; y and z, ny per plane of nx
+    let (rows, row_len) = if dir == 0 {
+        (nz * nx, xs)
+    } else {
+        (nz * ny, nx)
+    };
+    let mut dirty = vec![false; rows];
+    let mut longest = 0isize;
+    // the first cell of every line of `dir` through a changed cell, each once
+    let mut firsts: Vec<usize> = cells
+        .iter()
+        .map(|&idx| match dir {
+            0 => idx - idx % nx,
+            1 => idx - (idx / nx) % ny * nx,
+            _ => idx % plane,
+        })
+        .collect();
+    firsts.sort_unstable();
+    firsts.dedup();
+    let mut line: Vec<u16> = Vec::with_capacity(len);
+    let mut line_codes: Vec<u8> = Vec::with_capacity(len);
+    for &first in &firsts {
+        let cell = |q: usize| first + q * stride;
+        // the line's q-th cell in the kernel's layout (x: transposed per plane)
+        let (j, k) = ((first / nx) % ny, first / plane);
+        let at = |q: usize| {
+            if dir == 0 {
+                (k * nx + q) * xs + j
+            } else {
+                cell(q)
+            }
+        };
+        // pass 1 on the line's codes, gathered contiguous
+        line_codes.clear();
+        line_codes.extend((0..len).map(|q| codes[cell(q)]));
+        line.clear();
+        line.resize(len, 0);
+        if positions(&line_codes, &mut line, 1).is_none_or(|m| m > max_len) {
+            return None;
+        }
+        for (q, &kq) in line.iter().enumerate() {
+            let cc = line_codes[q];
+            let v = if cc & INSIDE_BIT == 0 {
+                0
+            } else {
+                table_index(cc, line_codes[q - kq as usize], kq as usize, max_len)
+            };
+            let p = at(q);
+            let old = &mut index[p];
+            if *old != v {
+                longest -= isize::from(ends.contains(old));
+                longest += isize::from(ends.contains(&v));
+                *old = v;
+                dirty[p / row_len] = true;
+            }
+        }
+    }
+    Some((longest, dirty))
+}
+
+/// Recompute the runs of direction `dir`'s rows `r` with `dirty[r]` from `index`; copy the
+/// others, each stretch of clean rows in one piece (their starts shifted by what the rows
+/// before them grew or shrank).
+fn rerun(
+    grid: &Grid,
+    dir: usize,
+    index: &[u16],
+    runs: &mut Vec<Run>,
+    row_start: &mut Vec<u32>,
+    max_len: usize,
+    dirty: &[bool],
+) {
+    let old = std::mem::take(runs);
+    let old_start = std::mem::take(row_start);
+    let rows = old_start.len() - 1;
+    runs.reserve(old.len() + 64);
+    row_start.reserve(rows + 1);
+    row_start.push(0);
+    let mut r = 0;
+    while r < rows {
+        if dirty[r] {
+            let (row, offset) = row_of(index, grid, dir, r);
+            row_runs(row, offset, max_len, runs);
+            row_start.push(runs.len() as u32);
+            r += 1;
+            continue;
+        }
+        let e = dirty[r..].iter().position(|&d| d).map_or(rows, |q| r + q);
+        let (a, b) = (old_start[r] as usize, old_start[e] as usize);
+        // new start − old start of these rows (mod 2³²: the sum is below 2³²)
+        let shift = (runs.len() as u32).wrapping_sub(a as u32);
+        runs.extend_from_slice(&old[a..b]);
+        row_start.extend(old_start[r + 1..=e].iter().map(|x| x.wrapping_add(shift)));
+        r = e;
     }
 }
 
@@ -1568,7 +1627,7 @@ impl ImplicitSolver {
             // log reaches back to them
             let updated = self.plan.as_mut().is_some_and(|plan| {
                 grid.changed_since(plan.codes_id)
-                    .is_some_and(|(lo, hi)| plan.update(grid, lo, hi))
+                    .is_some_and(|cells| plan.update(grid, &cells))
             });
             if !updated {
                 self.plan = LinePlan::build(grid);
@@ -3029,11 +3088,11 @@ mod planned_tests {
 
     /// Bring `plan` up to date with `g` through the change log, as [`change`].
     fn catch_up(g: &Grid, plan: &mut LinePlan) -> bool {
-        let (lo, hi) = g
+        let cells = g
             .changed_since(plan.codes_id)
             .expect("the log reaches back");
         let fresh = LinePlan::build(g).unwrap();
-        let updated = plan.update(g, lo, hi);
+        let updated = plan.update(g, &cells);
         if updated {
             assert!(
                 *plan == fresh,

@@ -194,8 +194,8 @@ pub struct Grid {
     /// plan ([`super::diffusion::ImplicitSolver`]) knows when to update.
     codes_id: u64,
     /// The last [`CHANGE_LOG_LEN`] changes of the codes, oldest first: the `codes_id` each set
-    /// and the box (inclusive lo, hi cell coordinates) of the cells whose codes it rewrote.
-    changes: std::collections::VecDeque<(u64, [usize; 3], [usize; 3])>,
+    /// and the cells whose codes it rewrote (sorted).
+    changes: std::collections::VecDeque<(u64, Vec<u32>)>,
     /// `codes_id` of the state before the oldest entry of `changes`.
     changes_from: u64,
 }
@@ -395,24 +395,14 @@ impl Grid {
         touched.sort_unstable();
         touched.dedup();
         self.codes_id = fresh_codes_id();
-        let (mut lo, mut hi) = ([usize::MAX; 3], [0usize; 3]);
-        for &idx in &touched {
-            let c = [
-                idx % self.n[0],
-                (idx / self.n[0]) % self.n[1],
-                idx / (self.n[0] * self.n[1]),
-            ];
-            for a in 0..3 {
-                lo[a] = lo[a].min(c[a]);
-                hi[a] = hi[a].max(c[a]);
-            }
-        }
         if self.changes.len() == CHANGE_LOG_LEN {
-            if let Some((id, _, _)) = self.changes.pop_front() {
+            if let Some((id, _)) = self.changes.pop_front() {
                 self.changes_from = id;
             }
         }
-        self.changes.push_back((self.codes_id, lo, hi));
+        // MAX_CELLS < 2³²: every index fits
+        let logged = touched.iter().map(|&idx| idx as u32).collect();
+        self.changes.push_back((self.codes_id, logged));
         for &idx in &touched {
             let base = self.base_of(idx);
             self.base_codes.entry(idx as u32).or_insert(base);
@@ -559,23 +549,24 @@ impl Grid {
         self.codes_id
     }
 
-    /// The box (inclusive lo, hi cell coordinates) holding every cell whose codes changed since
-    /// the state with codes_id `id` (empty, lo > hi, if that is the current state), or `None`
-    /// if `id` is not a state of this grid the change log reaches back to.
-    pub fn changed_since(&self, id: u64) -> Option<([usize; 3], [usize; 3])> {
+    /// Every cell whose codes changed since the state with codes_id `id`, sorted, each once
+    /// (empty if that is the current state), or `None` if `id` is not a state of this grid the
+    /// change log reaches back to.
+    pub fn changed_since(&self, id: u64) -> Option<Vec<usize>> {
         let skip = if id == self.changes_from {
             0
         } else {
             self.changes.iter().position(|c| c.0 == id)? + 1
         };
-        let (mut lo, mut hi) = ([usize::MAX; 3], [0usize; 3]);
-        for (_, l, h) in self.changes.iter().skip(skip) {
-            for a in 0..3 {
-                lo[a] = lo[a].min(l[a]);
-                hi[a] = hi[a].max(h[a]);
-            }
-        }
-        Some((lo, hi))
+        let mut cells: Vec<usize> = self
+            .changes
+            .iter()
+            .skip(skip)
+            .flat_map(|(_, cells)| cells.iter().map(|&idx| idx as usize))
+            .collect();
+        cells.sort_unstable();
+        cells.dedup();
+        Some(cells)
     }
 
     /// Total number of cells (inside and outside).
@@ -1078,16 +1069,38 @@ mod tests {
     }
 
     #[test]
-    fn changed_since_is_the_box_of_the_later_changes() {
+    fn changed_since_lists_the_cells_of_the_later_changes() {
         let mut g = Grid::new(Shape::Box { size: [1e-3; 3] }, 1e-4, &[]).unwrap();
         let id0 = g.codes_id();
-        assert_eq!(g.changed_since(id0), Some(([usize::MAX; 3], [0; 3])));
+        assert_eq!(g.changed_since(id0), Some(vec![]));
+        // each cell and its six neighbours, by hand
+        let star = |g: &Grid, [i, j, k]: [usize; 3]| {
+            let mut v = vec![
+                g.index(i, j, k),
+                g.index(i - 1, j, k),
+                g.index(i + 1, j, k),
+                g.index(i, j - 1, k),
+                g.index(i, j + 1, k),
+                g.index(i, j, k - 1),
+                g.index(i, j, k + 1),
+            ];
+            v.sort_unstable();
+            v
+        };
         g.set_excluded(&[g.index(2, 3, 4)], true);
         let id1 = g.codes_id();
         g.set_excluded(&[g.index(7, 5, 6)], true);
-        // each cell and its six neighbours
-        assert_eq!(g.changed_since(id1), Some(([6, 4, 5], [8, 6, 7])));
-        assert_eq!(g.changed_since(id0), Some(([1, 2, 3], [8, 6, 7])));
+        assert_eq!(g.changed_since(id1), Some(star(&g, [7, 5, 6])));
+        let mut both = star(&g, [2, 3, 4]);
+        both.extend(star(&g, [7, 5, 6]));
+        both.sort_unstable();
+        assert_eq!(g.changed_since(id0), Some(both));
+        // a cell next to an excluded one: its star less the sealed face's neighbour (whose
+        // codes do not change), counted once with the earlier change's cells
+        g.set_excluded(&[g.index(3, 3, 4)], true);
+        let got = g.changed_since(id0).unwrap();
+        assert!(got.windows(2).all(|w| w[0] < w[1]));
+        assert!(got.contains(&g.index(4, 3, 4)) && got.contains(&g.index(3, 2, 4)));
         // 0 is never handed out
         assert_eq!(g.changed_since(0), None);
     }
