@@ -448,7 +448,10 @@ pub struct Simulation<'a> {
     /// Fibonacci spheres of the sizes in use, keyed by their number of points (the coupling
     /// spheres of bubbles of different radii; [`Self::sphere_means`]).
     spheres: std::collections::HashMap<usize, Vec<[f64; 3]>>,
-    kernel: Vec<(usize, f64)>,
+    /// (cos, sin) of the Fibonacci spheres' longitudes ([`fibonacci_sphere`]).
+    sphere_turns: Vec<[f64; 2]>,
+    /// Per bubble, its last sink kernel ([`Self::take_from_grid`]).
+    kernels: Vec<SinkKernel>,
     /// Per gas, its flow into the gel through the open faces in the last step, mol
     /// ([`Self::diffuse`]; the loading estimate reads it, [`Self::loading_step`]).
     step_flow: [f64; Gas::ALL.len()],
@@ -497,14 +500,62 @@ pub struct Simulation<'a> {
     pub(super) tension_bound: Option<f64>,
 }
 
-fn fibonacci_sphere(n: usize) -> Vec<[f64; 3]> {
+/// A bubble's sink kernel ([`Grid::kernel`]) with what it was found for: the exchange's
+/// predictor and corrector and the next step's predictor mostly ask for the same one (a kernel
+/// depends only on its centre, its radius and the grid's codes).
+#[derive(Debug, Clone, Default)]
+struct SinkKernel {
+    /// Centre (m), radius (m) and [`Grid::codes_id`] of `cells`.
+    key: Option<([f64; 3], f64, u64)>,
+    /// The cells and their weights.
+    cells: Vec<(usize, f64)>,
+    /// Inclusive box of the cells' coordinates ([`cell_bounds`]).
+    bounds: ([usize; 3], [usize; 3]),
+}
+
+impl SinkKernel {
+    /// Make this the kernel of radius `a` about `pos` in `grid` as it is now.
+    fn find(&mut self, grid: &Grid, pos: [f64; 3], a: f64) {
+        let key = (pos, a, grid.codes_id());
+        if self.key != Some(key) {
+            grid.kernel(pos, a, &mut self.cells);
+            // a kernel holds at least one cell (Grid::kernel's fallback)
+            self.bounds = cell_bounds(grid, &self.cells).unwrap_or(([0; 3], [0; 3]));
+            self.key = Some(key);
+        }
+    }
+}
+
+/// The inclusive box (lo, hi cell coordinates) of `cells`, `None` if there are none.
+fn cell_bounds(grid: &Grid, cells: &[(usize, f64)]) -> Option<([usize; 3], [usize; 3])> {
+    let [nx, ny, _] = grid.n;
+    let mut out: Option<([usize; 3], [usize; 3])> = None;
+    for &(idx, _) in cells {
+        let c = [idx % nx, (idx / nx) % ny, idx / (nx * ny)];
+        let (lo, hi) = out.get_or_insert((c, c));
+        for a in 0..3 {
+            lo[a] = lo[a].min(c[a]);
+            hi[a] = hi[a].max(c[a]);
+        }
+    }
+    out
+}
+
+/// The `n` points of the Fibonacci sphere: z_i = 1 − (2i + 1)/n, at longitude i times the
+/// golden angle. `turns` holds (cos, sin) of the longitudes, which do not depend on n (grown
+/// here as needed: a growing bubble asks for a slightly larger sphere at almost every step).
+fn fibonacci_sphere(n: usize, turns: &mut Vec<[f64; 2]>) -> Vec<[f64; 3]> {
     let golden = PI * (3.0 - 5f64.sqrt());
+    for i in turns.len()..n {
+        let th = golden * i as f64;
+        turns.push([th.cos(), th.sin()]);
+    }
     (0..n)
         .map(|i| {
             let z = 1.0 - (2.0 * i as f64 + 1.0) / n as f64;
             let r = (1.0 - z * z).sqrt();
-            let th = golden * i as f64;
-            [r * th.cos(), r * th.sin(), z]
+            let [c, s] = turns[i];
+            [r * c, r * s, z]
         })
         .collect()
 }
@@ -624,7 +675,8 @@ impl<'a> Simulation<'a> {
             inflow: 0.0,
             initial_total: 0.0,
             spheres: std::collections::HashMap::new(),
-            kernel: Vec::new(),
+            sphere_turns: Vec::new(),
+            kernels: Vec::new(),
             step_flow: [0.0; Gas::ALL.len()],
             extra: Vec::new(),
             touched: None,
@@ -801,9 +853,10 @@ impl<'a> Simulation<'a> {
     /// [`Self::prepare_sphere`] for a sphere of radius `rho`.
     fn prepare_sphere_at(&mut self, rho: f64) -> usize {
         let want = self.sphere_size(rho);
+        let turns = &mut self.sphere_turns;
         self.spheres
             .entry(want)
-            .or_insert_with(|| fibonacci_sphere(want));
+            .or_insert_with(|| fibonacci_sphere(want, turns));
         want
     }
 
@@ -1425,15 +1478,19 @@ impl<'a> Simulation<'a> {
     fn take_from_grid(&mut self, i: usize, dn: &[f64]) -> [f64; Gas::ALL.len()] {
         let mut out = [0.0; Gas::ALL.len()];
         let (pos, a) = (self.bubbles[i].position, self.kernel_radius(i));
-        let mut kernel = std::mem::take(&mut self.kernel);
-        self.grid.kernel(pos, a, &mut kernel);
-        self.touch(&kernel);
+        if self.kernels.len() <= i {
+            self.kernels
+                .resize_with(self.bubbles.len(), SinkKernel::default);
+        }
+        let mut kernel = std::mem::take(&mut self.kernels[i]);
+        kernel.find(&self.grid, pos, a);
+        self.touch_box(kernel.bounds);
         let mut wide = Vec::new();
         for (g, &want) in dn.iter().enumerate() {
             if want == 0.0 {
                 continue;
             }
-            let mut taken = self.deposit(g, &kernel, want);
+            let mut taken = self.deposit(g, &kernel.cells, want);
             if want > 0.0 && taken < want {
                 // the kernel ran dry: the rest comes from the shell out to the coupling
                 // sphere ρ, the gel next to the bubble
@@ -1446,20 +1503,23 @@ impl<'a> Simulation<'a> {
             }
             out[g] = taken;
         }
-        self.kernel = kernel;
+        self.kernels[i] = kernel;
         out
     }
 
     /// Extend [`Self::touched`] by the cells of `kernel`.
     fn touch(&mut self, kernel: &[(usize, f64)]) {
-        let [nx, ny, _] = self.grid.n;
-        for &(idx, _) in kernel {
-            let c = [idx % nx, (idx / nx) % ny, idx / (nx * ny)];
-            let (lo, hi) = self.touched.get_or_insert((c, c));
-            for a in 0..3 {
-                lo[a] = lo[a].min(c[a]);
-                hi[a] = hi[a].max(c[a]);
-            }
+        if let Some(bounds) = cell_bounds(&self.grid, kernel) {
+            self.touch_box(bounds);
+        }
+    }
+
+    /// Extend [`Self::touched`] by the box `(lo, hi)` (inclusive cell coordinates).
+    fn touch_box(&mut self, (clo, chi): ([usize; 3], [usize; 3])) {
+        let (lo, hi) = self.touched.get_or_insert((clo, chi));
+        for a in 0..3 {
+            lo[a] = lo[a].min(clo[a]);
+            hi[a] = hi[a].max(chi[a]);
         }
     }
 
