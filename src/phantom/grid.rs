@@ -796,11 +796,18 @@ impl Grid {
 
     /// Weights of a spherically symmetric kernel of radius `a` centred at `p`, over inside
     /// cells, summing to one: w ∝ (1 − (d/a)²)² for cell-centre distance d < a. Falls back to
-    /// the nearest inside cell if the kernel catches none.
-    pub fn kernel(&self, p: [f64; 3], a: f64, out: &mut Vec<(usize, f64)>) {
+    /// the nearest inside cell if the kernel catches none. Returns the inclusive box (lo, hi
+    /// cell coordinates) of the cells in `out`.
+    pub fn kernel(
+        &self,
+        p: [f64; 3],
+        a: f64,
+        out: &mut Vec<(usize, f64)>,
+    ) -> ([usize; 3], [usize; 3]) {
         out.clear();
         let h = self.h;
         let (lo, hi) = self.cell_range(p, a);
+        let (mut blo, mut bhi) = ([usize::MAX; 3], [0usize; 3]);
         let mut total = 0.0;
         for k in lo[2]..=hi[2] {
             let z = (k as f64 + 0.5) * h - p[2];
@@ -809,16 +816,27 @@ impl Grid {
                 let Some((i0, i1)) = self.row_within(p, a, (y, z), (lo[0], hi[0])) else {
                     continue;
                 };
+                let row = self.index(0, j, k);
+                let before = out.len();
+                // the cells outside (those a displacing bubble holds, most of its ball) first
                 for i in i0..=i1 {
+                    let idx = row + i;
+                    if !self.inside(idx) {
+                        continue;
+                    }
                     let x = (i as f64 + 0.5) * h - p[0];
                     let q = (x * x + y * y + z * z) / (a * a);
                     if q < 1.0 {
-                        let idx = self.index(i, j, k);
-                        if self.inside(idx) {
-                            let w = (1.0 - q) * (1.0 - q);
-                            out.push((idx, w));
-                            total += w;
-                        }
+                        let w = (1.0 - q) * (1.0 - q);
+                        out.push((idx, w));
+                        total += w;
+                    }
+                }
+                if out.len() > before {
+                    let (first, last) = (out[before].0 - row, out[out.len() - 1].0 - row);
+                    for (a, (l, u)) in [(0, (first, last)), (1, (j, j)), (2, (k, k))] {
+                        blo[a] = blo[a].min(l);
+                        bhi[a] = bhi[a].max(u);
                     }
                 }
             }
@@ -827,6 +845,7 @@ impl Grid {
             for (_, w) in out.iter_mut() {
                 *w /= total;
             }
+            (blo, bhi)
         } else {
             let mut best = (usize::MAX, f64::INFINITY);
             for idx in 0..self.len() {
@@ -843,7 +862,14 @@ impl Grid {
                     best = (idx, d);
                 }
             }
+            out.clear();
             out.push((best.0, 1.0));
+            let c = [
+                best.0 % self.n[0],
+                (best.0 / self.n[0]) % self.n[1],
+                best.0 / (self.n[0] * self.n[1]),
+            ];
+            (c, c)
         }
     }
 }
@@ -964,6 +990,70 @@ mod tests {
             m[2] += w * ((kk as f64 + 0.5) * 1e-4 - 5e-4);
         }
         assert!(m.iter().all(|x| x.abs() < 1e-15));
+    }
+
+    /// The kernel against its definition cell by cell over the whole grid (every inside cell
+    /// with centre distance d < a, weight (1 − d²/a²)² normalised, in index order), with a
+    /// displacing bubble's cells excluded from the middle of the ball, and the box it returns
+    /// against the box of those cells; a ball with no inside cell takes the nearest one.
+    #[test]
+    fn kernel_is_its_definition_and_returns_its_cells_box() {
+        let h = 1e-4;
+        let mut g = Grid::new(Shape::Box { size: [2e-3; 3] }, h, &[Face::Top]).unwrap();
+        let [nx, ny, _] = g.n;
+        let coords = |idx: usize| [idx % nx, (idx / nx) % ny, idx / (nx * ny)];
+        let centre = |c: [usize; 3]| c.map(|a| (a as f64 + 0.5) * h);
+        let p = [1.03e-3, 0.96e-3, 1.11e-3];
+        let hole: Vec<usize> = (0..g.len())
+            .filter(|&idx| {
+                let c = centre(coords(idx));
+                (0..3).map(|a| (c[a] - p[a]).powi(2)).sum::<f64>() < (3.1 * h).powi(2)
+            })
+            .collect();
+        g.set_excluded(&hole, true);
+        let mut k = Vec::new();
+        for a in [4.2 * h, 6.0 * h, 0.3 * h] {
+            let bounds = g.kernel(p, a, &mut k);
+            let mut want = Vec::new();
+            let mut total = 0.0;
+            for idx in 0..g.len() {
+                let c = centre(coords(idx));
+                let q = (0..3).map(|x| (c[x] - p[x]).powi(2)).sum::<f64>() / (a * a);
+                if g.inside(idx) && q < 1.0 {
+                    want.push((idx, (1.0 - q) * (1.0 - q)));
+                    total += (1.0 - q) * (1.0 - q);
+                }
+            }
+            if want.is_empty() {
+                // a = 0.3h inside the hole: the nearest inside cell
+                assert_eq!(k.len(), 1);
+                assert!(g.inside(k[0].0) && k[0].1 == 1.0);
+                let d = |idx: usize| {
+                    let c = centre(coords(idx));
+                    (0..3).map(|x| (c[x] - p[x]).powi(2)).sum::<f64>()
+                };
+                let nearest = (0..g.len())
+                    .filter(|&i| g.inside(i))
+                    .map(d)
+                    .fold(f64::INFINITY, f64::min);
+                assert!((d(k[0].0) - nearest).abs() < 1e-18);
+            } else {
+                assert_eq!(k.len(), want.len(), "a = {a}");
+                for ((idx, w), (widx, ww)) in k.iter().zip(&want) {
+                    assert_eq!(idx, widx);
+                    assert!((w - ww / total).abs() < 1e-14, "{w} vs {}", ww / total);
+                }
+            }
+            let (mut lo, mut hi) = ([usize::MAX; 3], [0; 3]);
+            for (idx, _) in &k {
+                let c = coords(*idx);
+                for x in 0..3 {
+                    lo[x] = lo[x].min(c[x]);
+                    hi[x] = hi[x].max(c[x]);
+                }
+            }
+            assert_eq!(bounds, (lo, hi), "a = {a}");
+        }
     }
 
     /// Every row's edge runs, checked cell by cell from the codes: with the interior span they

@@ -450,8 +450,7 @@ pub struct Simulation<'a> {
     spheres: std::collections::HashMap<usize, Vec<[f64; 3]>>,
     /// (cos, sin) of the Fibonacci spheres' longitudes ([`fibonacci_sphere`]).
     sphere_turns: Vec<[f64; 2]>,
-    /// Per bubble, its last sink kernel ([`Self::take_from_grid`]).
-    kernels: Vec<SinkKernel>,
+    kernel: Vec<(usize, f64)>,
     /// Per gas, its flow into the gel through the open faces in the last step, mol
     /// ([`Self::diffuse`]; the loading estimate reads it, [`Self::loading_step`]).
     step_flow: [f64; Gas::ALL.len()],
@@ -498,47 +497,6 @@ pub struct Simulation<'a> {
     /// An upper bound of the gel tension anywhere in the gel so far, Pa (`None`: not known,
     /// computed from the fields when next needed): [`Self::tension_bound`].
     pub(super) tension_bound: Option<f64>,
-}
-
-/// A bubble's sink kernel ([`Grid::kernel`]) with what it was found for: the exchange's
-/// predictor and corrector and the next step's predictor mostly ask for the same one (a kernel
-/// depends only on its centre, its radius and the grid's codes).
-#[derive(Debug, Clone, Default)]
-struct SinkKernel {
-    /// Centre (m), radius (m) and [`Grid::codes_id`] of `cells`.
-    key: Option<([f64; 3], f64, u64)>,
-    /// The cells and their weights.
-    cells: Vec<(usize, f64)>,
-    /// Inclusive box of the cells' coordinates ([`cell_bounds`]).
-    bounds: ([usize; 3], [usize; 3]),
-}
-
-impl SinkKernel {
-    /// Make this the kernel of radius `a` about `pos` in `grid` as it is now.
-    fn find(&mut self, grid: &Grid, pos: [f64; 3], a: f64) {
-        let key = (pos, a, grid.codes_id());
-        if self.key != Some(key) {
-            grid.kernel(pos, a, &mut self.cells);
-            // a kernel holds at least one cell (Grid::kernel's fallback)
-            self.bounds = cell_bounds(grid, &self.cells).unwrap_or(([0; 3], [0; 3]));
-            self.key = Some(key);
-        }
-    }
-}
-
-/// The inclusive box (lo, hi cell coordinates) of `cells`, `None` if there are none.
-fn cell_bounds(grid: &Grid, cells: &[(usize, f64)]) -> Option<([usize; 3], [usize; 3])> {
-    let [nx, ny, _] = grid.n;
-    let mut out: Option<([usize; 3], [usize; 3])> = None;
-    for &(idx, _) in cells {
-        let c = [idx % nx, (idx / nx) % ny, idx / (nx * ny)];
-        let (lo, hi) = out.get_or_insert((c, c));
-        for a in 0..3 {
-            lo[a] = lo[a].min(c[a]);
-            hi[a] = hi[a].max(c[a]);
-        }
-    }
-    out
 }
 
 /// The `n` points of the Fibonacci sphere: z_i = 1 − (2i + 1)/n, at longitude i times the
@@ -676,7 +634,7 @@ impl<'a> Simulation<'a> {
             initial_total: 0.0,
             spheres: std::collections::HashMap::new(),
             sphere_turns: Vec::new(),
-            kernels: Vec::new(),
+            kernel: Vec::new(),
             step_flow: [0.0; Gas::ALL.len()],
             extra: Vec::new(),
             touched: None,
@@ -1478,44 +1436,34 @@ impl<'a> Simulation<'a> {
     fn take_from_grid(&mut self, i: usize, dn: &[f64]) -> [f64; Gas::ALL.len()] {
         let mut out = [0.0; Gas::ALL.len()];
         let (pos, a) = (self.bubbles[i].position, self.kernel_radius(i));
-        if self.kernels.len() <= i {
-            self.kernels
-                .resize_with(self.bubbles.len(), SinkKernel::default);
-        }
-        let mut kernel = std::mem::take(&mut self.kernels[i]);
-        kernel.find(&self.grid, pos, a);
-        self.touch_box(kernel.bounds);
+        let mut kernel = std::mem::take(&mut self.kernel);
+        let bounds = self.grid.kernel(pos, a, &mut kernel);
+        self.touch(bounds);
         let mut wide = Vec::new();
         for (g, &want) in dn.iter().enumerate() {
             if want == 0.0 {
                 continue;
             }
-            let mut taken = self.deposit(g, &kernel.cells, want);
+            let mut taken = self.deposit(g, &kernel, want);
             if want > 0.0 && taken < want {
                 // the kernel ran dry: the rest comes from the shell out to the coupling
                 // sphere ρ, the gel next to the bubble
                 if wide.is_empty() {
                     let rho = self.coupling_radius(i);
-                    self.grid.kernel(pos, rho, &mut wide);
-                    self.touch(&wide);
+                    let bounds = self.grid.kernel(pos, rho, &mut wide);
+                    self.touch(bounds);
                 }
                 taken += self.deposit(g, &wide, want - taken);
             }
             out[g] = taken;
         }
-        self.kernels[i] = kernel;
+        self.kernel = kernel;
         out
     }
 
-    /// Extend [`Self::touched`] by the cells of `kernel`.
-    fn touch(&mut self, kernel: &[(usize, f64)]) {
-        if let Some(bounds) = cell_bounds(&self.grid, kernel) {
-            self.touch_box(bounds);
-        }
-    }
-
-    /// Extend [`Self::touched`] by the box `(lo, hi)` (inclusive cell coordinates).
-    fn touch_box(&mut self, (clo, chi): ([usize; 3], [usize; 3])) {
+    /// Extend [`Self::touched`] by the box `(lo, hi)` (inclusive cell coordinates) of a kernel's
+    /// cells ([`Grid::kernel`]).
+    fn touch(&mut self, (clo, chi): ([usize; 3], [usize; 3])) {
         let (lo, hi) = self.touched.get_or_insert((clo, chi));
         for a in 0..3 {
             lo[a] = lo[a].min(clo[a]);
