@@ -4,6 +4,7 @@
 use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Throughput};
 use decophantom::gas::GasMix;
 use decophantom::phantom::diffusion;
+use decophantom::phantom::displacement;
 use decophantom::phantom::grid::{Face, Grid, Shape};
 use decophantom::phantom::params::{BubblePlacement, PhantomParams};
 use decophantom::phantom::sim::{Recorder, Simulation};
@@ -153,5 +154,42 @@ fn end_to_end(c: &mut Criterion) {
     group.finish();
 }
 
-criterion_group!(benches, kernels, end_to_end);
+/// The gel's displacement by a grown bubble ([`displacement::remap`]) as the Fig. 5 dive's
+/// largest bubble takes it: R = 850 µm growing by 0.1 h in the middle of the Fig. 5 cylinder,
+/// its cells taken out of the gel, two gases, out to 3R + 2h (`displace_reach`). Throughput in
+/// cells remapped.
+fn remap(c: &mut Criterion) {
+    let mut g = fig5_cylinder();
+    let h = g.h;
+    let centre = [5.5e-3, 5.5e-3, 2.5e-3];
+    let (r0, r1) = (850e-6, 850e-6 + 0.1 * h);
+    let inner = displacement::covered_cells(&g, centre, r0);
+    g.set_excluded(&inner, true);
+    let fields: Vec<Vec<f64>> = (0..2)
+        .map(|f| {
+            (0..g.len())
+                .map(|i| {
+                    if g.inside(i) {
+                        1.0 + ((i * (f + 3)) % 29) as f64 * 0.01
+                    } else {
+                        0.0
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let reach = 3.0 * r1 + 2.0 * h;
+    let n: usize = displacement::remap(&g, &fields, &[1.2, 0.8], centre, r0, r1, reach)
+        .iter()
+        .map(Vec::len)
+        .sum();
+    let mut group = c.benchmark_group("displacement");
+    group.throughput(Throughput::Elements(n as u64));
+    group.bench_function("remap/fig5_R850um", |b| {
+        b.iter(|| displacement::remap(&g, &fields, &[1.2, 0.8], centre, r0, r1, reach))
+    });
+    group.finish();
+}
+
+criterion_group!(benches, kernels, remap, end_to_end);
 criterion_main!(benches);

@@ -84,7 +84,8 @@ pub fn covered_cells(grid: &Grid, centre: [f64; 3], r: f64) -> Vec<usize> {
 /// at distance r ∈ [r_new, reach] from `centre`, the value of each field at the point the gel
 /// there came from, r_b = (r³ − (r_new³ − r_old³))^{1/3} on the same ray ([`interpolate_gases`],
 /// with the bubble's cells at the wall value `wall[g]`, Henry's law at its surface). Returns
-/// (cell, value per field in field order); the caller writes it after updating which cells
+/// (cell, value per field in field order), per z-plane in plane order (each plane's list
+/// built by one task: no copy into one list); the caller writes it after updating which cells
 /// the bubble holds.
 pub fn remap(
     grid: &Grid,
@@ -94,14 +95,14 @@ pub fn remap(
     r_old: f64,
     r_new: f64,
     reach: f64,
-) -> Vec<(usize, [f64; Gas::ALL.len()])> {
+) -> Vec<Vec<(usize, [f64; Gas::ALL.len()])>> {
     let h = grid.h;
     let dv = r_new.powi(3) - r_old.powi(3);
     let (lo, hi) = grid.cell_range(centre, reach);
     let planes: Vec<usize> = (lo[2]..=hi[2]).collect();
     planes
         .par_iter()
-        .flat_map_iter(|&k| {
+        .map(|&k| {
             let mut out = Vec::new();
             let z = (k as f64 + 0.5) * h - centre[2];
             for j in lo[1]..=hi[1] {
@@ -242,6 +243,9 @@ mod tests {
             r1,
             1.5e-3,
         );
+        // per plane, in plane order: every cell once, planes ascending
+        let out = out.concat();
+        assert!(out.windows(2).all(|w| w[0].0 < w[1].0));
         assert!(out.len() > 1000);
         let mut checked = 0;
         for (idx, v) in &out {
@@ -288,7 +292,7 @@ mod tests {
                 r1,
                 1.2e-3,
             );
-            for (_, v) in out {
+            for (_, v) in out.concat() {
                 assert!((v[0] - 3.7).abs() < 1e-12);
             }
         }

@@ -1664,7 +1664,7 @@ impl<'a> Simulation<'a> {
                 .filter(|idx| new_cells.binary_search(idx).is_err())
                 .collect();
             self.mark_gel(take.iter().chain(&give).copied());
-            self.mark_gel(remapped.iter().map(|(idx, _)| *idx));
+            self.mark_gel(remapped.iter().flatten().map(|(idx, _)| *idx));
             // cells grown over leave the gel with their gas
             for &idx in &take {
                 for f in self.fields.iter_mut() {
@@ -1674,7 +1674,7 @@ impl<'a> Simulation<'a> {
             }
             self.grid.set_excluded(&take, true);
             self.grid.set_excluded(&give, false);
-            for (idx, values) in &remapped {
+            for (idx, values) in remapped.iter().flatten() {
                 if !self.grid.inside(*idx) {
                     continue;
                 }
@@ -1683,7 +1683,7 @@ impl<'a> Simulation<'a> {
                     f[*idx] = *v;
                 }
             }
-            if remapped.is_empty() && !give.is_empty() {
+            if remapped.iter().all(|p| p.is_empty()) && !give.is_empty() {
                 // no remap: the cells given back take the gel next to them, outer cells first
                 let mut order = give.clone();
                 let dist = |idx: usize| {
