@@ -1943,20 +1943,33 @@ impl<'a> Simulation<'a> {
         let (gas, d) = (self.gases[g], self.diffusivity[g]);
         let cb = |s: f64| self.ostwald[g] * profile.inspired_partial_pressure(gas, s) / self.rt;
         let (cb_half, cb_end) = (cb(t + 0.5 * dt), cb(t + dt));
+        use rayon::prelude::*;
+        // the grid-wide passes in parallel chunks (element by element: the same bits)
+        const CHUNK: usize = 1 << 14;
         let mut whole = std::mem::take(&mut self.extra);
-        whole.clear();
-        whole.extend_from_slice(&self.fields[g]);
+        whole.resize(self.fields[g].len(), 0.0);
+        whole
+            .par_chunks_mut(CHUNK)
+            .zip(self.fields[g].par_chunks(CHUNK))
+            .for_each(|(w, f)| w.copy_from_slice(f));
         let f_whole = self.implicit.step(&self.grid, &mut whole, d, dt, cb_end);
         let half = &mut self.fields[g];
         let f_half = self.implicit.step(&self.grid, half, d, 0.5 * dt, cb_half)
             + self.implicit.step(&self.grid, half, d, 0.5 * dt, cb_end);
-        let negative = half.iter().zip(&whole).any(|(h, w)| 2.0 * h - w < 0.0);
+        let negative = half
+            .par_chunks(CHUNK)
+            .zip(whole.par_chunks(CHUNK))
+            .any(|(h, w)| h.iter().zip(w).any(|(h, w)| 2.0 * h - w < 0.0));
         let flow = if negative {
             f_half
         } else {
-            for (h, w) in half.iter_mut().zip(&whole) {
-                *h = 2.0 * *h - w;
-            }
+            half.par_chunks_mut(CHUNK)
+                .zip(whole.par_chunks(CHUNK))
+                .for_each(|(h, w)| {
+                    for (h, w) in h.iter_mut().zip(w) {
+                        *h = 2.0 * *h - w;
+                    }
+                });
             2.0 * f_half - f_whole
         };
         self.extra = whole;
