@@ -959,7 +959,17 @@ impl<'a> Simulation<'a> {
         let rho = self.coupling_radius(i);
         let mut cbar = [0.0; Gas::ALL.len()];
         let cb = self.inspired_concentrations(profile);
-        self.sphere_means(self.bubbles[i].position, rho, &cb[..ng], &mut cbar[..ng]);
+        if self.sphere_size(rho) >= PARALLEL_SPHERE_POINTS
+            && !serial_fluxes()
+            && rayon::current_num_threads() > 1
+        {
+            // a large sphere's points in parallel (the same bits, as in Self::all_fluxes)
+            let (mut vals, mut means) = (Vec::new(), Vec::new());
+            self.sphere_means_of(&[i], &cb, &mut vals, &mut means);
+            cbar = means[0];
+        } else {
+            self.sphere_means(self.bubbles[i].position, rho, &cb[..ng], &mut cbar[..ng]);
+        }
         self.fluxes_from_means(i, ambient, &cbar[..ng], j)
     }
 
