@@ -874,6 +874,91 @@ impl Grid {
     }
 }
 
+/// The cells a kernel about one centre may hold ([`Grid::kernel_cached`]): the inside cells
+/// within `a_max` of it, in the kernel's order, with their squared distance and coordinates.
+#[derive(Debug, Clone, Default)]
+pub struct KernelCache {
+    /// Centre (m), [`Grid::codes_id`] and `a_max` (m) of `cells`.
+    key: Option<([f64; 3], u64, f64)>,
+    /// (cell, squared centre distance as [`Grid::kernel`] computes it, its coordinates).
+    cells: Vec<(usize, f64, [u32; 3])>,
+}
+
+impl Grid {
+    /// [`Self::kernel`] through `cache`: the same cells, weights and box, bit for bit. The
+    /// candidates (every inside cell within a radius a little beyond `a`) are found again only
+    /// when the centre or the grid's codes change or `a` outgrows them; a kernel of a smaller
+    /// radius is a subset of the candidates (q = d²/a² < 1 implies d²/a_max² < 1, in floating
+    /// point too: both roundings are monotone).
+    pub fn kernel_cached(
+        &self,
+        p: [f64; 3],
+        a: f64,
+        cache: &mut KernelCache,
+        out: &mut Vec<(usize, f64)>,
+    ) -> ([usize; 3], [usize; 3]) {
+        let id = self.codes_id();
+        let fresh = cache
+            .key
+            .is_some_and(|(cp, cid, amax)| cp == p && cid == id && a <= amax);
+        if !fresh {
+            // room for half a cell of growth
+            let a_max = a + 0.5 * self.h;
+            cache.cells.clear();
+            let h = self.h;
+            let (lo, hi) = self.cell_range(p, a_max);
+            for k in lo[2]..=hi[2] {
+                let z = (k as f64 + 0.5) * h - p[2];
+                for j in lo[1]..=hi[1] {
+                    let y = (j as f64 + 0.5) * h - p[1];
+                    let Some((i0, i1)) = self.row_within(p, a_max, (y, z), (lo[0], hi[0])) else {
+                        continue;
+                    };
+                    let row = self.index(0, j, k);
+                    for i in i0..=i1 {
+                        if !self.inside(row + i) {
+                            continue;
+                        }
+                        let x = (i as f64 + 0.5) * h - p[0];
+                        // the same expression as Self::kernel's
+                        let d2 = x * x + y * y + z * z;
+                        if d2 / (a_max * a_max) < 1.0 {
+                            cache
+                                .cells
+                                .push((row + i, d2, [i as u32, j as u32, k as u32]));
+                        }
+                    }
+                }
+            }
+            cache.key = Some((p, id, a_max));
+        }
+        out.clear();
+        let (mut blo, mut bhi) = ([usize::MAX; 3], [0usize; 3]);
+        let mut total = 0.0;
+        for &(idx, d2, c) in &cache.cells {
+            let q = d2 / (a * a);
+            if q < 1.0 {
+                let w = (1.0 - q) * (1.0 - q);
+                out.push((idx, w));
+                total += w;
+                for ax in 0..3 {
+                    blo[ax] = blo[ax].min(c[ax] as usize);
+                    bhi[ax] = bhi[ax].max(c[ax] as usize);
+                }
+            }
+        }
+        if total > 0.0 {
+            for (_, w) in out.iter_mut() {
+                *w /= total;
+            }
+            (blo, bhi)
+        } else {
+            // no inside cell within a: the nearest one
+            self.kernel(p, a, out)
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1054,6 +1139,54 @@ mod tests {
             }
             assert_eq!(bounds, (lo, hi), "a = {a}");
         }
+    }
+
+    /// The cached kernel is the kernel, bit for bit, with its box: a bubble's kernel growing
+    /// and shrinking about a centre while cells are excluded and given back (each change of
+    /// the codes and every outgrowth of the candidates taking fresh ones), a moved centre, and
+    /// radii with no inside cell (the nearest-cell fallback).
+    #[test]
+    fn cached_kernels_are_the_kernels_bits() {
+        let h = 1e-4;
+        let mut g = Grid::new(Shape::Box { size: [2.4e-3; 3] }, h, &[Face::Top]).unwrap();
+        let mut cache = KernelCache::default();
+        let (mut a_out, mut b_out) = (Vec::new(), Vec::new());
+        let mut p = [1.21e-3, 1.17e-3, 1.33e-3];
+        let mut held: Vec<usize> = Vec::new();
+        let mut rebuilt = 0;
+        for step in 0..60 {
+            let r = 2.5 * h + 0.05 * h * (step as f64)
+                - if step > 40 {
+                    0.2 * h * (step - 40) as f64
+                } else {
+                    0.0
+                };
+            if step % 7 == 3 {
+                // the bubble holds the cells within r: exclusion changes the codes
+                g.set_excluded(&held, false);
+                held = crate::phantom::displacement::covered_cells(&g, p, r - 0.5 * h);
+                g.set_excluded(&held, true);
+            }
+            if step == 50 {
+                g.set_excluded(&held, false);
+                held.clear();
+                p[0] += 0.37 * h;
+            }
+            for a in [r + h, r + 2.0 * h, 0.2 * h] {
+                let before = cache.key;
+                let bb = g.kernel_cached(p, a, &mut cache, &mut b_out);
+                rebuilt += usize::from(cache.key != before);
+                let ba = g.kernel(p, a, &mut a_out);
+                assert_eq!(ba, bb, "box, step {step}, a = {a}");
+                assert_eq!(a_out.len(), b_out.len(), "step {step}, a = {a}");
+                for (x, y) in a_out.iter().zip(&b_out) {
+                    assert_eq!(x.0, y.0);
+                    assert_eq!(x.1.to_bits(), y.1.to_bits());
+                }
+            }
+        }
+        // the three radii alternate, so the candidates were found again often, but not always
+        assert!(rebuilt > 10 && rebuilt < 180, "{rebuilt}");
     }
 
     /// Every row's edge runs, checked cell by cell from the codes: with the interior span they

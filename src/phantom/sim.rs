@@ -24,7 +24,7 @@ use super::bubble::{Balance, Bubble, BubbleFate};
 use super::diffusion;
 use super::displacement::{self, Displaced};
 use super::gel_pass::{plane_gel, same_plane_gel, PlaneGel};
-use super::grid::{Face, Grid};
+use super::grid::{Face, Grid, KernelCache};
 use super::nucleation::{Nucleus, NucleusPool};
 use super::params::{BubblePlacement, PhantomParams};
 use crate::error::Error;
@@ -451,6 +451,9 @@ pub struct Simulation<'a> {
     /// (cos, sin) of the Fibonacci spheres' longitudes ([`fibonacci_sphere`]).
     sphere_turns: Vec<[f64; 2]>,
     kernel: Vec<(usize, f64)>,
+    /// Per bubble, the candidate cells of its sink kernel and of the wider one out to its
+    /// coupling sphere ([`Grid::kernel_cached`]).
+    kernel_caches: Vec<[KernelCache; 2]>,
     /// Per gas, its flow into the gel through the open faces in the last step, mol
     /// ([`Self::diffuse`]; the loading estimate reads it, [`Self::loading_step`]).
     step_flow: [f64; Gas::ALL.len()],
@@ -635,6 +638,7 @@ impl<'a> Simulation<'a> {
             spheres: std::collections::HashMap::new(),
             sphere_turns: Vec::new(),
             kernel: Vec::new(),
+            kernel_caches: Vec::new(),
             step_flow: [0.0; Gas::ALL.len()],
             extra: Vec::new(),
             touched: None,
@@ -1446,8 +1450,13 @@ impl<'a> Simulation<'a> {
     fn take_from_grid(&mut self, i: usize, dn: &[f64]) -> [f64; Gas::ALL.len()] {
         let mut out = [0.0; Gas::ALL.len()];
         let (pos, a) = (self.bubbles[i].position, self.kernel_radius(i));
+        if self.kernel_caches.len() < self.bubbles.len() {
+            self.kernel_caches
+                .resize_with(self.bubbles.len(), Default::default);
+        }
+        let [mut near, mut far] = std::mem::take(&mut self.kernel_caches[i]);
         let mut kernel = std::mem::take(&mut self.kernel);
-        let bounds = self.grid.kernel(pos, a, &mut kernel);
+        let bounds = self.grid.kernel_cached(pos, a, &mut near, &mut kernel);
         self.touch(bounds);
         let mut wide = Vec::new();
         for (g, &want) in dn.iter().enumerate() {
@@ -1460,7 +1469,7 @@ impl<'a> Simulation<'a> {
                 // sphere ρ, the gel next to the bubble
                 if wide.is_empty() {
                     let rho = self.coupling_radius(i);
-                    let bounds = self.grid.kernel(pos, rho, &mut wide);
+                    let bounds = self.grid.kernel_cached(pos, rho, &mut far, &mut wide);
                     self.touch(bounds);
                 }
                 taken += self.deposit(g, &wide, want - taken);
@@ -1468,6 +1477,7 @@ impl<'a> Simulation<'a> {
             out[g] = taken;
         }
         self.kernel = kernel;
+        self.kernel_caches[i] = [near, far];
         out
     }
 
