@@ -804,11 +804,18 @@ impl Grid {
         a: f64,
         out: &mut Vec<(usize, f64)>,
     ) -> ([usize; 3], [usize; 3]) {
-        out.clear();
+        let mut cells = Vec::new();
+        self.ball_cells(p, a, &mut cells);
+        self.kernel_of(a, &cells, out)
+            .unwrap_or_else(|| self.nearest_cell(p, out))
+    }
+
+    /// The inside cells whose centres lie within `a` of `p` (d²/a² < 1), in index order, with
+    /// d² and their coordinates.
+    fn ball_cells(&self, p: [f64; 3], a: f64, cells: &mut Vec<(usize, f64, [u32; 3])>) {
+        cells.clear();
         let h = self.h;
         let (lo, hi) = self.cell_range(p, a);
-        let (mut blo, mut bhi) = ([usize::MAX; 3], [0usize; 3]);
-        let mut total = 0.0;
         for k in lo[2]..=hi[2] {
             let z = (k as f64 + 0.5) * h - p[2];
             for j in lo[1]..=hi[1] {
@@ -817,60 +824,79 @@ impl Grid {
                     continue;
                 };
                 let row = self.index(0, j, k);
-                let before = out.len();
                 // the cells outside (those a displacing bubble holds, most of its ball) first
                 for i in i0..=i1 {
-                    let idx = row + i;
-                    if !self.inside(idx) {
+                    if !self.inside(row + i) {
                         continue;
                     }
                     let x = (i as f64 + 0.5) * h - p[0];
-                    let q = (x * x + y * y + z * z) / (a * a);
-                    if q < 1.0 {
-                        let w = (1.0 - q) * (1.0 - q);
-                        out.push((idx, w));
-                        total += w;
-                    }
-                }
-                if out.len() > before {
-                    let (first, last) = (out[before].0 - row, out[out.len() - 1].0 - row);
-                    for (a, (l, u)) in [(0, (first, last)), (1, (j, j)), (2, (k, k))] {
-                        blo[a] = blo[a].min(l);
-                        bhi[a] = bhi[a].max(u);
+                    let d2 = x * x + y * y + z * z;
+                    if d2 / (a * a) < 1.0 {
+                        cells.push((row + i, d2, [i as u32, j as u32, k as u32]));
                     }
                 }
             }
         }
-        if total > 0.0 {
-            for (_, w) in out.iter_mut() {
-                *w /= total;
-            }
-            (blo, bhi)
-        } else {
-            let mut best = (usize::MAX, f64::INFINITY);
-            for idx in 0..self.len() {
-                if !self.inside(idx) {
-                    continue;
+    }
+
+    /// The kernel of radius `a` over those of `cells` ([`Self::ball_cells`] of a radius ≥ a)
+    /// within `a`, into `out`; its box, or `None` if none is.
+    fn kernel_of(
+        &self,
+        a: f64,
+        cells: &[(usize, f64, [u32; 3])],
+        out: &mut Vec<(usize, f64)>,
+    ) -> Option<([usize; 3], [usize; 3])> {
+        out.clear();
+        let (mut blo, mut bhi) = ([usize::MAX; 3], [0usize; 3]);
+        let mut total = 0.0;
+        for &(idx, d2, c) in cells {
+            let q = d2 / (a * a);
+            if q < 1.0 {
+                let w = (1.0 - q) * (1.0 - q);
+                out.push((idx, w));
+                total += w;
+                for ax in 0..3 {
+                    blo[ax] = blo[ax].min(c[ax] as usize);
+                    bhi[ax] = bhi[ax].max(c[ax] as usize);
                 }
-                let i = idx % self.n[0];
-                let j = (idx / self.n[0]) % self.n[1];
-                let k = idx / (self.n[0] * self.n[1]);
-                let d = ((i as f64 + 0.5) * h - p[0]).powi(2)
-                    + ((j as f64 + 0.5) * h - p[1]).powi(2)
-                    + ((k as f64 + 0.5) * h - p[2]).powi(2);
-                if d < best.1 {
-                    best = (idx, d);
-                }
             }
-            out.clear();
-            out.push((best.0, 1.0));
-            let c = [
-                best.0 % self.n[0],
-                (best.0 / self.n[0]) % self.n[1],
-                best.0 / (self.n[0] * self.n[1]),
-            ];
-            (c, c)
         }
+        if !(total > 0.0) {
+            return None;
+        }
+        for (_, w) in out.iter_mut() {
+            *w /= total;
+        }
+        Some((blo, bhi))
+    }
+
+    /// The inside cell nearest to `p`, alone in `out` with weight 1, and its coordinates as a box.
+    fn nearest_cell(&self, p: [f64; 3], out: &mut Vec<(usize, f64)>) -> ([usize; 3], [usize; 3]) {
+        let h = self.h;
+        let mut best = (usize::MAX, f64::INFINITY);
+        for idx in 0..self.len() {
+            if !self.inside(idx) {
+                continue;
+            }
+            let i = idx % self.n[0];
+            let j = (idx / self.n[0]) % self.n[1];
+            let k = idx / (self.n[0] * self.n[1]);
+            let d = ((i as f64 + 0.5) * h - p[0]).powi(2)
+                + ((j as f64 + 0.5) * h - p[1]).powi(2)
+                + ((k as f64 + 0.5) * h - p[2]).powi(2);
+            if d < best.1 {
+                best = (idx, d);
+            }
+        }
+        out.clear();
+        out.push((best.0, 1.0));
+        let c = [
+            best.0 % self.n[0],
+            (best.0 / self.n[0]) % self.n[1],
+            best.0 / (self.n[0] * self.n[1]),
+        ];
+        (c, c)
     }
 }
 
@@ -904,58 +930,11 @@ impl Grid {
         if !fresh {
             // room for half a cell of growth
             let a_max = a + 0.5 * self.h;
-            cache.cells.clear();
-            let h = self.h;
-            let (lo, hi) = self.cell_range(p, a_max);
-            for k in lo[2]..=hi[2] {
-                let z = (k as f64 + 0.5) * h - p[2];
-                for j in lo[1]..=hi[1] {
-                    let y = (j as f64 + 0.5) * h - p[1];
-                    let Some((i0, i1)) = self.row_within(p, a_max, (y, z), (lo[0], hi[0])) else {
-                        continue;
-                    };
-                    let row = self.index(0, j, k);
-                    for i in i0..=i1 {
-                        if !self.inside(row + i) {
-                            continue;
-                        }
-                        let x = (i as f64 + 0.5) * h - p[0];
-                        // the same expression as Self::kernel's
-                        let d2 = x * x + y * y + z * z;
-                        if d2 / (a_max * a_max) < 1.0 {
-                            cache
-                                .cells
-                                .push((row + i, d2, [i as u32, j as u32, k as u32]));
-                        }
-                    }
-                }
-            }
+            self.ball_cells(p, a_max, &mut cache.cells);
             cache.key = Some((p, id, a_max));
         }
-        out.clear();
-        let (mut blo, mut bhi) = ([usize::MAX; 3], [0usize; 3]);
-        let mut total = 0.0;
-        for &(idx, d2, c) in &cache.cells {
-            let q = d2 / (a * a);
-            if q < 1.0 {
-                let w = (1.0 - q) * (1.0 - q);
-                out.push((idx, w));
-                total += w;
-                for ax in 0..3 {
-                    blo[ax] = blo[ax].min(c[ax] as usize);
-                    bhi[ax] = bhi[ax].max(c[ax] as usize);
-                }
-            }
-        }
-        if total > 0.0 {
-            for (_, w) in out.iter_mut() {
-                *w /= total;
-            }
-            (blo, bhi)
-        } else {
-            // no inside cell within a: the nearest one
-            self.kernel(p, a, out)
-        }
+        self.kernel_of(a, &cache.cells, out)
+            .unwrap_or_else(|| self.nearest_cell(p, out))
     }
 }
 
