@@ -1076,7 +1076,7 @@ impl LinePlan {
                 .map(|k| {
                     let (mut runs, mut ends) = (Vec::new(), Vec::with_capacity(per));
                     for r in k * per..(k + 1) * per {
-                        let (row, offset) = plan.row(grid, dir, r);
+                        let (row, offset) = row_of(&plan.index[dir], grid, dir, r);
                         row_runs(row, offset, max_len, &mut runs);
                         ends.push(runs.len() as u32);
                     }
@@ -1104,11 +1104,6 @@ impl LinePlan {
         } else {
             grid.n[1]
         }
-    }
-
-    /// Row `r` of direction `dir`'s indices and the position of its first cell in its runs.
-    fn row(&self, grid: &Grid, dir: usize, r: usize) -> (&[u16], u32) {
-        row_of(&self.index[dir], grid, dir, r)
     }
 
     /// Bring the plan to `grid`'s codes, which changed only in `cells` since the plan's (as

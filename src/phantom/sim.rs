@@ -883,7 +883,7 @@ impl<'a> Simulation<'a> {
         } else {
             for &i in which {
                 let mut j = [0.0; Gas::ALL.len()];
-                let t = self.fluxes(i, ambient, profile, &mut j[..ng]);
+                let t = self.fluxes(i, ambient, profile, &mut j[..ng], (vals, means));
                 out[i] = (t, j);
             }
         }
@@ -958,7 +958,17 @@ impl<'a> Simulation<'a> {
 
     /// Gas fluxes into bubble `i` (mol/s per gas) and the gel tension at its coupling sphere.
     /// The bubble's coupling sphere must have been prepared ([`Self::prepare_sphere`]).
-    fn fluxes(&self, i: usize, ambient: f64, profile: &PressureHistory, j: &mut [f64]) -> f64 {
+    fn fluxes(
+        &self,
+        i: usize,
+        ambient: f64,
+        profile: &PressureHistory,
+        j: &mut [f64],
+        (vals, means): (
+            &mut Vec<[f64; Gas::ALL.len()]>,
+            &mut Vec<[f64; Gas::ALL.len()]>,
+        ),
+    ) -> f64 {
         let ng = self.gases.len();
         let rho = self.coupling_radius(i);
         let mut cbar = [0.0; Gas::ALL.len()];
@@ -968,8 +978,7 @@ impl<'a> Simulation<'a> {
             && rayon::current_num_threads() > 1
         {
             // a large sphere's points in parallel (the same bits, as in Self::all_fluxes)
-            let (mut vals, mut means) = (Vec::new(), Vec::new());
-            self.sphere_means_of(&[i], &cb, &mut vals, &mut means);
+            self.sphere_means_of(&[i], &cb, vals, means);
             cbar = means[0];
         } else {
             self.sphere_means(self.bubbles[i].position, rho, &cb[..ng], &mut cbar[..ng]);
@@ -1542,7 +1551,7 @@ impl<'a> Simulation<'a> {
         // every open bubble's end-of-step fluxes, from the grid before any correction; a
         // bubble whose coupling sphere reads cells that an earlier bubble's correction has
         // changed is evaluated again when its turn comes (what a serial loop would have read)
-        let round = self.flux_round(p1, profile, |s, i| {
+        let mut round = self.flux_round(p1, profile, |s, i| {
             s.steps_state[i].open && s.bubbles[i].active()
         });
         self.touched = None;
@@ -1553,7 +1562,9 @@ impl<'a> Simulation<'a> {
             }
             let mut j1 = round.out[i].1;
             if self.reads_touched(i) || serial_fluxes() {
-                self.fluxes(i, p1, profile, &mut j1[..ng]);
+                // the round's sampling buffers as scratch (its fluxes are in `out`)
+                let scratch = (&mut round.vals, &mut round.means);
+                self.fluxes(i, p1, profile, &mut j1[..ng], scratch);
             }
             if (0..ng).all(|g| j1[g] == 0.0 && st.flux[g] == 0.0) {
                 continue;
