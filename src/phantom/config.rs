@@ -100,6 +100,7 @@ struct RawPopulation {
 struct RawNumerics {
     max_step_s: Option<f64>,
     max_pressure_change: Option<f64>,
+    max_step_growth: Option<f64>,
     max_content_change: Option<f64>,
     bubble_tolerance: Option<f64>,
     field_tolerance: Option<f64>,
@@ -548,6 +549,16 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
         max_pressure_change: positive(
             "numerics.max_pressure_change",
             n.max_pressure_change.unwrap_or(d.max_pressure_change),
+        )?,
+        max_step_growth: in_range(
+            "numerics.max_step_growth",
+            positive(
+                "numerics.max_step_growth",
+                n.max_step_growth.unwrap_or(d.max_step_growth),
+            )?,
+            1.01,
+            10.0,
+            "(factor per step)",
         )?,
         max_content_change: positive(
             "numerics.max_content_change",

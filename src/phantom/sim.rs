@@ -153,7 +153,7 @@ impl StepScheme {
 pub enum StepLimit {
     /// `max_step`.
     MaxStep,
-    /// At most twice the last step.
+    /// At most `max_step_growth` times the last step.
     Growth,
     /// The bubbles' error estimate (`bubble_tolerance`).
     BubbleError,
@@ -1303,7 +1303,7 @@ impl<'a> Simulation<'a> {
         self.round = round;
     }
 
-    /// Phase 2: the step. The physics sets it — at most ×2 growth per step, `max_step`, the
+    /// Phase 2: the step. The physics sets it — at most ×`max_step_growth` per step, `max_step`, the
     /// pressure-change limit, and for every bubble the content limit on the sum of each gas's
     /// own change, dt·Σ_g|J_g| ≤ max_content_change·n (not the net |Σ_g J_g|, which vanishes in
     /// counter-diffusion while each gas changes fast), and no gas losing more than half of what
@@ -1330,7 +1330,14 @@ impl<'a> Simulation<'a> {
             }
             *dt = new;
         };
-        let d = dt.min(2.0 * dt_prev);
+        // ×`max_step_growth` from an implicit step (`Numerics::max_step_growth`), ×2 from an
+        // explicit one (forward Euler's steady state does not depend on the step)
+        let growth = if dt_prev >= self.implicit_threshold {
+            num.max_step_growth
+        } else {
+            2.0
+        };
+        let d = dt.min(growth * dt_prev);
         lower(&mut dt, d, StepLimit::Growth);
         for (e, which) in estimates {
             let d = dt.min(e);

@@ -271,18 +271,28 @@ fn displaced_reference_follows_scriven() {
 
 /// The 3-D model against Scriven at the two supersaturations: a 150 µm bubble with γ = 0 in a
 /// sealed cube at h = 50 µm (6 mm at S = 9.9; 4 mm at S = 3, where it grows only to 270 µm);
-/// the slope of R² over 200–300 s against 4β²D with ε = 1. The sealed cube's depletion lowers
-/// the slope a little. Printed when run: at S = 9.9 ε = 0 (no displacement) is 8.3 % higher than
-/// ε = 1, so the test tells the two apart; at S = 3 they differ by 1.6 %.
+/// the slope of R² over 200–300 s, fitted by least squares to the 101 frames of that stretch,
+/// against Scriven's 4β²D with ε = 1.
+///
+/// At S = 9.9 ε = 0 (no displacement) is 8.3 % higher than ε = 1, so the test tells the two
+/// apart; within 1 %. At S = 3 the two differ by only 1.6 % and the model's own discretisation
+/// is larger than that (measured 26 Nov 2026, every step within the explicit limit, i.e. the
+/// time step converged: +3.4 / −1.5 / +1.2 / +1.8 % from ε = 1 at h = 100 / 66.7 / 50 / 40 µm,
+/// the bubble's centre falling differently on each grid), so that case checks only that the
+/// growth is Scriven's within 3 %. The slope used to be taken from two frames (200 and 300 s):
+/// that one passed at S = 3 (+0.24 %) by a lucky draw. A change of the last bit of the
+/// bubbles' step estimate moved it to +2.0 %, with the time-converged value at +1.2 %.
 #[test]
 fn resolved_bubble_grows_as_scriven_with_convection() {
     // at S = 3 the bubble grows from 150 to 270 µm: h = 50 µm (4 mm cube) to resolve it
-    for (s, side, h, tol) in [(9.9, 6e-3, 50e-6, 0.01), (3.0, 4e-3, 50e-6, 0.01)] {
+    for (s, side, h, tol) in [(9.9, 6e-3, 50e-6, 0.01), (3.0, 4e-3, 50e-6, 0.03)] {
         let ja = L * (s - 1.0);
         let beta = scriven_beta(ja, 1.0);
         let beta0 = scriven_beta(ja, 0.0);
-        let r = three_d(side, h, 150e-6, 0.0, s, true, &[200.0, 300.0]);
-        let slope = (r[1].powi(2) - r[0].powi(2)) / 100.0;
+        let times: Vec<f64> = (0..=100).map(|i| 200.0 + f64::from(i)).collect();
+        let r = three_d(side, h, 150e-6, 0.0, s, true, &times);
+        let r2: Vec<f64> = r.iter().map(|x| x * x).collect();
+        let slope = least_squares_slope(&times, &r2);
         let (want, want0) = (4.0 * beta * beta * D, 4.0 * beta0 * beta0 * D);
         eprintln!(
             "3-D, S = {s}: dR²/dt {slope:.4e}; Scriven ε = 1 {want:.4e} ({:+.2} %), ε = 0 {want0:.4e} ({:+.2} %)",
@@ -291,6 +301,23 @@ fn resolved_bubble_grows_as_scriven_with_convection() {
         );
         assert!((slope / want - 1.0).abs() < tol);
     }
+}
+
+/// The least-squares slope of y over x.
+fn least_squares_slope(x: &[f64], y: &[f64]) -> f64 {
+    let n = x.len() as f64;
+    let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+    let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
+    let sxx: f64 = x.iter().map(|a| (a - mx).powi(2)).sum();
+    sxy / sxx
+}
+
+#[test]
+fn least_squares_slope_of_a_line_is_its_slope() {
+    // y = 3x − 2 with symmetric residuals that cancel (an independent hand computation)
+    let x = [0.0, 1.0, 2.0, 3.0, 4.0];
+    let y = [-2.0 + 0.5, 1.0 - 0.5, 4.0, 7.0 - 0.5, 10.0 + 0.5];
+    assert!((least_squares_slope(&x, &y) - 3.0).abs() < 1e-12);
 }
 
 /// The case: a 150 µm bubble (γ = 0.07 N/m) at supersaturation ratio 9.9, D_surf = D,
