@@ -4,7 +4,9 @@
 
 use decophantom::gas::{Gas, GasMix};
 use decophantom::phantom::params::{BubblePlacement, GasProperties, PhantomParams};
-use decophantom::phantom::sim::{Event, Recorder, Simulation};
+use decophantom::phantom::sim::{
+    Event, Frame, Observer, Recorder, Simulation, StepLimit, StepRecord, StepScheme,
+};
 use decophantom::profile::PressureHistory;
 
 /// The Epstein–Plesset set-up of `analytic::epstein_plesset_dissolution` (pure N2, γ = 0,
@@ -157,5 +159,83 @@ fn implicit_steps_near_a_growing_bubble_stay_near_an_all_explicit_run() {
     assert!(
         (va / vb - 1.0).abs() < 0.015,
         "peak volume {va} against {vb}"
+    );
+}
+
+/// Every step's physics-allowed length, scheme and limit, as the time loop reports them.
+#[derive(Default)]
+struct Steps {
+    rec: Recorder,
+    steps: Vec<(f64, StepScheme, StepLimit)>,
+}
+
+impl Observer for Steps {
+    fn frame(&mut self, frame: &Frame) {
+        self.rec.frame(frame);
+    }
+    fn step(&mut self, s: &StepRecord) {
+        self.steps.push((s.physics_dt, s.scheme, s.limit));
+    }
+}
+
+/// `numerics.max_step_growth`: after an implicit step the step the physics allows grows by at
+/// most that factor (1.2), after an explicit one by at most 2; both bounds are reached in a
+/// run that takes both kinds (a bubble dissolving in an open box, as the Epstein–Plesset case,
+/// for 600 s: the bubbles' estimate lets the steps grow past the implicit threshold).
+#[test]
+fn steps_grow_by_at_most_the_growth_factor() {
+    let (d, l, f, p, r0, h) = (2e-9, 0.014, 0.2, 1e5, 300e-6, 100e-6);
+    let mut params = PhantomParams::box_phantom([4e-3; 3], h);
+    params.surface_tension = 0.0;
+    params.min_radius = 0.0;
+    params.gases = vec![GasProperties {
+        gas: Gas::N2,
+        diffusivity: d,
+        ostwald: l,
+    }];
+    params.open_faces = params.shape.faces().to_vec();
+    params.bubbles = BubblePlacement::Explicit(vec![([2e-3; 3], r0)]);
+    params.numerics.max_step = 600.0;
+    let g = params.numerics.max_step_growth;
+    assert_eq!(g, 1.2);
+    let profile = PressureHistory::with_gas(
+        "ep",
+        vec![0.0, 600.0],
+        vec![p, p],
+        GasMix { o2: 0.0, he: 0.0 },
+        (1.0 - f) * p,
+    )
+    .unwrap();
+    let mut sim = Simulation::new(&params, &profile).unwrap();
+    let mut obs = Steps::default();
+    sim.run(&profile, &mut obs).unwrap();
+    let (mut after_implicit, mut at_g, mut at_2) = (0, 0, 0);
+    for w in obs.steps.windows(2) {
+        let ((prev, scheme, _), (next, _, limit)) = (w[0], w[1]);
+        let factor = if scheme == StepScheme::Implicit {
+            after_implicit += 1;
+            g
+        } else {
+            2.0
+        };
+        assert!(
+            next <= factor * prev * (1.0 + 1e-12),
+            "{prev} → {next} after {scheme:?}"
+        );
+        if limit == StepLimit::Growth {
+            if factor == g {
+                at_g += 1;
+            } else {
+                at_2 += 1;
+            }
+        }
+    }
+    eprintln!(
+        "{} steps, {after_implicit} after an implicit one; growth-limited ×{g}: {at_g}, ×2: {at_2}",
+        obs.steps.len()
+    );
+    assert!(
+        at_g > 0 && at_2 > 0,
+        "both bounds reached: {at_g} and {at_2}"
     );
 }

@@ -839,3 +839,24 @@ fn numerics_tolerances_are_checked_and_inf_is_off() {
     );
     assert_eq!(d.loading_tolerance, 1e-3);
 }
+
+/// `[numerics] max_step_growth`: below 1.01 (a step that could never grow), above 10, negative
+/// or NaN is refused with its field named; a good value is taken as written; missing, 1.2.
+#[test]
+fn max_step_growth_is_checked() {
+    for bad in ["1.0", "0.5", "-2.0", "nan", "11.0"] {
+        let text = format!("{}[numerics]\nmax_step_growth = {bad}\n", good_phantom());
+        phantom_refused(&text, "numerics.max_step_growth");
+    }
+    let text = format!("{}[numerics]\nmax_step_growth = 1.5\n", good_phantom());
+    let n = parse_phantom(&text, Path::new("p.toml"))
+        .unwrap()
+        .params
+        .numerics;
+    assert_eq!(n.max_step_growth, 1.5);
+    let n = parse_phantom(&good_phantom(), Path::new("p.toml"))
+        .unwrap()
+        .params
+        .numerics;
+    assert_eq!(n.max_step_growth, 1.2);
+}
