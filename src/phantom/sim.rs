@@ -1330,9 +1330,13 @@ impl<'a> Simulation<'a> {
             }
             *dt = new;
         };
-        // ×`max_step_growth` from an implicit step (`Numerics::max_step_growth`), ×2 from an
-        // explicit one (forward Euler's steady state does not depend on the step)
-        let growth = if dt_prev >= self.implicit_threshold {
+        // ×`max_step_growth` from an implicit step while the bubbles' estimate is the tightest
+        // of the error estimates (`Numerics::max_step_growth`); ×2 otherwise (forward Euler's
+        // steady state does not depend on the step; the loading's and the field's estimates
+        // follow their own smooth errors)
+        let [(bubble_dt, _), (field_dt, _), (loading_dt, _)] = estimates;
+        let bubbles_govern = bubble_dt <= field_dt.min(loading_dt).min(num.max_step);
+        let growth = if dt_prev >= self.implicit_threshold && bubbles_govern {
             num.max_step_growth
         } else {
             2.0
