@@ -9,23 +9,30 @@ use decophantom::phantom::sim::{
 };
 use decophantom::profile::PressureHistory;
 
+/// A pure-N2 bubble of radius `r0` (γ = 0, Ω = 0, D_surf = D = 2e-9 m²/s, L = 0.014) in the
+/// centre of an open cube of side `side` at grid step `h`: the Epstein–Plesset set-up.
+fn dissolving_bubble(side: f64, h: f64, r0: f64) -> PhantomParams {
+    let mut params = PhantomParams::box_phantom([side; 3], h);
+    params.surface_tension = 0.0;
+    params.min_radius = 0.0;
+    params.gases = vec![GasProperties {
+        gas: Gas::N2,
+        diffusivity: 2e-9,
+        ostwald: 0.014,
+    }];
+    params.open_faces = params.shape.faces().to_vec();
+    params.bubbles = BubblePlacement::Explicit(vec![([side / 2.0; 3], r0)]);
+    params
+}
+
 /// The Epstein–Plesset set-up of `analytic::epstein_plesset_dissolution` (pure N2, γ = 0,
 /// Ω = 0, D_surf = D = 2e-9 m²/s, L = 0.014, f = 0.2, R0 = 100 µm = 2h, open box of
 /// half-width 1 mm) with every step limit multiplied by `scale` (the bubble tolerance too: the
 /// step it allows is proportional to it). A breakpoint at 100 s lands a step there.
 /// Returns (R at 100 s, dissolution time, steps).
 pub(crate) fn ep_run(scale: f64) -> (f64, f64, usize) {
-    let (d, l, f, p, r0, h) = (2e-9, 0.014, 0.2, 1e5, 100e-6, 50e-6);
-    let mut params = PhantomParams::box_phantom([2e-3; 3], h);
-    params.surface_tension = 0.0;
-    params.min_radius = 0.0;
-    params.gases = vec![GasProperties {
-        gas: Gas::N2,
-        diffusivity: d,
-        ostwald: l,
-    }];
-    params.open_faces = params.shape.faces().to_vec();
-    params.bubbles = BubblePlacement::Explicit(vec![([1e-3; 3], r0)]);
+    let (f, p) = (0.2, 1e5);
+    let mut params = dissolving_bubble(2e-3, 50e-6, 100e-6);
     params.numerics.record_interval = 0.0;
     let n = &mut params.numerics;
     n.max_step *= scale;
@@ -189,17 +196,8 @@ impl Observer for Steps {
 /// estimate lets the steps grow past the implicit threshold).
 #[test]
 fn steps_grow_by_at_most_the_growth_factor() {
-    let (d, l, f, p, r0, h) = (2e-9, 0.014, 0.2, 1e5, 300e-6, 100e-6);
-    let mut params = PhantomParams::box_phantom([4e-3; 3], h);
-    params.surface_tension = 0.0;
-    params.min_radius = 0.0;
-    params.gases = vec![GasProperties {
-        gas: Gas::N2,
-        diffusivity: d,
-        ostwald: l,
-    }];
-    params.open_faces = params.shape.faces().to_vec();
-    params.bubbles = BubblePlacement::Explicit(vec![([2e-3; 3], r0)]);
+    let (f, p) = (0.2, 1e5);
+    let mut params = dissolving_bubble(4e-3, 100e-6, 300e-6);
     params.numerics.max_step = 600.0;
     let g = params.numerics.max_step_growth;
     assert_eq!(g, 1.2);
