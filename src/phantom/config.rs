@@ -103,6 +103,7 @@ struct RawNumerics {
     max_step_growth: Option<f64>,
     max_content_change: Option<f64>,
     bubble_tolerance: Option<f64>,
+    explicit_tolerance_factor: Option<f64>,
     field_tolerance: Option<f64>,
     loading_tolerance: Option<f64>,
     kernel_min_cells: Option<f64>,
@@ -573,6 +574,17 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
             1e-6,
             1.0,
             "(relative change)",
+        )?,
+        explicit_tolerance_factor: in_range(
+            "numerics.explicit_tolerance_factor",
+            positive(
+                "numerics.explicit_tolerance_factor",
+                n.explicit_tolerance_factor
+                    .unwrap_or(d.explicit_tolerance_factor),
+            )?,
+            1.0,
+            10.0,
+            "(multiple of bubble_tolerance)",
         )?,
         field_tolerance: tolerance(
             "numerics.field_tolerance",

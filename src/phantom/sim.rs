@@ -1142,6 +1142,14 @@ impl<'a> Simulation<'a> {
             } else {
                 f64::INFINITY
             };
+            // within the explicit limit the bubbles' tolerance is `explicit_tolerance_factor`
+            // times larger (forward Euler leaves no backward-Euler lag near a bubble)
+            let explicit_dt = self.params.numerics.explicit_tolerance_factor * bubble_dt;
+            bubble_dt = if explicit_dt <= lim {
+                explicit_dt
+            } else {
+                bubble_dt.max(lim)
+            };
             observer.step(&StepRecord {
                 time: t,
                 dt,

@@ -3,7 +3,7 @@
 //! limits are all 16× smaller (step-converged), in the dissolution time and in R at 100 s.
 
 use decophantom::gas::{Gas, GasMix};
-use decophantom::phantom::params::{BubblePlacement, GasProperties, PhantomParams};
+use decophantom::phantom::params::{BubblePlacement, GasProperties, Numerics, PhantomParams};
 use decophantom::phantom::sim::{
     Event, Frame, Observer, Recorder, Simulation, StepLimit, StepRecord, StepScheme,
 };
@@ -31,8 +31,15 @@ fn dissolving_bubble(side: f64, h: f64, r0: f64) -> PhantomParams {
 /// step it allows is proportional to it). A breakpoint at 100 s lands a step there.
 /// Returns (R at 100 s, dissolution time, steps).
 pub(crate) fn ep_run(scale: f64) -> (f64, f64, usize) {
+    ep_run_with(scale, Numerics::default().explicit_tolerance_factor)
+}
+
+/// [`ep_run`] with the bubbles' tolerance for explicit steps `explicit_factor` ×
+/// `bubble_tolerance` (`numerics.explicit_tolerance_factor`).
+fn ep_run_with(scale: f64, explicit_factor: f64) -> (f64, f64, usize) {
     let (f, p) = (0.2, 1e5);
     let mut params = dissolving_bubble(2e-3, 50e-6, 100e-6);
+    params.numerics.explicit_tolerance_factor = explicit_factor;
     params.numerics.record_interval = 0.0;
     let n = &mut params.numerics;
     n.max_step *= scale;
@@ -244,4 +251,24 @@ fn steps_grow_by_at_most_the_growth_factor() {
         at_g > 0 && at_2 > 0,
         "both bounds reached: {at_g} and {at_2}"
     );
+}
+
+/// `numerics.explicit_tolerance_factor`: the bubbles' tolerance doubled for steps within the
+/// explicit limit (the default, 2) takes the Epstein–Plesset case in fewer steps than the
+/// plain tolerance (1) and moves neither its R(100 s) nor its dissolution time by more than
+/// 0.01 % (measured: 1 082 against 1 488 steps, 0.001 % and 0.002 %): forward Euler within its
+/// limit leaves no backward-Euler lag for the tolerance to bound. The accuracy of either
+/// against 16× smaller steps is `default_steps_are_within_0_3_percent_of_16x_smaller_steps`.
+#[test]
+fn a_looser_tolerance_for_explicit_steps_saves_steps_not_accuracy() {
+    let (r2, t2, n2) = ep_run_with(1.0, 2.0);
+    let (r1, t1, n1) = ep_run_with(1.0, 1.0);
+    eprintln!(
+        "factor 2: R(100 s) {:.4} µm, dissolved {t2:.3} s, {n2} steps; factor 1: {:.4} µm, {t1:.3} s, {n1} steps",
+        r2 * 1e6,
+        r1 * 1e6
+    );
+    assert!(n2 * 5 < n1 * 4, "{n2} against {n1} steps");
+    assert!((r2 / r1 - 1.0).abs() < 1e-4, "{r2} against {r1}");
+    assert!((t2 / t1 - 1.0).abs() < 1e-4, "{t2} against {t1}");
 }

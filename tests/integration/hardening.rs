@@ -860,3 +860,30 @@ fn max_step_growth_is_checked() {
         .numerics;
     assert_eq!(n.max_step_growth, 1.2);
 }
+
+/// `[numerics] explicit_tolerance_factor`: below 1, above 10, negative or NaN is refused with
+/// its field named; a good value is taken as written; missing, 2.
+#[test]
+fn explicit_tolerance_factor_is_checked() {
+    for bad in ["0.5", "-2.0", "nan", "11.0"] {
+        let text = format!(
+            "{}[numerics]\nexplicit_tolerance_factor = {bad}\n",
+            good_phantom()
+        );
+        phantom_refused(&text, "numerics.explicit_tolerance_factor");
+    }
+    let text = format!(
+        "{}[numerics]\nexplicit_tolerance_factor = 1.0\n",
+        good_phantom()
+    );
+    let n = parse_phantom(&text, Path::new("p.toml"))
+        .unwrap()
+        .params
+        .numerics;
+    assert_eq!(n.explicit_tolerance_factor, 1.0);
+    let n = parse_phantom(&good_phantom(), Path::new("p.toml"))
+        .unwrap()
+        .params
+        .numerics;
+    assert_eq!(n.explicit_tolerance_factor, 2.0);
+}
