@@ -1311,12 +1311,13 @@ impl<'a> Simulation<'a> {
         self.round = round;
     }
 
-    /// Phase 2: the step. The physics sets it — at most ×`max_step_growth` per step, `max_step`, the
-    /// pressure-change limit, and for every bubble the content limit on the sum of each gas's
-    /// own change, dt·Σ_g|J_g| ≤ max_content_change·n (not the net |Σ_g J_g|, which vanishes in
-    /// counter-diffusion while each gas changes fast), and no gas losing more than half of what
-    /// the bubble holds of it in one step. Then the profile's breakpoints and the scheme's cost
-    /// cut it. Returns (the step, the step the physics allowed before the cuts).
+    /// Phase 2: the step. The physics sets it — at most ×`max_step_growth` per step (×2 after
+    /// an explicit step), `max_step`, the pressure-change limit, and for every bubble the
+    /// content limit on the sum of each gas's own change, dt·Σ_g|J_g| ≤ max_content_change·n
+    /// (not the net |Σ_g J_g|, which vanishes in counter-diffusion while each gas changes
+    /// fast), and no gas losing more than half of what the bubble holds of it in one step.
+    /// Then the profile's breakpoints and the scheme's cost cut it. Returns (the step, the step
+    /// the physics allowed before the cuts).
     fn choose_step(
         &self,
         profile: &PressureHistory,
