@@ -68,8 +68,9 @@ pub struct Numerics {
     /// estimate measures mostly the change of step: the locally-one-dimensional step's
     /// quasi-steady state near a sink depends on the step (README "Time stepping"), so a step
     /// twice the last moves the coupling sphere's mean, the estimate reports 1.5–7× the
-    /// tolerance, the step is cut to ⅓–½ and the cycle starts again. On the Fig. 5 dive, the
-    /// implicit steps from 5 min after surfacing: 412 with ×2, 44 % of them above the
+    /// tolerance, the step is cut to ⅓–½ and the cycle starts again. On the Fig. 5 dive (with
+    /// `explicit_tolerance_factor` 1 and displacements every 0.1·h), the implicit steps from
+    /// 5 min after surfacing: 412 with ×2, 44 % of them above the
     /// tolerance (the largest 7.5×), against 351 with ×1.2, 26 % above it (the largest 2.8×);
     /// the whole dive 780 + 446 steps against 838 + 506, peak volume 6.528 against 6.527 mm³
     /// (every step within the explicit limit: 6.522). 1.05–1.15 took 441–447 implicit steps,
