@@ -70,8 +70,8 @@ pub struct Numerics {
     /// twice the last moves the coupling sphere's mean, the estimate reports 1.5–7× the
     /// tolerance, the step is cut to ⅓–½ and the cycle starts again. On the Fig. 5 dive (with
     /// `explicit_tolerance_factor` 1 and displacements every 0.1·h), the implicit steps from
-    /// 5 min after surfacing: 412 with ×2, 44 % of them above the
-    /// tolerance (the largest 7.5×), against 351 with ×1.2, 26 % above it (the largest 2.8×);
+    /// 5 min after surfacing: 412 with ×2, 44 % of them above the tolerance (the largest
+    /// 7.5×), against 351 with ×1.2, 26 % above it (the largest 2.8×);
     /// the whole dive 780 + 446 steps against 838 + 506, peak volume 6.528 against 6.527 mm³
     /// (every step within the explicit limit: 6.522). 1.05–1.15 took 441–447 implicit steps,
     /// 1.25 / 1.35 / 1.5 461 / 472 / 495. Forward Euler's steady state does not depend on the
@@ -97,9 +97,9 @@ pub struct Numerics {
     /// explicit limit, the step takes it (explicit); when only the limit itself is, the limit.
     /// Default 2 (1 before 26 Nov 2026). `bubble_tolerance` bounds what is left first order,
     /// the lag of the backward-Euler steps near a bubble; forward Euler within its limit leaves
-    /// none. Measured with 1 and 2 (displacements every 0.1·h): the Epstein–Plesset case (`bubble_steps`) 1 488 and
-    /// 1 082 steps, R(100 s) −0.125 and −0.126 % and the dissolution time −0.218 and
-    /// −0.217 % from a run with every limit 16× smaller; the small cube R(300 s) 387.39 and
+    /// none. Measured with 1 and 2 (displacements every 0.1·h): the Epstein–Plesset case
+    /// (`bubble_steps`) 1 488 and 1 082 steps, R(100 s) −0.125 and −0.126 % and the
+    /// dissolution time −0.218 and −0.217 % from a run with every limit 16× smaller; the small cube R(300 s) 387.39 and
     /// 387.42 µm in 493 + 17 and 429 + 16 steps (every step within 0.025 s: 386.97 µm); the
     /// Fig. 5 dive 780 + 446 and 666 + 442 steps, peak volume 6.528 and 6.533 mm³, R_max 848.3
     /// and 848.5 µm (every step within the explicit limit: 6.522 mm³, 849.9 µm); the 3-D growth

@@ -1137,19 +1137,7 @@ impl<'a> Simulation<'a> {
             let (err, worst) =
                 self.events(profile, (t, t1, dt), &mut tensions, &mut fluxes, &mut log)?;
             let tol = self.params.numerics.bubble_tolerance;
-            bubble_dt = if err > 0.0 {
-                0.9 * dt * tol / err
-            } else {
-                f64::INFINITY
-            };
-            // within the explicit limit the bubbles' tolerance is `explicit_tolerance_factor`
-            // times larger (forward Euler leaves no backward-Euler lag near a bubble)
-            let explicit_dt = self.params.numerics.explicit_tolerance_factor * bubble_dt;
-            bubble_dt = if explicit_dt <= lim {
-                explicit_dt
-            } else {
-                bubble_dt.max(lim)
-            };
+            bubble_dt = self.bubble_step(dt, err, lim);
             observer.step(&StepRecord {
                 time: t,
                 dt,
@@ -1309,6 +1297,26 @@ impl<'a> Simulation<'a> {
             }
         }
         self.round = round;
+    }
+
+    /// The next step the bubbles' error estimate allows after a step `dt` whose estimate was
+    /// `err` (`bubble_tolerance`; the next step is 0.9·dt·tol/err). Within the explicit limit
+    /// `lim` the tolerance is `explicit_tolerance_factor` times larger (forward Euler leaves no
+    /// backward-Euler lag near a bubble): when that step is within the limit it is taken, when
+    /// only the limit is, the limit.
+    fn bubble_step(&self, dt: f64, err: f64, lim: f64) -> f64 {
+        let num = &self.params.numerics;
+        let step = if err > 0.0 {
+            0.9 * dt * num.bubble_tolerance / err
+        } else {
+            return f64::INFINITY;
+        };
+        let explicit = num.explicit_tolerance_factor * step;
+        if explicit <= lim {
+            explicit
+        } else {
+            step.max(lim)
+        }
     }
 
     /// Phase 2: the step. The physics sets it — at most ×`max_step_growth` per step (×2 after
