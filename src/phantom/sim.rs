@@ -457,9 +457,8 @@ pub struct Simulation<'a> {
     /// Per gas, its flow into the gel through the open faces in the last step, mol
     /// ([`Self::diffuse`]; the loading estimate reads it, [`Self::loading_step`]).
     step_flow: [f64; Gas::ALL.len()],
-    /// Per gas, a field-sized buffer for the extrapolated step ([`Self::diffuse`]; empty
-    /// until used).
-    extra: Vec<Vec<f64>>,
+    /// A field-sized buffer for the extrapolated step ([`Self::diffuse`]; empty until used).
+    extra: Vec<f64>,
     /// The cells (an index box, lowest and highest corner) that [`Self::take_from_grid`] has
     /// changed since it was last reset, or `None`: the corrector uses it to know which
     /// bubbles' fluxes, evaluated before the corrections, are still current.
@@ -1851,20 +1850,10 @@ impl<'a> Simulation<'a> {
         }
         let mut err: f64 = 0.0;
         if !extrapolate && !self.extra.is_empty() {
-            // the descent's extrapolation is over: give its field-sized buffers back
+            // the descent's extrapolation is over: give its field-sized buffer back
             self.extra = Vec::new();
         }
-        if implicit && extrapolate && !estimate {
-            // every gas's extrapolated step, the solves side by side
-            let mut flow = [0.0; Gas::ALL.len()];
-            self.extrapolated_steps(profile, 0..ng, t, dt, &mut flow[..ng]);
-            for (g, x) in flow[..ng].iter().enumerate() {
-                self.inflow += x * h3;
-                self.step_flow[g] = x * h3;
-            }
-            return (implicit, 0.0);
-        }
-        // (the field's estimate gas by gas, below)
+        // (the field's estimate and the extrapolated descent step gas by gas, below)
         if !(estimate || implicit && extrapolate) {
             // every gas at once, each the same bits as stepped alone: the explicit step in one
             // parallel pass, the implicit steps side by side; the open faces at their value at
@@ -1911,9 +1900,7 @@ impl<'a> Simulation<'a> {
                 self.scratch.copy_from_slice(&self.fields[g]);
             }
             let inflow = if implicit && extrapolate {
-                let mut flow = [0.0];
-                self.extrapolated_steps(profile, g..g + 1, t, dt, &mut flow);
-                flow[0]
+                self.extrapolated_step(profile, g, t, dt)
             } else {
                 // the open faces at their end value (both schemes take their term implicitly)
                 let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t + dt) / self.rt;
@@ -2007,95 +1994,45 @@ impl<'a> Simulation<'a> {
         }
     }
 
-    /// The implicit steps over [t, t + dt] of the gases `gases`, each Richardson-extrapolated,
-    /// 2·u_½ − u_1 from two half steps and one whole (second order; conservative, its weights
-    /// summing to 1), or the two half steps where the extrapolation would make a cell
-    /// negative. The gases' solves run side by side ([`diffusion::ImplicitSolver::steps`]),
-    /// each gas the same bits as stepped alone. Writes each gas's inflow through the open
-    /// faces per cell volume into `flow`, as [`diffusion::ImplicitSolver::step`] returns it.
-    fn extrapolated_steps(
-        &mut self,
-        profile: &PressureHistory,
-        gases: std::ops::Range<usize>,
-        t: f64,
-        dt: f64,
-        flow: &mut [f64],
-    ) {
+    /// Gas `g`'s implicit step over [t, t + dt] Richardson-extrapolated, 2·u_½ − u_1 from two
+    /// half steps and one whole (second order; conservative, its weights summing to 1), or the
+    /// two half steps where the extrapolation would make a cell negative. Returns the inflow
+    /// through the open faces per cell volume, as [`diffusion::ImplicitSolver::step`].
+    fn extrapolated_step(&mut self, profile: &PressureHistory, g: usize, t: f64, dt: f64) -> f64 {
+        let (gas, d) = (self.gases[g], self.diffusivity[g]);
+        let cb = |s: f64| self.ostwald[g] * profile.inspired_partial_pressure(gas, s) / self.rt;
+        let (cb_half, cb_end) = (cb(t + 0.5 * dt), cb(t + dt));
         use rayon::prelude::*;
-        let n = gases.len();
-        let dc = |s: f64| {
-            let mut dc = [(0.0, 0.0); Gas::ALL.len()];
-            for (dc, g) in dc.iter_mut().zip(gases.clone()) {
-                let cb =
-                    self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], s) / self.rt;
-                *dc = (self.diffusivity[g], cb);
-            }
-            dc
-        };
-        let (dc_half, dc_end) = (dc(t + 0.5 * dt), dc(t + dt));
         // the grid-wide passes in parallel chunks (element by element: the same bits)
         const CHUNK: usize = 1 << 14;
         let mut whole = std::mem::take(&mut self.extra);
-        whole.resize_with(self.fields.len(), Vec::new);
-        let whole_n = &mut whole[gases.clone()];
-        for (w, f) in whole_n.iter_mut().zip(&self.fields[gases.clone()]) {
-            w.resize(f.len(), 0.0);
-            w.par_chunks_mut(CHUNK)
-                .zip(f.par_chunks(CHUNK))
-                .for_each(|(w, f)| w.copy_from_slice(f));
-        }
-        let (mut f_whole, mut f_first, mut f_second) = (
-            [0.0; Gas::ALL.len()],
-            [0.0; Gas::ALL.len()],
-            [0.0; Gas::ALL.len()],
-        );
-        {
-            let mut w: Vec<&mut [f64]> = whole_n.iter_mut().map(|w| w.as_mut_slice()).collect();
-            self.implicit
-                .steps(&self.grid, &mut w, &dc_end[..n], dt, &mut f_whole[..n]);
-            let mut h: Vec<&mut [f64]> = self.fields[gases.clone()]
-                .iter_mut()
-                .map(|f| f.as_mut_slice())
-                .collect();
-            self.implicit.steps(
-                &self.grid,
-                &mut h,
-                &dc_half[..n],
-                0.5 * dt,
-                &mut f_first[..n],
-            );
-            self.implicit.steps(
-                &self.grid,
-                &mut h,
-                &dc_end[..n],
-                0.5 * dt,
-                &mut f_second[..n],
-            );
-        }
-        for (q, (half, whole)) in self.fields[gases]
-            .iter_mut()
-            .zip(whole_n.iter())
-            .enumerate()
-        {
-            let f_half = f_first[q] + f_second[q];
-            let negative = half
-                .par_chunks(CHUNK)
+        whole.resize(self.fields[g].len(), 0.0);
+        whole
+            .par_chunks_mut(CHUNK)
+            .zip(self.fields[g].par_chunks(CHUNK))
+            .for_each(|(w, f)| w.copy_from_slice(f));
+        let f_whole = self.implicit.step(&self.grid, &mut whole, d, dt, cb_end);
+        let half = &mut self.fields[g];
+        let f_half = self.implicit.step(&self.grid, half, d, 0.5 * dt, cb_half)
+            + self.implicit.step(&self.grid, half, d, 0.5 * dt, cb_end);
+        let negative = half
+            .par_chunks(CHUNK)
+            .zip(whole.par_chunks(CHUNK))
+            .any(|(h, w)| h.iter().zip(w).any(|(h, w)| 2.0 * h - w < 0.0));
+        let flow = if negative {
+            f_half
+        } else {
+            half.par_chunks_mut(CHUNK)
                 .zip(whole.par_chunks(CHUNK))
-                .any(|(h, w)| h.iter().zip(w).any(|(h, w)| 2.0 * h - w < 0.0));
-            flow[q] = if negative {
-                f_half
-            } else {
-                half.par_chunks_mut(CHUNK)
-                    .zip(whole.par_chunks(CHUNK))
-                    .for_each(|(h, w)| {
-                        for (h, w) in h.iter_mut().zip(w) {
-                            *h = 2.0 * *h - w;
-                        }
-                    });
-                2.0 * f_half - f_whole[q]
-            };
-        }
+                .for_each(|(h, w)| {
+                    for (h, w) in h.iter_mut().zip(w) {
+                        *h = 2.0 * *h - w;
+                    }
+                });
+            2.0 * f_half - f_whole
+        };
         self.extra = whole;
+        flow
     }
 
     /// Phase 4b: the loading's error estimate ([`Numerics::loading_tolerance`]) after the step
@@ -3136,57 +3073,6 @@ mod extrapolated_step_tests {
             "{total1} {total0} {flow}"
         );
         (sim.fields[0].clone(), flow, half, whole, total0)
-    }
-
-    /// Two gases of different diffusivities stepped side by side by [`Simulation::diffuse`]
-    /// give each gas's bits stepped alone ([`Simulation::extrapolated_steps`] over one gas),
-    /// fields and inflows (one gas a smooth field, the other a spike).
-    #[test]
-    fn extrapolated_steps_side_by_side_are_each_gas_alone() {
-        let h = 1e-4;
-        let mut params = PhantomParams::box_phantom([9.0 * h; 3], h);
-        params.gases = vec![
-            GasProperties {
-                gas: Gas::N2,
-                diffusivity: 1e-9,
-                ostwald: 0.014,
-            },
-            GasProperties {
-                gas: Gas::O2,
-                diffusivity: 2.3e-9,
-                ostwald: 0.03,
-            },
-        ];
-        params.open_faces = params.shape.faces().to_vec();
-        let air = GasMix { o2: 0.21, he: 0.0 };
-        let profile =
-            PressureHistory::with_gas("ramp", vec![0.0, 100.0], vec![1e5, 3e5], air, 0.0).unwrap();
-        let mut sim = Simulation::new(&params, &profile).unwrap();
-        let centre = 4 + 9 * (4 + 9 * 4);
-        for (i, c) in sim.fields[0].iter_mut().enumerate() {
-            *c = 0.5 + 0.01 * (i % 9) as f64;
-        }
-        for (i, c) in sim.fields[1].iter_mut().enumerate() {
-            *c = if i == centre { 5e4 } else { 0.0 };
-        }
-        let mut alone = [sim.fields[0].clone(), sim.fields[1].clone()];
-        let mut flows = [0.0; 2];
-        for g in 0..2 {
-            let mut one = Simulation::new(&params, &profile).unwrap();
-            one.fields[g].copy_from_slice(&alone[g]);
-            let mut flow = [0.0];
-            one.extrapolated_steps(&profile, g..g + 1, 0.0, 50.0, &mut flow);
-            alone[g].copy_from_slice(&one.fields[g]);
-            flows[g] = flow[0] * one.grid.cell_volume();
-        }
-        let (implicit, _) = sim.diffuse(&profile, 0.0, 50.0, f64::INFINITY, true);
-        assert!(implicit);
-        for g in 0..2 {
-            assert_eq!(sim.step_flow[g].to_bits(), flows[g].to_bits(), "gas {g}");
-            for (a, b) in sim.fields[g].iter().zip(&alone[g]) {
-                assert_eq!(a.to_bits(), b.to_bits(), "gas {g}");
-            }
-        }
     }
 
     /// A smooth start: the step is 2·(two half steps) − (one whole step), cell by cell.
