@@ -38,9 +38,13 @@
 //! across lines (independent systems: the same operations per cell as the generic sweep, in
 //! the same order, hence the same bits, for any thread count):
 //! - **x and y, per z-plane** (planes in parallel; a 128×128 plane is 128 KiB and stays in
-//!   L2): the plane is transposed into a per-thread copy whose rows are x positions (row
-//!   stride ny, padded by `x_row_stride` against cache-set conflicts), so the x lines run
-//!   across contiguous rows; forward elimination row by row, back substitution in reverse,
+//!   L2): the plane is transposed into a per-thread copy whose rows are positions along the
+//!   x lines, each line shifted to start at its first cell inside the shape (row stride ny,
+//!   padded by `x_row_stride` against cache-set conflicts), so the x lines run across
+//!   contiguous rows, and in a cylinder a row's middle cells share one table row (the
+//!   shift turned the cylinder's per-cell runs into broadcast ones: Fig. 5 −4 %, README);
+//!   only the cells within the lines' extents are copied; forward elimination row by row,
+//!   back substitution in reverse,
 //!   transpose back, keep the x-open cells' values (the x inflow is summed afterwards in cell
 //!   order, as the generic sweep does), then the y lines the same way on the plane itself.
 //! - **z**, in column chunks (in parallel) sized so a chunk's nz planes stay in L2 between
@@ -910,8 +914,10 @@ const MIN_RUN: usize = 8;
 /// its last row) the plus end.
 ///
 /// The indices are stored in the layout the kernel walks (see the module doc): for y and z the
-/// grid's own order; for x transposed per z-plane (cell (i, j, k) at (k·nx + i)·s + j, s = ny
-/// padded by [`x_row_stride`]). In that layout every direction's data is a sequence of rows
+/// grid's own order; for x transposed per z-plane, each line shifted to begin at its first cell
+/// inside the shape (cell (i, j, k) at (k·nx + i − i₀)·s + j, with [i₀, i₁) the x-row's
+/// [`Grid::inside_extents`], which exclusion never changes, and s = ny padded by
+/// [`x_row_stride`]; positions past the line's extent hold index 0). In that layout every direction's data is a sequence of rows
 /// (x: per plane, one row per i, of ny cells; y and z: per plane, one row per j, of nx cells),
 /// and `runs` cuts each row into stretches of equal index (broadcast factors) and mixed
 /// stretches. The z sweep walks whole planes: a z row's runs count positions from the start of
@@ -1043,16 +1049,18 @@ impl LinePlan {
                 .map(|(k, out)| table_indices(codes, k * plane, stride, out, max_len))
                 .sum::<usize>();
         }
-        // x: transposed per plane (rows of ny cells, `xstride` apart)
+        // x: transposed per plane (rows of ny cells, `xstride` apart), each line shifted to
+        // start at its first cell inside the shape (cells outside the shape have index 0)
         let xstride = x_row_stride(ny);
         let mut padded = vec![0u16; nz * nx * xstride];
         padded
             .par_chunks_mut(nx * xstride)
             .zip(index[0].par_chunks(plane))
-            .for_each(|(dst, src)| {
-                for j in 0..ny {
-                    for i in 0..nx {
-                        dst[i * xstride + j] = src[j * nx + i];
+            .zip(grid.inside_extents.par_chunks(ny))
+            .for_each(|((dst, src), ext)| {
+                for (j, &(s, e)) in ext.iter().enumerate() {
+                    for (a, i) in (s as usize..e as usize).enumerate() {
+                        dst[a * xstride + j] = src[j * nx + i];
                     }
                 }
             });
@@ -1209,9 +1217,16 @@ fn update_lines(
         let cell = |q: usize| first + q * stride;
         // the line's q-th cell in the kernel's layout (x: transposed per plane)
         let (j, k) = ((first / nx) % ny, first / plane);
+        // x: the line's cells inside the shape, the first of them in row 0 ([`LinePlan`])
+        let (s, e) = if dir == 0 {
+            let (s, e) = grid.inside_extents[j + ny * k];
+            (s as usize, e as usize)
+        } else {
+            (0, len)
+        };
         let at = |q: usize| {
             if dir == 0 {
-                (k * nx + q) * xs + j
+                (k * nx + q - s) * xs + j
             } else {
                 cell(q)
             }
@@ -1231,6 +1246,11 @@ fn update_lines(
             } else {
                 table_index(cc, line_codes[q - kq as usize], kq as usize, max_len)
             };
+            if !(s..e).contains(&q) {
+                // outside the shape: never inside, and not in the layout
+                debug_assert_eq!(v, 0);
+                continue;
+            }
             let p = at(q);
             let old = &mut index[p];
             if *old != v {
@@ -1962,97 +1982,120 @@ unsafe fn fwd<const OM: bool, const OP: bool, const LINK: bool>(
     }
 }
 
-/// Copy the `rows × cols` matrix at `src` (row `r` at `src + r·ss`) transposed into `dst`
-/// (row `c` at `dst + c·ds`). With `by_dst` the outer loop walks the destination's rows (its
-/// writes stream, the reads scatter), else the source's.
+/// Copy a z-plane's x lines between the plane itself (x-row j at `plane + j·nx`) and the x
+/// sweep's transposed copy `t` (row a at `t + a·xs`), each line from its first cell inside the
+/// shape: with `ext[j]` = [s, e) ([`Grid::inside_extents`]), cell (s + a, j) sits at
+/// `t[a·xs + j]`, so row a holds every line's a-th cell (in a cylinder, the middle cells of one
+/// row share a table row, and broadcast). `into_t`: plane → t, else t → plane; nothing outside
+/// the lines' extents is read or written.
 ///
 /// # Safety
-/// `src` and `dst` are valid for the rows and do not overlap.
+/// `plane` is valid for `ext.len()` rows of `nx` cells, `t` for `nx` rows of `xs` ≥
+/// `ext.len()` cells, every extent lies within its row, and the two do not overlap.
 #[inline(always)]
-unsafe fn transpose(
-    src: *const f64,
-    ss: usize,
-    dst: *mut f64,
-    ds: usize,
-    rows: usize,
-    cols: usize,
-    by_dst: bool,
+unsafe fn x_lines(
+    plane: *mut f64,
+    nx: usize,
+    t: *mut f64,
+    xs: usize,
+    ext: &[(u32, u32)],
+    into_t: bool,
 ) {
-    const B: usize = 8;
-    let block = |r0: usize, c0: usize| {
-        for r in r0..(r0 + B).min(rows) {
-            for c in c0..(c0 + B).min(cols) {
-                *dst.add(c * ds + r) = *src.add(r * ss + c);
-            }
-        }
-    };
-    if by_dst {
-        for c0 in (0..cols).step_by(B) {
-            for r0 in (0..rows).step_by(B) {
-                block(r0, c0);
-            }
-        }
-    } else {
-        for r0 in (0..rows).step_by(B) {
-            for c0 in (0..cols).step_by(B) {
-                block(r0, c0);
-            }
+    for (j, &(s, e)) in ext.iter().enumerate() {
+        x_line_tail(
+            plane.add(j * nx + s as usize),
+            t.add(j),
+            xs,
+            0,
+            e.saturating_sub(s) as usize,
+            into_t,
+        );
+    }
+}
+
+/// Cells `a0..a1` of one line of [`x_lines`]: `row` its first cell in the plane, `col` in `t`.
+#[inline(always)]
+unsafe fn x_line_tail(row: *mut f64, col: *mut f64, xs: usize, a0: usize, a1: usize, into_t: bool) {
+    for a in a0..a1 {
+        if into_t {
+            *col.add(a * xs) = *row.add(a);
+        } else {
+            *row.add(a) = *col.add(a * xs);
         }
     }
 }
 
-/// [`transpose`] with 4×4 blocks transposed in AVX registers (the edges element by element).
+/// [`x_lines`] with 4×4 blocks (four lines, four cells of each) transposed in AVX registers;
+/// the cells beyond the shortest of the four lines one by one.
 ///
 /// # Safety
-/// As [`transpose`]; the CPU has AVX.
+/// As [`x_lines`]; the CPU has AVX.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx")]
-unsafe fn transpose_avx(
-    src: *const f64,
-    ss: usize,
-    dst: *mut f64,
-    ds: usize,
-    rows: usize,
-    cols: usize,
-    by_dst: bool,
+unsafe fn x_lines_avx(
+    plane: *mut f64,
+    nx: usize,
+    t: *mut f64,
+    xs: usize,
+    ext: &[(u32, u32)],
+    into_t: bool,
 ) {
     use std::arch::x86_64::*;
-    let (r4, c4) = (rows / 4 * 4, cols / 4 * 4);
-    let block = |r0: usize, c0: usize| {
-        let s = src.add(r0 * ss + c0);
-        let a0 = _mm256_loadu_pd(s);
-        let a1 = _mm256_loadu_pd(s.add(ss));
-        let a2 = _mm256_loadu_pd(s.add(2 * ss));
-        let a3 = _mm256_loadu_pd(s.add(3 * ss));
-        let t0 = _mm256_unpacklo_pd(a0, a1);
-        let t1 = _mm256_unpackhi_pd(a0, a1);
-        let t2 = _mm256_unpacklo_pd(a2, a3);
-        let t3 = _mm256_unpackhi_pd(a2, a3);
-        let d = dst.add(c0 * ds + r0);
-        _mm256_storeu_pd(d, _mm256_permute2f128_pd(t0, t2, 0x20));
-        _mm256_storeu_pd(d.add(ds), _mm256_permute2f128_pd(t1, t3, 0x20));
-        _mm256_storeu_pd(d.add(2 * ds), _mm256_permute2f128_pd(t0, t2, 0x31));
-        _mm256_storeu_pd(d.add(3 * ds), _mm256_permute2f128_pd(t1, t3, 0x31));
-    };
-    if by_dst {
-        for c0 in (0..c4).step_by(4) {
-            for r0 in (0..r4).step_by(4) {
-                block(r0, c0);
+    let ny4 = ext.len() / 4 * 4;
+    for j0 in (0..ny4).step_by(4) {
+        let rows: [*mut f64; 4] =
+            std::array::from_fn(|q| plane.add((j0 + q) * nx + ext[j0 + q].0 as usize));
+        let lens: [usize; 4] = std::array::from_fn(|q| {
+            let (s, e) = ext[j0 + q];
+            e.saturating_sub(s) as usize
+        });
+        let a4 = lens.iter().min().copied().unwrap_or(0) / 4 * 4;
+        let col = t.add(j0);
+        for a0 in (0..a4).step_by(4) {
+            // the 4×4 block: in the plane, line q's cells a0..a0+4; in t, rows a0..a0+4 of
+            // columns j0..j0+4 (a block and its transpose swap with the same shuffles)
+            let (v0, v1, v2, v3) = if into_t {
+                (
+                    _mm256_loadu_pd(rows[0].add(a0)),
+                    _mm256_loadu_pd(rows[1].add(a0)),
+                    _mm256_loadu_pd(rows[2].add(a0)),
+                    _mm256_loadu_pd(rows[3].add(a0)),
+                )
+            } else {
+                let c = col.add(a0 * xs);
+                (
+                    _mm256_loadu_pd(c),
+                    _mm256_loadu_pd(c.add(xs)),
+                    _mm256_loadu_pd(c.add(2 * xs)),
+                    _mm256_loadu_pd(c.add(3 * xs)),
+                )
+            };
+            let t0 = _mm256_unpacklo_pd(v0, v1);
+            let t1 = _mm256_unpackhi_pd(v0, v1);
+            let t2 = _mm256_unpacklo_pd(v2, v3);
+            let t3 = _mm256_unpackhi_pd(v2, v3);
+            let w0 = _mm256_permute2f128_pd(t0, t2, 0x20);
+            let w1 = _mm256_permute2f128_pd(t1, t3, 0x20);
+            let w2 = _mm256_permute2f128_pd(t0, t2, 0x31);
+            let w3 = _mm256_permute2f128_pd(t1, t3, 0x31);
+            if into_t {
+                let c = col.add(a0 * xs);
+                _mm256_storeu_pd(c, w0);
+                _mm256_storeu_pd(c.add(xs), w1);
+                _mm256_storeu_pd(c.add(2 * xs), w2);
+                _mm256_storeu_pd(c.add(3 * xs), w3);
+            } else {
+                _mm256_storeu_pd(rows[0].add(a0), w0);
+                _mm256_storeu_pd(rows[1].add(a0), w1);
+                _mm256_storeu_pd(rows[2].add(a0), w2);
+                _mm256_storeu_pd(rows[3].add(a0), w3);
             }
         }
-    } else {
-        for r0 in (0..r4).step_by(4) {
-            for c0 in (0..c4).step_by(4) {
-                block(r0, c0);
-            }
+        for q in 0..4 {
+            x_line_tail(rows[q], col.add(q), xs, a4, lens[q], into_t);
         }
     }
-    for r in 0..rows {
-        let c_from = if r < r4 { c4 } else { 0 };
-        for c in c_from..cols {
-            *dst.add(c * ds + r) = *src.add(r * ss + c);
-        }
-    }
+    x_lines(plane.add(ny4 * nx), nx, t.add(ny4), xs, &ext[ny4..], into_t);
 }
 
 thread_local! {
@@ -2083,20 +2126,26 @@ unsafe fn xy_plane(
     let plane = nx * ny;
     let up = u.add(b * plane);
     let xs = x_row_stride(ny);
-    let transpose = |src: *const f64, ss, dst: *mut f64, ds, rows, cols, by_dst| {
+    let ext = &grid.inside_extents[b * ny..(b + 1) * ny];
+    let lines = |into_t: bool| {
         #[cfg(target_arch = "x86_64")]
         if isa != Isa::Portable {
-            return transpose_avx(src, ss, dst, ds, rows, cols, by_dst);
+            return x_lines_avx(up, nx, t, xs, ext, into_t);
         }
-        transpose(src, ss, dst, ds, rows, cols, by_dst)
+        x_lines(up, nx, t, xs, ext, into_t)
     };
-    // the scattered side of both transposes is the padded copy
-    transpose(up, nx, t, xs, ny, nx, false);
+    // rows of t past the longest line hold no cell
+    let n_rows = ext
+        .iter()
+        .map(|&(s, e)| e.saturating_sub(s) as usize)
+        .max()
+        .unwrap_or(0);
+    lines(true);
     solve_rows(
         t,
         plan.index[0].as_ptr().add(b * nx * xs),
         xs,
-        nx,
+        n_rows,
         0,
         ny,
         &plan.runs[0],
@@ -2106,7 +2155,7 @@ unsafe fn xy_plane(
         table,
         isa,
     );
-    transpose(t, xs, up, nx, nx, ny, true);
+    lines(false);
     for q in plan.xopen_start[b]..plan.xopen_start[b + 1] {
         *xvals.add(q) = *u.add(grid.open_cells[0].get_unchecked(q).0 as usize);
     }
