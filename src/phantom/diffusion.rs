@@ -260,8 +260,11 @@ fn stencil_plane(
         let base = j * nx;
         if let Some(save) = save.as_deref_mut() {
             // the row above, kept before the pass over this row reads it (it is then in the
-            // core's first-level cache for the stencil's z+ neighbours)
-            save[base..base + nx].copy_from_slice(&zp[base..base + nx]);
+            // core's first-level cache for the stencil's z+ neighbours): its cells inside the
+            // shape, the only ones the next plane's pass reads
+            let (e0, e1) = grid.inside_extents[j + ny * (k + 1)];
+            let (a, b) = (base + e0 as usize, base + (e1 as usize).max(e0 as usize));
+            save[a..b].copy_from_slice(&zp[a..b]);
         }
         let (i0, i1) = grid.interior_spans[row];
         let (i0, i1) = (i0 as usize, i1 as usize);
