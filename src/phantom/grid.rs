@@ -2,6 +2,7 @@
 //! diffusion solver uses. Cell (i, j, k) has its centre at ((i+½)h, (j+½)h, (k+½)h);
 //! the flat index is `i + nx·(j + ny·k)`; z points up (k = 0 is the bottom).
 
+use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
 
 /// A face of the phantom.
@@ -287,52 +288,76 @@ impl Grid {
             }
         };
         let is_open = |f: Face| open.contains(&f);
+        let plane = n[0] * n[1];
         let mut codes = [vec![0u8; total], vec![0u8; total], vec![0u8; total]];
-        let mut open_cells: [Vec<(u32, u8)>; 3] = [Vec::new(), Vec::new(), Vec::new()];
-        let mut n_inside = 0;
-        for k in 0..n[2] {
-            for j in 0..n[1] {
-                for i in 0..n[0] {
-                    let (ii, jj, kk) = (i as isize, j as isize, k as isize);
-                    if !inside_at(ii, jj, kk) {
-                        continue;
-                    }
-                    n_inside += 1;
-                    let idx = i + n[0] * (j + n[1] * k);
-                    for (d, code) in codes.iter_mut().enumerate() {
-                        let mut sides = [SIDE_SEALED; 2];
-                        for (s, sign) in [-1isize, 1].into_iter().enumerate() {
-                            let (ni, nj, nk) = match d {
-                                0 => (ii + sign, jj, kk),
-                                1 => (ii, jj + sign, kk),
-                                _ => (ii, jj, kk + sign),
-                            };
-                            sides[s] = if inside_at(ni, nj, nk) {
-                                SIDE_INTERIOR
-                            } else {
-                                let face = match (shape, d, sign) {
-                                    (_, 2, -1) => Face::Bottom,
-                                    (_, 2, _) => Face::Top,
-                                    (Shape::Cylinder { .. }, _, _) => Face::Side,
-                                    (_, 0, -1) => Face::XMinus,
-                                    (_, 0, _) => Face::XPlus,
-                                    (_, _, -1) => Face::YMinus,
-                                    _ => Face::YPlus,
-                                };
-                                if is_open(face) {
-                                    SIDE_OPEN
-                                } else {
-                                    SIDE_SEALED
-                                }
-                            };
+        // plane by plane in parallel: each plane's codes, its inside cells and its cells with
+        // open sides per direction (joined below in plane order, the order of the cells)
+        let [cx, cy, cz] = &mut codes;
+        let planes: Vec<(usize, [Vec<(u32, u8)>; 3])> = cx
+            .par_chunks_mut(plane)
+            .zip(cy.par_chunks_mut(plane))
+            .zip(cz.par_chunks_mut(plane))
+            .enumerate()
+            .map(|(k, ((px, py), pz))| {
+                let mut out: [&mut [u8]; 3] = [px, py, pz];
+                let mut open_cells: [Vec<(u32, u8)>; 3] = Default::default();
+                let mut n_inside = 0;
+                for j in 0..n[1] {
+                    for i in 0..n[0] {
+                        let (ii, jj, kk) = (i as isize, j as isize, k as isize);
+                        if !inside_at(ii, jj, kk) {
+                            continue;
                         }
-                        code[idx] = sides[0] | (sides[1] << 2) | INSIDE_BIT;
-                        let opens = sides.iter().filter(|s| **s == SIDE_OPEN).count() as u8;
-                        if opens > 0 {
-                            open_cells[d].push((idx as u32, opens));
+                        n_inside += 1;
+                        let q = i + n[0] * j;
+                        let idx = q + plane * k;
+                        for (d, code) in out.iter_mut().enumerate() {
+                            let mut sides = [SIDE_SEALED; 2];
+                            for (s, sign) in [-1isize, 1].into_iter().enumerate() {
+                                let (ni, nj, nk) = match d {
+                                    0 => (ii + sign, jj, kk),
+                                    1 => (ii, jj + sign, kk),
+                                    _ => (ii, jj, kk + sign),
+                                };
+                                sides[s] = if inside_at(ni, nj, nk) {
+                                    SIDE_INTERIOR
+                                } else {
+                                    let face = match (shape, d, sign) {
+                                        (_, 2, -1) => Face::Bottom,
+                                        (_, 2, _) => Face::Top,
+                                        (Shape::Cylinder { .. }, _, _) => Face::Side,
+                                        (_, 0, -1) => Face::XMinus,
+                                        (_, 0, _) => Face::XPlus,
+                                        (_, _, -1) => Face::YMinus,
+                                        _ => Face::YPlus,
+                                    };
+                                    if is_open(face) {
+                                        SIDE_OPEN
+                                    } else {
+                                        SIDE_SEALED
+                                    }
+                                };
+                            }
+                            code[q] = sides[0] | (sides[1] << 2) | INSIDE_BIT;
+                            let opens = sides.iter().filter(|s| **s == SIDE_OPEN).count() as u8;
+                            if opens > 0 {
+                                open_cells[d].push((idx as u32, opens));
+                            }
                         }
                     }
                 }
+                (n_inside, open_cells)
+            })
+            .collect();
+        let mut open_cells: [Vec<(u32, u8)>; 3] = Default::default();
+        let mut n_inside = 0;
+        for (d, cells) in open_cells.iter_mut().enumerate() {
+            cells.reserve(planes.iter().map(|p| p.1[d].len()).sum());
+        }
+        for (count, cells) in &planes {
+            n_inside += count;
+            for (all, c) in open_cells.iter_mut().zip(cells) {
+                all.extend_from_slice(c);
             }
         }
         let codes_id = fresh_codes_id();
@@ -353,14 +378,23 @@ impl Grid {
             open_cells,
             n_inside,
         };
-        let mut runs = Vec::new();
-        for row in 0..n[1] * n[2] {
-            grid.interior_spans[row] = grid.interior_span(row);
-            let inside = |i: &usize| grid.codes[0][row * n[0] + i] & INSIDE_BIT != 0;
-            if let (Some(i0), Some(i1)) = ((0..n[0]).find(inside), (0..n[0]).rev().find(inside)) {
-                grid.inside_extents[row] = (i0 as u32, i1 as u32 + 1);
-            }
-            grid.edge_runs_of(row, &mut runs);
+        // the rows' spans, extents and edge runs, in parallel, then kept in row order
+        let rows: Vec<((u32, u32), (u32, u32), Vec<(u32, u32)>)> = (0..n[1] * n[2])
+            .into_par_iter()
+            .map_init(Vec::new, |runs, row| {
+                let span = grid.interior_span(row);
+                let inside = |i: &usize| grid.codes[0][row * n[0] + i] & INSIDE_BIT != 0;
+                let extent = match ((0..n[0]).find(inside), (0..n[0]).rev().find(inside)) {
+                    (Some(i0), Some(i1)) => (i0 as u32, i1 as u32 + 1),
+                    _ => (0, 0),
+                };
+                grid.edge_runs_between(row, span, extent, runs);
+                (span, extent, runs.clone())
+            })
+            .collect();
+        for (row, (span, extent, runs)) in rows.into_iter().enumerate() {
+            grid.interior_spans[row] = span;
+            grid.inside_extents[row] = extent;
             grid.edge_runs.set(row, &runs);
         }
         Ok(grid)
@@ -521,11 +555,25 @@ impl Grid {
     /// [`Grid::edge_runs`] of x-row `row` from the current codes and interior span, into `runs`
     /// (cleared first; one buffer for all the rows of a build or an exclusion).
     fn edge_runs_of(&self, row: usize, runs: &mut Vec<(u32, u32)>) {
+        self.edge_runs_between(
+            row,
+            self.interior_spans[row],
+            self.inside_extents[row],
+            runs,
+        );
+    }
+
+    /// [`Self::edge_runs_of`] with the row's interior span and inside extent given.
+    fn edge_runs_between(
+        &self,
+        row: usize,
+        (i0, i1): (u32, u32),
+        (e0, e1): (u32, u32),
+        runs: &mut Vec<(u32, u32)>,
+    ) {
         runs.clear();
         let base = row * self.n[0];
         let code = |i: usize| [0, 1, 2].map(|d| self.codes[d][base + i]);
-        let (i0, i1) = self.interior_spans[row];
-        let (e0, e1) = self.inside_extents[row];
         let (i0, i1) = if i1 > i0 { (i0, i1) } else { (e1, e1) };
         for (lo, hi) in [(e0 as usize, i0 as usize), (i1 as usize, e1 as usize)] {
             let mut i = lo;
