@@ -267,6 +267,19 @@ impl Grid {
                 return Err(format!("face '{}' does not exist on this shape", f.name()));
             }
         }
+        // the shape's cross-section (every shape is a prism along z), once per (i, j)
+        let section: Vec<bool> = (0..n[0] * n[1])
+            .map(|q| match shape {
+                Shape::Box { .. } => true,
+                Shape::Cylinder { .. } => {
+                    let (i, j) = (q % n[0], q / n[0]);
+                    let c = n[0] as f64 / 2.0;
+                    let x = i as f64 + 0.5 - c;
+                    let y = j as f64 + 0.5 - c;
+                    x * x + y * y <= c * c
+                }
+            })
+            .collect();
         let inside_at = |i: isize, j: isize, k: isize| -> bool {
             if i < 0
                 || j < 0
@@ -277,15 +290,7 @@ impl Grid {
             {
                 return false;
             }
-            match shape {
-                Shape::Box { .. } => true,
-                Shape::Cylinder { .. } => {
-                    let c = n[0] as f64 / 2.0;
-                    let x = i as f64 + 0.5 - c;
-                    let y = j as f64 + 0.5 - c;
-                    x * x + y * y <= c * c
-                }
-            }
+            section[i as usize + n[0] * j as usize]
         };
         let is_open = |f: Face| open.contains(&f);
         let plane = n[0] * n[1];
