@@ -383,24 +383,40 @@ impl Grid {
             open_cells,
             n_inside,
         };
-        // the rows' spans, extents and edge runs, in parallel, then kept in row order
-        let rows: Vec<((u32, u32), (u32, u32), Vec<(u32, u32)>)> = (0..n[1] * n[2])
+        // the rows' spans, extents and edge runs, a plane's rows per task (its runs in one
+        // list, with each row's count), then kept in row order
+        let ny = n[1];
+        let planes: Vec<(Vec<(u32, u32)>, Vec<u32>)> = (0..n[2])
             .into_par_iter()
-            .map_init(Vec::new, |runs, row| {
-                let span = grid.interior_span(row);
-                let inside = |i: &usize| grid.codes[0][row * n[0] + i] & INSIDE_BIT != 0;
-                let extent = match ((0..n[0]).find(inside), (0..n[0]).rev().find(inside)) {
-                    (Some(i0), Some(i1)) => (i0 as u32, i1 as u32 + 1),
-                    _ => (0, 0),
-                };
-                grid.edge_runs_between(row, span, extent, runs);
-                (span, extent, runs.clone())
+            .map(|k| {
+                let (mut all, mut counts) = (Vec::new(), Vec::with_capacity(ny));
+                let mut runs = Vec::new();
+                for row in k * ny..(k + 1) * ny {
+                    let span = grid.interior_span(row);
+                    let inside = |i: &usize| grid.codes[0][row * n[0] + i] & INSIDE_BIT != 0;
+                    let extent = match ((0..n[0]).find(inside), (0..n[0]).rev().find(inside)) {
+                        (Some(i0), Some(i1)) => (i0 as u32, i1 as u32 + 1),
+                        _ => (0, 0),
+                    };
+                    grid.edge_runs_between(row, span, extent, &mut runs);
+                    all.push(span);
+                    all.push(extent);
+                    all.extend_from_slice(&runs);
+                    counts.push(runs.len() as u32);
+                }
+                (all, counts)
             })
             .collect();
-        for (row, (span, extent, runs)) in rows.into_iter().enumerate() {
-            grid.interior_spans[row] = span;
-            grid.inside_extents[row] = extent;
-            grid.edge_runs.set(row, &runs);
+        for (k, (all, counts)) in planes.into_iter().enumerate() {
+            let mut at = 0;
+            for (q, &count) in counts.iter().enumerate() {
+                let row = k * ny + q;
+                grid.interior_spans[row] = all[at];
+                grid.inside_extents[row] = all[at + 1];
+                let count = count as usize;
+                grid.edge_runs.set(row, &all[at + 2..at + 2 + count]);
+                at += 2 + count;
+            }
         }
         Ok(grid)
     }
