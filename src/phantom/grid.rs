@@ -201,6 +201,14 @@ pub struct Grid {
     changes_from: u64,
 }
 
+/// One z-plane's part of [`Grid::new`]: its inside cells and, per direction, its cells with
+/// open sides (cell, how many).
+type PlaneCells = (usize, [Vec<(u32, u8)>; 3]);
+
+/// One z-plane's rows in [`Grid::new`]: per row its interior span, its inside extent and its
+/// edge runs, one after the other in one list, and each row's count of runs.
+type PlaneRows = (Vec<(u32, u32)>, Vec<u32>);
+
 /// Most changes a grid's log keeps ([`Grid::changed_since`]).
 const CHANGE_LOG_LEN: usize = 64;
 
@@ -298,7 +306,7 @@ impl Grid {
         // plane by plane in parallel: each plane's codes, its inside cells and its cells with
         // open sides per direction (joined below in plane order, the order of the cells)
         let [cx, cy, cz] = &mut codes;
-        let planes: Vec<(usize, [Vec<(u32, u8)>; 3])> = cx
+        let planes: Vec<PlaneCells> = cx
             .par_chunks_mut(plane)
             .zip(cy.par_chunks_mut(plane))
             .zip(cz.par_chunks_mut(plane))
@@ -386,7 +394,7 @@ impl Grid {
         // the rows' spans, extents and edge runs, a plane's rows per task (its runs in one
         // list, with each row's count), then kept in row order
         let ny = n[1];
-        let planes: Vec<(Vec<(u32, u32)>, Vec<u32>)> = (0..n[2])
+        let planes: Vec<PlaneRows> = (0..n[2])
             .into_par_iter()
             .map(|k| {
                 let (mut all, mut counts) = (Vec::new(), Vec::with_capacity(ny));
