@@ -182,17 +182,22 @@ pub fn simulate_checkpointed(
         stop,
         checkpointer: checkpointer.as_deref_mut(),
     };
+    // a run started from outside the pool is its only work: it keeps the pool's workers awake
+    // through its serial phases (`phantom::keep_warm`)
+    let lone = rayon::current_thread_index().is_none();
     let (summary, resumed_at) = rayon::scope(|_| -> Result<_, Error> {
-        Ok(match resume {
-            None => (
-                Simulation::new(params, profile)?.run(profile, &mut obs)?,
-                None,
-            ),
-            Some((mut cp, file)) => {
-                let at = cp.state.time();
-                obs.rec.frames = std::mem::take(&mut cp.frames);
-                (cp.resume(params, profile, &mut obs, file)?, Some(at))
-            }
+        crate::phantom::keep_warm::lone_run(lone, || {
+            Ok(match resume {
+                None => (
+                    Simulation::new(params, profile)?.run(profile, &mut obs)?,
+                    None,
+                ),
+                Some((mut cp, file)) => {
+                    let at = cp.state.time();
+                    obs.rec.frames = std::mem::take(&mut cp.frames);
+                    (cp.resume(params, profile, &mut obs, file)?, Some(at))
+                }
+            })
         })
     })?;
     let frames = obs.rec.frames;

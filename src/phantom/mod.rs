@@ -8,6 +8,7 @@ pub mod displacement;
 pub mod elasticity;
 mod gel_pass;
 pub mod grid;
+pub mod keep_warm;
 pub mod nucleation;
 pub mod params;
 pub mod sim;

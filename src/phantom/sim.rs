@@ -1106,6 +1106,8 @@ impl<'a> Simulation<'a> {
                 }
             }
         };
+        // the pool's other workers kept awake through the serial phases of a lone run
+        let warm = super::keep_warm::KeepWarm::new();
         while self.time < end - 1e-9 {
             let t = self.time;
             let p = profile.ambient(t);
@@ -1126,6 +1128,7 @@ impl<'a> Simulation<'a> {
                 && ((self.params.numerics.record_gel && t1 >= log.next_record - 1e-9)
                     || t1 >= end - 1e-9);
             let scheme;
+            warm.parallel_phase();
             (field_dt, loading_dt, scheme) = self.gel_step(
                 profile,
                 (t, dt),
@@ -1133,6 +1136,7 @@ impl<'a> Simulation<'a> {
                 &mut last_flow_dt,
                 &mut log,
             );
+            warm.serial_phase();
             self.perfuse(profile, t, dt);
             let (err, worst) =
                 self.events(profile, (t, t1, dt), &mut tensions, &mut fluxes, &mut log)?;
