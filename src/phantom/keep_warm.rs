@@ -111,7 +111,7 @@ impl KeepWarm {
 /// Run the pool's pending work or spin while `epoch` is `e0`, for at most `limit`. An idle
 /// round yields the CPU to the system (as rayon's own idle rounds do), so that a spinner
 /// never holds a core another process wants: on the small cube as fast as a pure spin
-/// (0.168–0.177 s against 0.173–0.178 s, four rounds of `perf stat -r 8`) for 2–7 % less CPU.
+/// (0.168–0.177 s against 0.173–0.178 s, four rounds of `perf stat -r 8`) for 1–7 % less CPU.
 fn spin(epoch: &AtomicU64, e0: u64, limit: Duration) {
     let start = Instant::now();
     while epoch.load(Ordering::Acquire) == e0 && start.elapsed() < limit {
