@@ -79,24 +79,30 @@ fn weight(code: u8) -> f64 {
     }
 }
 
-/// The largest over the inside cells of the sum of `side(code)` over their six sides.
+/// The largest over the inside cells of the sum of `side(code)` over their six sides. A cell's
+/// sum depends only on its codes, and every inside cell is in its row's interior span (six
+/// interior sides) or in one of its row's edge runs, whose cells share their codes
+/// ([`Grid::edge_runs`]): one cell per span and per run is enough.
 fn max_side_sum(grid: &Grid, side: impl Fn(u8) -> f64 + Sync) -> f64 {
-    // planes in parallel (a maximum of small whole numbers: exact in any order)
-    let plane = grid.n[0] * grid.n[1];
-    (0..grid.n[2])
+    let sum = |code: [u8; 3]| -> f64 {
+        let mut n = 0.0;
+        for c in code {
+            n += side(c & 3) + side((c >> 2) & 3);
+        }
+        n
+    };
+    let full = sum([SIDE_INTERIOR | (SIDE_INTERIOR << 2); 3]);
+    let nx = grid.n[0];
+    // rows in parallel (a maximum of small whole numbers: exact in any order)
+    (0..grid.n[1] * grid.n[2])
         .into_par_iter()
-        .map(|k| {
-            let mut m: f64 = 0.0;
-            for idx in k * plane..(k + 1) * plane {
-                if !grid.inside(idx) {
-                    continue;
-                }
-                let mut n = 0.0;
-                for d in 0..3 {
-                    let c = grid.codes[d][idx];
-                    n += side(c & 3) + side((c >> 2) & 3);
-                }
-                m = m.max(n);
+        .with_min_len(64)
+        .map(|row| {
+            let (i0, i1) = grid.interior_spans[row];
+            let mut m: f64 = if i1 > i0 { full } else { 0.0 };
+            for &(a, _) in grid.edge_runs.of(row) {
+                let idx = row * nx + a as usize;
+                m = m.max(sum([0, 1, 2].map(|d| grid.codes[d][idx])));
             }
             m
         })
@@ -3337,6 +3343,59 @@ mod planned_tests {
                 (a[..a.len() / 2].to_vec(), false),
             ];
             assert_same_bits_through(&g, &changes);
+        }
+    }
+
+    /// The step limits' scans, which read one cell per interior span and per edge run, give
+    /// what a scan of every inside cell's six sides gives (written out here: the largest number
+    /// of interior sides, and the largest weight sum with an open side counted 2), on boxes with
+    /// every combination of open faces, a cylinder, and grids with cells taken out by bubbles.
+    #[test]
+    fn limit_scans_match_a_scan_of_every_cell() {
+        fn every_cell(g: &Grid) -> (f64, f64) {
+            let (mut interior, mut weights) = (0u32, 0u32);
+            for idx in (0..g.len()).filter(|&i| g.inside(i)) {
+                let (mut n, mut w) = (0, 0);
+                for d in 0..3 {
+                    for side in [g.codes[d][idx] & 3, (g.codes[d][idx] >> 2) & 3] {
+                        n += u32::from(side == SIDE_INTERIOR);
+                        w += match side {
+                            SIDE_INTERIOR => 1,
+                            SIDE_OPEN => 2,
+                            _ => 0,
+                        };
+                    }
+                }
+                interior = interior.max(n);
+                weights = weights.max(w);
+            }
+            (f64::from(interior.max(1)), f64::from(weights))
+        }
+        let faces = all_box_faces();
+        let mut grids: Vec<Grid> = (0..1u32 << faces.len())
+            .map(|m| {
+                let open: Vec<Face> = (0..faces.len())
+                    .filter(|b| m & (1 << b) != 0)
+                    .map(|b| faces[b])
+                    .collect();
+                boxed([5, 4, 3], &open)
+            })
+            .collect();
+        grids.push(fig5_cylinder());
+        grids.push(cylinder_with_hole());
+        // a box whose only fully interior cells are taken out: every cell left has a sealed side
+        let mut g = boxed([3, 3, 3], faces);
+        g.set_excluded(&[13], true);
+        grids.push(g);
+        for g in &grids {
+            let scans = LimitScans::of(g);
+            let (interior, weights) = every_cell(g);
+            assert_eq!(
+                scans.interior_sides, interior,
+                "{:?} open {:?}",
+                g.n, g.open
+            );
+            assert_eq!(scans.weight_sum, weights, "{:?} open {:?}", g.n, g.open);
         }
     }
 }

@@ -201,10 +201,6 @@ pub struct Grid {
     changes_from: u64,
 }
 
-/// One z-plane's part of [`Grid::new`]: its inside cells and, per direction, its cells with
-/// open sides (cell, how many).
-type PlaneCells = (usize, [Vec<(u32, u8)>; 3]);
-
 /// One z-plane's rows in [`Grid::new`]: per row its interior span, its inside extent and its
 /// edge runs, one after the other in one list, and each row's count of runs.
 type PlaneRows = (Vec<(u32, u32)>, Vec<u32>);
@@ -288,91 +284,96 @@ impl Grid {
                 }
             })
             .collect();
-        let inside_at = |i: isize, j: isize, k: isize| -> bool {
-            if i < 0
-                || j < 0
-                || k < 0
-                || i >= n[0] as isize
-                || j >= n[1] as isize
-                || k >= n[2] as isize
-            {
-                return false;
+        let side = |inside: bool, face: Face| {
+            if inside {
+                SIDE_INTERIOR
+            } else if open.contains(&face) {
+                SIDE_OPEN
+            } else {
+                SIDE_SEALED
             }
-            section[i as usize + n[0] * j as usize]
         };
-        let is_open = |f: Face| open.contains(&f);
+        let code_of = |minus: u8, plus: u8| -> (u8, u8) {
+            let opens = u8::from(minus == SIDE_OPEN) + u8::from(plus == SIDE_OPEN);
+            (minus | (plus << 2) | INSIDE_BIT, opens)
+        };
+        // Every shape is a prism along z, so a cell's x and y codes depend only on (i, j), one
+        // template for every plane, and its z codes only on whether its plane is the bottom or
+        // the top one.
         let plane = n[0] * n[1];
-        let mut codes = [vec![0u8; total], vec![0u8; total], vec![0u8; total]];
-        // plane by plane in parallel: each plane's codes, its inside cells and its cells with
-        // open sides per direction (joined below in plane order, the order of the cells)
-        let [cx, cy, cz] = &mut codes;
-        let planes: Vec<PlaneCells> = cx
-            .par_chunks_mut(plane)
-            .zip(cy.par_chunks_mut(plane))
-            .zip(cz.par_chunks_mut(plane))
-            .enumerate()
-            .map(|(k, ((px, py), pz))| {
-                let mut out: [&mut [u8]; 3] = [px, py, pz];
-                let mut open_cells: [Vec<(u32, u8)>; 3] = Default::default();
-                let mut n_inside = 0;
-                for j in 0..n[1] {
-                    for i in 0..n[0] {
-                        let (ii, jj, kk) = (i as isize, j as isize, k as isize);
-                        if !inside_at(ii, jj, kk) {
-                            continue;
-                        }
-                        n_inside += 1;
-                        let q = i + n[0] * j;
-                        let idx = q + plane * k;
-                        for (d, code) in out.iter_mut().enumerate() {
-                            let mut sides = [SIDE_SEALED; 2];
-                            for (s, sign) in [-1isize, 1].into_iter().enumerate() {
-                                let (ni, nj, nk) = match d {
-                                    0 => (ii + sign, jj, kk),
-                                    1 => (ii, jj + sign, kk),
-                                    _ => (ii, jj, kk + sign),
-                                };
-                                sides[s] = if inside_at(ni, nj, nk) {
-                                    SIDE_INTERIOR
-                                } else {
-                                    let face = match (shape, d, sign) {
-                                        (_, 2, -1) => Face::Bottom,
-                                        (_, 2, _) => Face::Top,
-                                        (Shape::Cylinder { .. }, _, _) => Face::Side,
-                                        (_, 0, -1) => Face::XMinus,
-                                        (_, 0, _) => Face::XPlus,
-                                        (_, _, -1) => Face::YMinus,
-                                        _ => Face::YPlus,
-                                    };
-                                    if is_open(face) {
-                                        SIDE_OPEN
-                                    } else {
-                                        SIDE_SEALED
-                                    }
-                                };
-                            }
-                            code[q] = sides[0] | (sides[1] << 2) | INSIDE_BIT;
-                            let opens = sides.iter().filter(|s| **s == SIDE_OPEN).count() as u8;
-                            if opens > 0 {
-                                open_cells[d].push((idx as u32, opens));
-                            }
-                        }
+        let in_section = |i: usize, j: usize, di: isize, dj: isize| -> bool {
+            let (i, j) = (i as isize + di, j as isize + dj);
+            i >= 0
+                && j >= 0
+                && i < n[0] as isize
+                && j < n[1] as isize
+                && section[i as usize + n[0] * j as usize]
+        };
+        let faces = match shape {
+            Shape::Box { .. } => [[Face::XMinus, Face::XPlus], [Face::YMinus, Face::YPlus]],
+            Shape::Cylinder { .. } => [[Face::Side; 2]; 2],
+        };
+        // per direction x, y: the plane's codes, and its cells with open sides (cell, how many)
+        let mut template = [vec![0u8; plane], vec![0u8; plane]];
+        let mut template_open: [Vec<(u32, u8)>; 2] = Default::default();
+        for j in 0..n[1] {
+            for i in 0..n[0] {
+                let q = i + n[0] * j;
+                if !section[q] {
+                    continue;
+                }
+                for (d, (di, dj)) in [(1, 0), (0, 1)].into_iter().enumerate() {
+                    let minus = side(in_section(i, j, -di, -dj), faces[d][0]);
+                    let plus = side(in_section(i, j, di, dj), faces[d][1]);
+                    let (code, opens) = code_of(minus, plus);
+                    template[d][q] = code;
+                    if opens > 0 {
+                        // MAX_CELLS < 2³²: every index fits
+                        template_open[d].push((q as u32, opens));
                     }
                 }
-                (n_inside, open_cells)
-            })
-            .collect();
-        let mut open_cells: [Vec<(u32, u8)>; 3] = Default::default();
-        let mut n_inside = 0;
-        for (d, cells) in open_cells.iter_mut().enumerate() {
-            cells.reserve(planes.iter().map(|p| p.1[d].len()).sum());
-        }
-        for (count, cells) in &planes {
-            n_inside += count;
-            for (all, c) in open_cells.iter_mut().zip(cells) {
-                all.extend_from_slice(c);
             }
         }
+        let z_code = |k: usize| code_of(side(k > 0, Face::Bottom), side(k + 1 < n[2], Face::Top));
+        let mut codes = [vec![0u8; total], vec![0u8; total], vec![0u8; total]];
+        {
+            let [cx, cy, cz] = &mut codes;
+            cx.par_chunks_mut(plane)
+                .zip(cy.par_chunks_mut(plane))
+                .zip(cz.par_chunks_mut(plane))
+                .enumerate()
+                .for_each(|(k, ((px, py), pz))| {
+                    px.copy_from_slice(&template[0]);
+                    py.copy_from_slice(&template[1]);
+                    let (code, _) = z_code(k);
+                    for (z, &x) in pz.iter_mut().zip(&template[0]) {
+                        if x != 0 {
+                            *z = code;
+                        }
+                    }
+                });
+        }
+        // per direction, the cells with open sides in index order: plane by plane
+        let mut open_cells: [Vec<(u32, u8)>; 3] = Default::default();
+        for (cells, template) in open_cells.iter_mut().zip(&template_open) {
+            cells.reserve(template.len() * n[2]);
+            for k in 0..n[2] {
+                let base = (k * plane) as u32;
+                cells.extend(template.iter().map(|&(q, o)| (base + q, o)));
+            }
+        }
+        for k in 0..n[2] {
+            let (_, opens) = z_code(k);
+            if opens > 0 {
+                let base = k * plane;
+                open_cells[2].extend(
+                    (0..plane)
+                        .filter(|&q| section[q])
+                        .map(|q| ((base + q) as u32, opens)),
+                );
+            }
+        }
+        let n_inside = section.iter().filter(|&&s| s).count() * n[2];
         let codes_id = fresh_codes_id();
         let mut grid = Grid {
             codes_id,
@@ -391,31 +392,37 @@ impl Grid {
             open_cells,
             n_inside,
         };
-        // the rows' spans, extents and edge runs, a plane's rows per task (its runs in one
-        // list, with each row's count), then kept in row order
+        // the rows' spans, extents and edge runs (positions along the row), found for the
+        // bottom plane, one middle plane and the top one: every middle plane has the same
+        // codes, hence the same rows (n ≥ 3 along z)
         let ny = n[1];
-        let planes: Vec<PlaneRows> = (0..n[2])
-            .into_par_iter()
-            .map(|k| {
-                let (mut all, mut counts) = (Vec::new(), Vec::with_capacity(ny));
-                let mut runs = Vec::new();
-                for row in k * ny..(k + 1) * ny {
-                    let span = grid.interior_span(row);
-                    let inside = |i: &usize| grid.codes[0][row * n[0] + i] & INSIDE_BIT != 0;
-                    let extent = match ((0..n[0]).find(inside), (0..n[0]).rev().find(inside)) {
-                        (Some(i0), Some(i1)) => (i0 as u32, i1 as u32 + 1),
-                        _ => (0, 0),
-                    };
-                    grid.edge_runs_between(row, span, extent, &mut runs);
-                    all.push(span);
-                    all.push(extent);
-                    all.extend_from_slice(&runs);
-                    counts.push(runs.len() as u32);
-                }
-                (all, counts)
-            })
-            .collect();
-        for (k, (all, counts)) in planes.into_iter().enumerate() {
+        let rows_of = |k: usize| -> PlaneRows {
+            let (mut all, mut counts) = (Vec::new(), Vec::with_capacity(ny));
+            let mut runs = Vec::new();
+            for row in k * ny..(k + 1) * ny {
+                let span = grid.interior_span(row);
+                let inside = |i: &usize| grid.codes[0][row * n[0] + i] & INSIDE_BIT != 0;
+                let extent = match ((0..n[0]).find(inside), (0..n[0]).rev().find(inside)) {
+                    (Some(i0), Some(i1)) => (i0 as u32, i1 as u32 + 1),
+                    _ => (0, 0),
+                };
+                grid.edge_runs_between(row, span, extent, &mut runs);
+                all.push(span);
+                all.push(extent);
+                all.extend_from_slice(&runs);
+                counts.push(runs.len() as u32);
+            }
+            (all, counts)
+        };
+        let distinct: Vec<PlaneRows> = [0, 1, n[2] - 1].into_par_iter().map(rows_of).collect();
+        for k in 0..n[2] {
+            let (all, counts) = &distinct[if k == 0 {
+                0
+            } else if k + 1 == n[2] {
+                2
+            } else {
+                1
+            }];
             let mut at = 0;
             for (q, &count) in counts.iter().enumerate() {
                 let row = k * ny + q;
@@ -1308,6 +1315,134 @@ mod tests {
             }
         }
         assert!(compacted > 0, "no compaction happened");
+    }
+
+    /// A grid's codes, open cells, inside count, inside extents and interior spans are what
+    /// each cell's own neighbours and the open faces make them (written out here cell by cell
+    /// from the shape's definition: a box is every cell, a cylinder's cross-section the cells
+    /// whose centres lie within nx/2 of the axis), and its edge runs fit the codes: boxes with
+    /// every combination of open faces and cylinders with each combination of theirs.
+    #[test]
+    fn grids_are_each_cells_neighbours_and_open_faces() {
+        let mut grids = Vec::new();
+        let box_faces = Shape::Box { size: [1.0; 3] }.faces();
+        for m in 0..1u32 << box_faces.len() {
+            let open: Vec<Face> = (0..box_faces.len())
+                .filter(|b| m & (1 << b) != 0)
+                .map(|b| box_faces[b])
+                .collect();
+            grids.push(
+                Grid::new(
+                    Shape::Box {
+                        size: [5e-4, 4e-4, 3e-4],
+                    },
+                    1e-4,
+                    &open,
+                )
+                .unwrap(),
+            );
+        }
+        let cylinder = Shape::Cylinder {
+            diameter: 1.1e-3,
+            depth: 4e-4,
+        };
+        let cyl_faces = cylinder.faces();
+        for m in 0..1u32 << cyl_faces.len() {
+            let open: Vec<Face> = (0..cyl_faces.len())
+                .filter(|b| m & (1 << b) != 0)
+                .map(|b| cyl_faces[b])
+                .collect();
+            grids.push(Grid::new(cylinder, 1e-4, &open).unwrap());
+        }
+        for g in &grids {
+            let [nx, ny, nz] = g.n;
+            let inside = |i: isize, j: isize, k: isize| -> bool {
+                let within = (0..nx as isize).contains(&i)
+                    && (0..ny as isize).contains(&j)
+                    && (0..nz as isize).contains(&k);
+                within
+                    && match g.shape {
+                        Shape::Box { .. } => true,
+                        Shape::Cylinder { .. } => {
+                            let c = nx as f64 / 2.0;
+                            let (x, y) = (i as f64 + 0.5 - c, j as f64 + 0.5 - c);
+                            x * x + y * y <= c * c
+                        }
+                    }
+            };
+            let mut open_cells: [Vec<(u32, u8)>; 3] = Default::default();
+            let mut n_inside = 0;
+            for idx in 0..g.len() {
+                let (i, j, k) = (idx % nx, (idx / nx) % ny, idx / (nx * ny));
+                let (i, j, k) = (i as isize, j as isize, k as isize);
+                if !inside(i, j, k) {
+                    for d in 0..3 {
+                        assert_eq!(g.codes[d][idx], 0, "cell {idx} outside");
+                    }
+                    continue;
+                }
+                n_inside += 1;
+                for d in 0..3 {
+                    let mut sides = [0u8; 2];
+                    let mut opens = 0;
+                    for (s, sign) in [-1isize, 1].into_iter().enumerate() {
+                        let nb = match d {
+                            0 => (i + sign, j, k),
+                            1 => (i, j + sign, k),
+                            _ => (i, j, k + sign),
+                        };
+                        let face = match (d, sign, g.shape) {
+                            (2, -1, _) => Face::Bottom,
+                            (2, _, _) => Face::Top,
+                            (_, _, Shape::Cylinder { .. }) => Face::Side,
+                            (0, -1, _) => Face::XMinus,
+                            (0, _, _) => Face::XPlus,
+                            (_, -1, _) => Face::YMinus,
+                            _ => Face::YPlus,
+                        };
+                        sides[s] = if inside(nb.0, nb.1, nb.2) {
+                            SIDE_INTERIOR
+                        } else if g.open.contains(&face) {
+                            opens += 1;
+                            SIDE_OPEN
+                        } else {
+                            SIDE_SEALED
+                        };
+                    }
+                    let code = sides[0] | (sides[1] << 2) | INSIDE_BIT;
+                    assert_eq!(
+                        g.codes[d][idx], code,
+                        "cell {idx}, direction {d}, open {:?}",
+                        g.open
+                    );
+                    if opens > 0 {
+                        open_cells[d].push((idx as u32, opens));
+                    }
+                }
+            }
+            assert_eq!(g.n_inside, n_inside);
+            assert_eq!(g.open_cells, open_cells, "open {:?}", g.open);
+            let full = SIDE_INTERIOR | (SIDE_INTERIOR << 2) | INSIDE_BIT;
+            for row in 0..ny * nz {
+                let cell = |i: usize| row * nx + i;
+                let ins: Vec<usize> = (0..nx).filter(|&i| g.codes[0][cell(i)] != 0).collect();
+                let extent = match (ins.first(), ins.last()) {
+                    (Some(&a), Some(&b)) => (a as u32, b as u32 + 1),
+                    _ => (0, 0),
+                };
+                assert_eq!(g.inside_extents[row], extent, "row {row}");
+                let is_full = |i: usize| (0..3).all(|d| g.codes[d][cell(i)] == full);
+                let span = match (0..nx).find(|&i| is_full(i)) {
+                    Some(a) => {
+                        let b = (a..nx).find(|&i| !is_full(i)).unwrap_or(nx);
+                        (a as u32, b as u32)
+                    }
+                    None => (0, 0),
+                };
+                assert_eq!(g.interior_spans[row], span, "row {row}");
+            }
+            assert_edge_runs_fit_the_codes(g);
+        }
     }
 
     /// The edge runs of a cylinder with open faces, through cells taken out of the gel at
