@@ -10,6 +10,9 @@
 //!   parallelism), each with its grid loops on the same pool (nested) or serial inside
 //!   ([`GridThreads::Parallel`] / [`GridThreads::Serial`]).
 //!
+//! - `small_runs/setup`: what a run costs before its first step, [`Simulation::new`] (the grid,
+//!   its step-limit scans, the fields and the bubbles), on the global pool.
+//!
 //! Runs per second = runs / time. `cargo bench --bench small_runs` (about 2 minutes).
 //! `SMALL_RUNS_SIZE_MM=12` (say) runs the same case in a bigger cube (same h), to place the
 //! threshold of [`GridThreads::Auto`].
@@ -18,6 +21,7 @@ use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use decophantom::app::simulate::{simulate, with_grid_threads, GridThreads};
 use decophantom::phantom::config::load_phantom;
 use decophantom::phantom::grid::Shape;
+use decophantom::phantom::sim::Simulation;
 use decophantom::profile::{load, LoadOptions};
 use rayon::prelude::*;
 use std::path::Path;
@@ -52,6 +56,9 @@ fn small_runs(c: &mut Criterion) {
         .warm_up_time(Duration::from_secs(1))
         .measurement_time(Duration::from_secs(10));
     group.throughput(Throughput::Elements(1));
+    group.bench_function(format!("setup{tag}"), |b| {
+        b.iter(|| rayon::scope(|_| Simulation::new(&params, &history).unwrap().time()))
+    });
     group.bench_function(format!("one_run{tag}/1_thread"), |b| {
         b.iter(|| one(GridThreads::Serial))
     });
