@@ -430,6 +430,12 @@ pub struct Simulation<'a> {
     back_codes: u64,
     /// [`OUT_OF_PLACE_BYTES`] (a field so that a test can step in place).
     out_of_place_bytes: usize,
+    /// Whether the explicit steps take a thread per field when there are as many gases as
+    /// threads and no gel pass is due ([`diffusion::explicit_steps_in_place_per_field`]; a test
+    /// turns it off to compare).
+    per_field: bool,
+    /// Explicit steps taken a thread per field (a test's check that the path is taken).
+    per_field_steps: usize,
     /// The implicit step's line plan and factor table ([`diffusion::ImplicitSolver`]).
     implicit: diffusion::ImplicitSolver,
     /// Per gas, the change of every cell by diffusion in the last step (mol/m³), for the
@@ -620,6 +626,8 @@ impl<'a> Simulation<'a> {
             back: Vec::new(),
             back_codes: 0,
             out_of_place_bytes: OUT_OF_PLACE_BYTES,
+            per_field: true,
+            per_field_steps: 0,
             implicit: diffusion::ImplicitSolver::new(),
             last_change: Vec::new(),
             last_dt: 0.0,
@@ -1870,9 +1878,13 @@ impl<'a> Simulation<'a> {
                 *dc = (self.diffusivity[g], cb);
             }
             let mut inflow = [0.0; Gas::ALL.len()];
-            let out_of_place =
-                self.fields_bytes() <= self.out_of_place_bytes && rayon::current_num_threads() > 1;
-            if !implicit && out_of_place {
+            let threads = rayon::current_num_threads();
+            let out_of_place = self.fields_bytes() <= self.out_of_place_bytes && threads > 1;
+            // as many gases as threads: a thread per field
+            // (`diffusion::explicit_steps_in_place_per_field`), unless the step passes the gel
+            // for a frame (out of place, on grids up to `OUT_OF_PLACE_BYTES`)
+            let per_field = self.per_field && ng > 1 && ng == threads;
+            if !implicit && out_of_place && (self.pass_gel_next || !per_field) {
                 self.explicit_steps_out_of_place(&dc[..ng], dt, &mut inflow[..ng]);
             } else {
                 let mut fields: Vec<&mut [f64]> =
@@ -1880,6 +1892,15 @@ impl<'a> Simulation<'a> {
                 if implicit {
                     self.implicit
                         .steps(&self.grid, &mut fields, &dc[..ng], dt, &mut inflow[..ng]);
+                } else if per_field {
+                    self.per_field_steps += 1;
+                    diffusion::explicit_steps_in_place_per_field(
+                        &self.grid,
+                        &mut fields,
+                        &dc[..ng],
+                        dt,
+                        &mut inflow[..ng],
+                    );
                 } else {
                     diffusion::explicit_steps_in_place(
                         &self.grid,
@@ -3108,51 +3129,71 @@ mod extrapolated_step_tests {
 mod out_of_place_tests {
     use super::*;
 
-    /// The explicit steps out of place (into a second set of fields, swapped) give the in-place
-    /// steps' bits through a run in which bubbles grow over cells of the gel and give them back
-    /// (the gel's displacement takes cells out, which changes the codes and zeroes those cells
-    /// in one set only, then a recompression shrinks the bubbles): three bubbles in an open box;
-    /// every frame's radii, contents and gel tensions, the step counts, the gas balance and the
-    /// final fields compared bit by bit.
+    /// The explicit steps out of place (into a second set of fields, swapped) and with a thread
+    /// per field give the in-place steps' bits through a run in which bubbles grow over cells
+    /// of the gel and give them back (the gel's displacement takes cells out, which changes the
+    /// codes and zeroes those cells in one set only, then a recompression shrinks the bubbles):
+    /// three bubbles in an open box, two gases on two threads; every frame's radii, contents
+    /// and gel tensions, the step counts, the gas balance and the final fields compared bit by
+    /// bit. With frames at every step, every step out of place passes the gel, so a thread per
+    /// field is taken only in place; with frames every 0.7 s, also between those steps.
     #[test]
-    fn out_of_place_explicit_steps_are_the_in_place_bits() {
-        let params = three_bubbles_in_an_open_box(1e-4);
+    fn out_of_place_and_per_field_explicit_steps_are_the_in_place_bits() {
         let profile = grow_then_recompress(90.0);
-        let run = |out_of_place: bool| {
-            let mut sim = Simulation::new(&params, &profile).unwrap();
-            if !out_of_place {
-                sim.out_of_place_bytes = 0;
-            }
-            let start_codes = sim.grid.codes_id();
-            let mut rec = Recorder::default();
-            // out of place only with more than one thread in the grid loops
-            let pool = rayon::ThreadPoolBuilder::new()
-                .num_threads(2)
-                .build()
-                .unwrap();
-            let summary = pool.install(|| sim.run(&profile, &mut rec)).unwrap();
-            assert_ne!(
-                sim.grid.codes_id(),
-                start_codes,
-                "no cell was taken out of the gel"
-            );
-            assert_eq!(sim.back.is_empty(), !out_of_place);
-            (summary, rec.frames, sim.fields.clone(), sim.grid.clone())
-        };
-        let (ps, inplace, pf, grid) = run(false);
-        let (os, outplace, of, _) = run(true);
-        assert!(ps.steps.0 > 20, "{:?}", ps.steps);
-        assert_eq!(ps.steps, os.steps);
-        assert_eq!(
-            ps.gas_balance_error.to_bits(),
-            os.gas_balance_error.to_bits()
-        );
-        assert_eq!(inplace.len(), outplace.len());
-        assert_same_frame_bits(&inplace, &outplace);
-        for (f, g) in pf.iter().zip(&of) {
-            for idx in 0..grid.len() {
-                if grid.inside(idx) {
-                    assert_eq!(f[idx].to_bits(), g[idx].to_bits(), "cell {idx}");
+        for interval in [0.0, 0.7] {
+            let mut params = three_bubbles_in_an_open_box(1e-4);
+            params.numerics.record_interval = interval;
+            let run = |out_of_place: bool, per_field: bool| {
+                let mut sim = Simulation::new(&params, &profile).unwrap();
+                assert_eq!(sim.gases.len(), 2);
+                if !out_of_place {
+                    sim.out_of_place_bytes = 0;
+                }
+                sim.per_field = per_field;
+                let start_codes = sim.grid.codes_id();
+                let mut rec = Recorder::default();
+                // out of place and a thread per field only with more than one thread in the
+                // grid loops
+                let pool = rayon::ThreadPoolBuilder::new()
+                    .num_threads(2)
+                    .build()
+                    .unwrap();
+                let summary = pool.install(|| sim.run(&profile, &mut rec)).unwrap();
+                assert_ne!(
+                    sim.grid.codes_id(),
+                    start_codes,
+                    "no cell was taken out of the gel"
+                );
+                let taken = sim.per_field_steps;
+                if per_field && (!out_of_place || interval > 0.0) {
+                    assert!(taken > 20, "{taken} steps a thread per field");
+                } else if !per_field {
+                    assert_eq!(taken, 0);
+                }
+                assert_eq!(
+                    sim.back.is_empty(),
+                    !out_of_place,
+                    "{out_of_place} {per_field}"
+                );
+                (summary, rec.frames, sim.fields.clone(), sim.grid.clone())
+            };
+            let (ps, inplace, pf, grid) = run(false, false);
+            assert!(ps.steps.0 > 20, "{:?}", ps.steps);
+            for (out_of_place, per_field) in [(true, false), (false, true), (true, true)] {
+                let (os, other, of, _) = run(out_of_place, per_field);
+                assert_eq!(ps.steps, os.steps);
+                assert_eq!(
+                    ps.gas_balance_error.to_bits(),
+                    os.gas_balance_error.to_bits()
+                );
+                assert_eq!(inplace.len(), other.len());
+                assert_same_frame_bits(&inplace, &other);
+                for (f, g) in pf.iter().zip(&of) {
+                    for idx in 0..grid.len() {
+                        if grid.inside(idx) {
+                            assert_eq!(f[idx].to_bits(), g[idx].to_bits(), "cell {idx}");
+                        }
+                    }
                 }
             }
         }
