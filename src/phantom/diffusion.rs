@@ -10,10 +10,12 @@
 //!   open sides, counted 2 each, it was h²/(9D) in a corner with three open faces, which
 //!   held every grid with an open corner to ⅔ of the step); the simulation uses
 //!   [`explicit_steps_in_place`], the same bits without a second field (z-plane blocks in
-//!   parallel, each keeping the old planes it still needs in per-thread buffers), or on
-//!   small grids with more than one thread [`explicit_steps_into`] a second set of fields
-//!   (`sim::OUT_OF_PLACE_BYTES`), which also passes the gel for a frame over each plane it
-//!   has just written (`explicit_steps_into_passing_gel`). A row's interior span takes the
+//!   parallel, each keeping the old planes it still needs in per-thread buffers), with as
+//!   many gases as threads [`explicit_steps_in_place_per_field`] (a thread per field, each
+//!   going up its planes in one block), and on small grids with more than one thread, when
+//!   the step ends at a frame with the gel's state, [`explicit_steps_into`] a second set of
+//!   fields (`sim::OUT_OF_PLACE_BYTES`), which passes the gel over each plane it has just
+//!   written (`explicit_steps_into_passing_gel`); all give the same bits. A row's interior span takes the
 //!   plain 7-point stencil; its other cells the per-cell terms, side by side where a run of
 //!   them shares its face codes (`uniform_span`);
 //! - [`implicit_step`]: locally one-dimensional backward Euler (x, y, then z tridiagonal
