@@ -523,9 +523,8 @@ pub fn explicit_steps_in_place(
 /// [`explicit_steps_in_place`] with a thread per field: the fields in parallel, one task each,
 /// each going up all its planes in one block (no halo), the same bits. For as many fields as
 /// threads (`sim` chooses it then): each core streams its own field once, in place, with no
-/// fork and join per plane. Measured against the plane-parallel steps on the 2-core Intel
-/// machine (26 Nov 2026, README "Speed", session 21): the small cube −7 %, the oscillation −6 %,
-/// the Fig. 5 dive −4 %.
+/// fork and join per plane. Against the plane-parallel steps on the 2-core Intel machine (26
+/// Nov 2026, README "Speed", session 21, alternated): the lone small run −5 %, Fig. 5 −2 to −4 %.
 pub fn explicit_steps_in_place_per_field(
     grid: &Grid,
     fields: &mut [&mut [f64]],
@@ -533,19 +532,8 @@ pub fn explicit_steps_in_place_per_field(
     dt: f64,
     inflow: &mut [f64],
 ) {
-    explicit_steps_per_field_with(grid, fields, dc, dt, inflow, Isa::detect())
-}
-
-/// [`explicit_steps_in_place_per_field`] with the interior stencil compiled for `isa`.
-fn explicit_steps_per_field_with(
-    grid: &Grid,
-    fields: &mut [&mut [f64]],
-    dc: &[(f64, f64)],
-    dt: f64,
-    inflow: &mut [f64],
-    isa: Isa,
-) {
     assert!(dc.len() == fields.len() && inflow.len() == fields.len());
+    let isa = Isa::detect();
     fields
         .par_iter_mut()
         .zip(dc.par_iter())

@@ -1896,23 +1896,14 @@ impl<'a> Simulation<'a> {
                 if implicit {
                     self.implicit
                         .steps(&self.grid, &mut fields, &dc[..ng], dt, &mut inflow[..ng]);
-                } else if per_field {
-                    self.per_field_steps += 1;
-                    diffusion::explicit_steps_in_place_per_field(
-                        &self.grid,
-                        &mut fields,
-                        &dc[..ng],
-                        dt,
-                        &mut inflow[..ng],
-                    );
                 } else {
-                    diffusion::explicit_steps_in_place(
-                        &self.grid,
-                        &mut fields,
-                        &dc[..ng],
-                        dt,
-                        &mut inflow[..ng],
-                    );
+                    let step = if per_field {
+                        self.per_field_steps += 1;
+                        diffusion::explicit_steps_in_place_per_field
+                    } else {
+                        diffusion::explicit_steps_in_place
+                    };
+                    step(&self.grid, &mut fields, &dc[..ng], dt, &mut inflow[..ng]);
                 }
             }
             for (g, x) in inflow[..ng].iter().enumerate() {
