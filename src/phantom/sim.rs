@@ -1886,9 +1886,12 @@ impl<'a> Simulation<'a> {
             let out_of_place = self.fields_bytes() <= self.out_of_place_bytes && threads > 1;
             // as many gases as threads: a thread per field
             // (`diffusion::explicit_steps_in_place_per_field`), unless the step passes the gel
-            // for a frame (out of place, on grids up to `OUT_OF_PLACE_BYTES`)
+            // for one of the frames that carry it (out of place, on grids up to
+            // `OUT_OF_PLACE_BYTES`); without `record_gel` only the last frame does, and a pass
+            // of its own costs less than the second set of fields
             let per_field = self.per_field && ng > 1 && ng == threads;
-            if !implicit && out_of_place && (self.pass_gel_next || !per_field) {
+            let pass_gel = self.pass_gel_next && self.params.numerics.record_gel;
+            if !implicit && out_of_place && (pass_gel || !per_field) {
                 self.explicit_steps_out_of_place(&dc[..ng], dt, &mut inflow[..ng]);
             } else {
                 let mut fields: Vec<&mut [f64]> =
