@@ -1003,17 +1003,28 @@ struct LinePlan {
     xopen_start: Vec<usize>,
 }
 
-/// The table index of a cell with code `c` at position `k` of a segment whose first cell has
-/// code `first`.
+/// The table index of a cell with code `c` at position `k` of a segment whose minus end is
+/// open (`start_open`) or not.
 #[inline(always)]
-fn table_index(c: u8, first: u8, k: usize, max_len: usize) -> u16 {
-    let start_open = usize::from(first & 3 == SIDE_OPEN);
+fn table_index(c: u8, start_open: bool, k: usize, max_len: usize) -> u16 {
+    let start_open = usize::from(start_open);
     let end = match (c >> 2) & 3 {
         SIDE_INTERIOR => MIDDLE,
         SIDE_OPEN => LAST_OPEN,
         _ => LAST_SEALED,
     };
     (1 + (start_open * 3 + end) * max_len + k) as u16
+}
+
+/// Bit of a position from [`positions`]: the cell's segment begins at an open face (positions
+/// stay below [`MAX_TABLE_SEGMENT`] < 2¹⁵).
+const START_OPEN: u16 = 1 << 15;
+
+/// The position in its segment and whether the segment begins at an open face, from a value
+/// of [`positions`].
+#[inline(always)]
+fn position(v: u16) -> (usize, bool) {
+    (usize::from(v & !START_OPEN), v & START_OPEN != 0)
 }
 
 /// The table indices of the last cells of segments of `max_len` cells.
@@ -1029,44 +1040,44 @@ fn longest_ends(max_len: usize) -> [u16; 4] {
 }
 
 /// Pass 1 of a plan over `codes` (one z-plane for x and y, the whole grid for z): the position
-/// of every inside cell in its segment, into `pos` (zero on entry); cells in index order, so
-/// the minus neighbour idx − `stride` always comes first. Returns the longest segment, or
-/// `None` when one is longer than [`MAX_TABLE_SEGMENT`].
+/// of every inside cell in its segment, with [`START_OPEN`] set when the segment begins at an
+/// open face (carried along the segment from its first cell), into `pos` (zero on entry);
+/// cells in index order, so the minus neighbour idx − `stride` always comes first. Returns the
+/// longest segment, or `None` when one is longer than [`MAX_TABLE_SEGMENT`].
 fn positions(codes: &[u8], pos: &mut [u16], stride: usize) -> Option<usize> {
     let mut max_len = 1usize;
     for idx in 0..codes.len() {
         let c = codes[idx];
-        if c & INSIDE_BIT != 0 && c & 3 == SIDE_INTERIOR {
-            let k = pos[idx - stride] as usize + 1;
-            if k + 1 > MAX_TABLE_SEGMENT {
-                return None;
+        if c & INSIDE_BIT == 0 {
+            continue;
+        }
+        match c & 3 {
+            SIDE_INTERIOR => {
+                let before = pos[idx - stride];
+                let k = usize::from(before & !START_OPEN) + 1;
+                if k + 1 > MAX_TABLE_SEGMENT {
+                    return None;
+                }
+                pos[idx] = k as u16 | (before & START_OPEN);
+                max_len = max_len.max(k + 1);
             }
-            pos[idx] = k as u16;
-            max_len = max_len.max(k + 1);
+            SIDE_OPEN => pos[idx] = START_OPEN,
+            _ => {}
         }
     }
     Some(max_len)
 }
 
-/// Pass 2 of a plan, in place on the cells `base..base + out.len()`: position → table index
-/// (the segment's minus end is read at its first cell). Returns how many segments of
-/// `max_len` cells end there.
-fn table_indices(
-    codes: &[u8],
-    base: usize,
-    stride: usize,
-    out: &mut [u16],
-    max_len: usize,
-) -> usize {
+/// Pass 2 of a plan, in place on the cells `codes` (one plane's): position → table index.
+/// Returns how many segments of `max_len` cells end there.
+fn table_indices(codes: &[u8], out: &mut [u16], max_len: usize) -> usize {
     let mut longest = 0;
-    for (q, v) in out.iter_mut().enumerate() {
-        let idx = base + q;
-        let c = codes[idx];
+    for (v, &c) in out.iter_mut().zip(codes) {
         if c & INSIDE_BIT == 0 {
             continue;
         }
-        let k = *v as usize;
-        *v = table_index(c, codes[idx - k * stride], k, max_len);
+        let (k, start_open) = position(*v);
+        *v = table_index(c, start_open, k, max_len);
         longest += usize::from(k + 1 == max_len && (c >> 2) & 3 != SIDE_INTERIOR);
     }
     longest
@@ -1078,7 +1089,6 @@ impl LinePlan {
     fn build(grid: &Grid) -> Option<LinePlan> {
         let [nx, ny, nz] = grid.n;
         let plane = nx * ny;
-        let strides = [1usize, nx, plane];
         let len = grid.len();
         // pass 1, kept in the index arrays themselves (no temporary of the grid's size)
         let mut index: [Vec<u16>; 3] = [vec![0; len], vec![0; len], vec![0; len]];
@@ -1102,11 +1112,10 @@ impl LinePlan {
         // pass 2
         let mut n_longest = 0;
         for (dir, out) in index.iter_mut().enumerate() {
-            let (codes, stride) = (&grid.codes[dir], strides[dir]);
             n_longest += out
                 .par_chunks_mut(plane)
-                .enumerate()
-                .map(|(k, out)| table_indices(codes, k * plane, stride, out, max_len))
+                .zip(grid.codes[dir].par_chunks(plane))
+                .map(|(out, codes)| table_indices(codes, out, max_len))
                 .sum::<usize>();
         }
         // x: transposed per plane (rows of ny cells, `xstride` apart), each line shifted to
@@ -1304,7 +1313,8 @@ fn update_lines(
             let v = if cc & INSIDE_BIT == 0 {
                 0
             } else {
-                table_index(cc, line_codes[q - kq as usize], kq as usize, max_len)
+                let (k, start_open) = position(kq);
+                table_index(cc, start_open, k, max_len)
             };
             if !(s..e).contains(&q) {
                 // outside the shape: never inside, and not in the layout
