@@ -686,12 +686,12 @@ fn explicit_steps_in_blocks(
     let mut per_plane = take_plane_flows(nz * nf);
     let mut halo = HALO.take();
     {
-        let per_field = 2 * blocks * plane;
+        // (one block reads no halo: none is kept)
+        let per_field = if blocks > 1 { 2 * blocks * plane } else { 0 };
         if halo.len() < nf * per_field {
             halo.resize(nf * per_field, 0.0);
         }
-        // per field, halo plane 2b: the plane below block b; 2b + 1: the plane above it (none
-        // with one block: serially, as a task of the per-field steps)
+        // per field, halo plane 2b: the plane below block b; 2b + 1: the plane above it
         if blocks > 1 {
             let fields: Vec<&[f64]> = fields.iter().map(|u| &**u).collect();
             halo[..nf * per_field]
