@@ -67,7 +67,7 @@
 //! against the generic sweep.
 
 use super::gel_pass::{plane_gel_of, PlaneGel};
-use super::grid::{Grid, INSIDE_BIT, SIDE_INTERIOR, SIDE_OPEN, SIDE_SEALED};
+use super::grid::{EdgeRun, Grid, INSIDE_BIT, SIDE_INTERIOR, SIDE_OPEN, SIDE_SEALED};
 use crate::gas::Gas;
 use rayon::prelude::*;
 
@@ -94,7 +94,6 @@ fn max_side_sum(grid: &Grid, side: impl Fn(u8) -> f64 + Sync) -> f64 {
         n
     };
     let full = sum([SIDE_INTERIOR | (SIDE_INTERIOR << 2); 3]);
-    let nx = grid.n[0];
     // rows in parallel (a maximum of small whole numbers: exact in any order)
     (0..grid.n[1] * grid.n[2])
         .into_par_iter()
@@ -102,9 +101,8 @@ fn max_side_sum(grid: &Grid, side: impl Fn(u8) -> f64 + Sync) -> f64 {
         .map(|row| {
             let (i0, i1) = grid.interior_spans[row];
             let mut m: f64 = if i1 > i0 { full } else { 0.0 };
-            for &(a, _) in grid.edge_runs.of(row) {
-                let idx = row * nx + a as usize;
-                m = m.max(sum([0, 1, 2].map(|d| grid.codes[d][idx])));
+            for run in grid.edge_runs.of(row) {
+                m = m.max(sum(run.codes));
             }
             m
         })
@@ -228,19 +226,14 @@ fn stencil_plane(
     mut save: Option<&mut [f64]>,
 ) -> f64 {
     let [nx, ny, _] = grid.n;
-    let plane = nx * ny;
     let mut inflow = 0.0;
-    let codes = grid
-        .codes
-        .each_ref()
-        .map(|v| &v[k * plane..(k + 1) * plane]);
-    // an inside cell with a side that is not interior (`q` in the plane)
-    let generic = |q: usize, inflow: &mut f64| -> f64 {
+    // an inside cell with a side that is not interior (`q` in the plane), `code` its run's codes
+    // (the per-cell arrays are not read)
+    let generic = |q: usize, code: [u8; 3], inflow: &mut f64| -> f64 {
         let ui = c[q];
         let mut acc = 0.0;
         let mut open = 0;
-        for (dir, codes) in codes.iter().enumerate() {
-            let code = codes[q];
+        for (dir, code) in code.into_iter().enumerate() {
             let m = code & 3;
             let p = (code >> 2) & 3;
             if m == SIDE_INTERIOR {
@@ -270,6 +263,8 @@ fn stencil_plane(
         new
     };
     let centre = 1.0 - 6.0 * r;
+    // a row end's outer x side sealed or open ([`row_end`])
+    let end_sides = [0, 1].map(|open| OpenSides::new(open, r, cb));
     for j in 0..ny {
         let row = j + ny * k;
         let base = j * nx;
@@ -283,10 +278,20 @@ fn stencil_plane(
         }
         let (i0, i1) = grid.interior_spans[row];
         let (i0, i1) = (i0 as usize, i1 as usize);
-        if i1 > i0 {
+        let runs = grid.edge_runs.of(row);
+        // a row with one cell outside its span at each end, each with every side interior but
+        // its outer x one: the span's stencil taken over them too (their neighbours across
+        // that side are other cells of the plane), their values then put right
+        let ends = row_ends(runs, i0, i1);
+        let (s0, s1) = if ends.is_some() {
+            (i0 - 1, i1 + 1)
+        } else {
+            (i0, i1)
+        };
+        if s1 > s0 {
             // all six neighbours exist and are inside: plain 7-point stencil, branch-free; first,
             // so that the row's other cells find their neighbours' cache lines loaded
-            let (o, a) = (&mut out[base + i0..base + i1], base + i0);
+            let (o, a) = (&mut out[base + s0..base + s1], base + s0);
             match isa {
                 Isa::Portable => stencil_span(zm, c, zp, o, a, nx, centre, r),
                 // SAFETY: `Isa::detect` found the instruction set on this CPU
@@ -296,11 +301,25 @@ fn stencil_plane(
                 Isa::Avx512 => unsafe { stencil_span_avx512(zm, c, zp, o, a, nx, centre, r) },
             }
         }
+        if let Some([left, right]) = ends {
+            let planes = (zm, c, zp);
+            let (q0, q1) = (base + s0, base + s1 - 1);
+            let (side0, side1) = (
+                (end_sides[usize::from(left)], left),
+                (end_sides[usize::from(right)], right),
+            );
+            #[cfg(target_arch = "x86_64")]
+            if left == right {
+                [out[q0], out[q1]] = row_end_pair(planes, [q0, q1], nx, r, cb, side0, &mut inflow);
+                continue;
+            }
+            out[q0] = row_end(planes, q0, q0 + 1, nx, r, cb, side0, &mut inflow);
+            out[q1] = row_end(planes, q1, q1 - 1, nx, r, cb, side1, &mut inflow);
+            continue;
+        }
         // runs of inside cells with the same codes: one branch-free pass per side
-        for &(i, j) in grid.edge_runs.of(row) {
-            let (i, j) = (i as usize, j as usize);
-            let q = base + i;
-            let code = [codes[0][q], codes[1][q], codes[2][q]];
+        for run in runs {
+            let (i, j, code) = (run.start as usize, run.end as usize, run.codes);
             if j - i >= UNIFORM_RUN {
                 let (o, a) = (&mut out[base + i..base + j], base + i);
                 inflow += match isa {
@@ -313,12 +332,121 @@ fn stencil_plane(
                 };
             } else {
                 for q in base + i..base + j {
-                    out[q] = generic(q, &mut inflow);
+                    out[q] = generic(q, code, &mut inflow);
                 }
             }
         }
     }
     inflow
+}
+
+/// Both sides of a direction code interior, the cell inside.
+const BOTH_INTERIOR: u8 = SIDE_INTERIOR | (SIDE_INTERIOR << 2) | INSIDE_BIT;
+
+/// Whether a row's cells outside its interior span `i0..i1` ([`Grid::edge_runs`] `runs`) are one
+/// cell at each end of it, i0 − 1 and i1, each with every side interior but its outer x one:
+/// then, per end, whether that side is open (else it is sealed). Such a row has a row of the
+/// plane on both sides and planes above and below (those sides are interior), so the span's
+/// stencil can be taken over its ends ([`stencil_plane`]). Every row of a box but those along
+/// its y and z faces is one, and most of a cylinder's.
+#[inline(always)]
+fn row_ends(runs: &[EdgeRun], i0: usize, i1: usize) -> Option<[bool; 2]> {
+    let [l, r] = runs else { return None };
+    let fits = i0 < i1
+        && (l.start as usize, l.end as usize) == (i0 - 1, i0)
+        && (r.start as usize, r.end as usize) == (i1, i1 + 1)
+        && l.codes[1..] == [BOTH_INTERIOR; 2]
+        && r.codes[1..] == [BOTH_INTERIOR; 2]
+        && (l.codes[0] >> 2) & 3 == SIDE_INTERIOR
+        && r.codes[0] & 3 == SIDE_INTERIOR;
+    fits.then(|| {
+        [
+            l.codes[0] & 3 == SIDE_OPEN,
+            (r.codes[0] >> 2) & 3 == SIDE_OPEN,
+        ]
+    })
+}
+
+/// The new value of an end cell `q` of a [`row_ends`] row, its inner x neighbour `inner`, its
+/// outer x side open or sealed (`open`, and `sides` for one open side or none), from the old values of the plane below, the
+/// plane and the one above (`planes`): the generic cell's terms in its order (the x side, y−,
+/// y+, z−, z+; the open side implicit, [`open_sides_implicit`]), so the same bits; adds what
+/// entered through the open side to `inflow`.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+fn row_end(
+    (zm, c, zp): (&[f64], &[f64], &[f64]),
+    q: usize,
+    inner: usize,
+    nx: usize,
+    r: f64,
+    cb: f64,
+    (sides, open): (OpenSides, bool),
+    inflow: &mut f64,
+) -> f64 {
+    let ui = c[q];
+    let mut acc = 0.0;
+    acc += c[inner] - ui;
+    acc += c[q - nx] - ui;
+    acc += c[q + nx] - ui;
+    acc += zm[q] - ui;
+    acc += zp[q] - ui;
+    let new = open_sides_implicit(ui, r * acc, sides);
+    if open {
+        *inflow += sides.s * (cb - new);
+    }
+    new
+}
+
+/// Both ends `[q0, q1]` of a [`row_ends`] row whose outer x sides are alike (`open`, `sides`
+/// as [`row_end`]'s), side by side in the two lanes of an SSE2 vector: each lane [`row_end`]'s
+/// operations in its order, so its bits, with one division for the two (the ends' divisions
+/// were the longest wait of the explicit kernel's rows); their inflows added to `inflow` in
+/// the order q0, q1.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn row_end_pair(
+    (zm, c, zp): (&[f64], &[f64], &[f64]),
+    [q0, q1]: [usize; 2],
+    nx: usize,
+    r: f64,
+    cb: f64,
+    (sides, open): (OpenSides, bool),
+    inflow: &mut f64,
+) -> [f64; 2] {
+    use std::arch::x86_64::*;
+    // SAFETY: SSE2 is part of every x86_64 CPU (the target's baseline), and `out` holds two f64
+    let out = unsafe {
+        let lanes = |a: f64, b: f64| _mm_set_pd(b, a);
+        let u = lanes(c[q0], c[q1]);
+        let mut acc = _mm_setzero_pd();
+        for nb in [
+            lanes(c[q0 + 1], c[q1 - 1]),
+            lanes(c[q0 - nx], c[q1 - nx]),
+            lanes(c[q0 + nx], c[q1 + nx]),
+            lanes(zm[q0], zm[q1]),
+            lanes(zp[q0], zp[q1]),
+        ] {
+            acc = _mm_add_pd(acc, _mm_sub_pd(nb, u));
+        }
+        let r_acc = _mm_mul_pd(_mm_set1_pd(r), acc);
+        // open_sides_implicit, lane by lane
+        let new = if sides.s == 0.0 {
+            _mm_add_pd(u, r_acc)
+        } else {
+            let num = _mm_add_pd(_mm_add_pd(u, r_acc), _mm_set1_pd(sides.s_cb));
+            _mm_div_pd(num, _mm_set1_pd(1.0 + sides.s))
+        };
+        let mut out = [0.0; 2];
+        _mm_storeu_pd(out.as_mut_ptr(), new);
+        out
+    };
+    if open {
+        for o in out {
+            *inflow += sides.s * (cb - o);
+        }
+    }
+    out
 }
 
 /// Runs of at least this many neighbouring cells with the same codes (a face of the grid, a

@@ -91,15 +91,30 @@ pub const MAX_FIELDS: usize = 4;
 /// Bit set in a direction code when the cell is inside the phantom.
 pub const INSIDE_BIT: u8 = 16;
 
-/// Per x-row lists of runs (start, end) of cells, all in one buffer ([`Grid::edge_runs`]): a
-/// row's list is rewritten in place when the new one is no longer, else appended, and the
-/// buffer is compacted when more than half of it is stale (a `Vec` per row cost about 110 B per
-/// row, 23 MB at the cell cap; this, 8 B per row and 8 B per run).
+/// A run of neighbouring inside cells [start, end) of one x-row that share their face codes
+/// ([`Grid::edge_runs`]), with those codes (x, y, z; as [`Grid::codes`]). The explicit kernel
+/// reads a run's codes here, not from the per-cell arrays: those reads touched three cache lines
+/// per run (on the small cube's rows, whose runs are the two x-face cells, 1.4 MB of code lines
+/// per field and step beside the field's 1.7 MB).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct EdgeRun {
+    /// First cell, as a position along the row.
+    pub start: u32,
+    /// One past the last cell.
+    pub end: u32,
+    /// The run's cells' codes per direction.
+    pub codes: [u8; 3],
+}
+
+/// Per x-row lists of [`EdgeRun`]s, all in one buffer ([`Grid::edge_runs`]): a row's list is
+/// rewritten in place when the new one is no longer, else appended, and the buffer is compacted
+/// when more than half of it is stale (a `Vec` per row cost about 110 B per row, 23 MB at the
+/// cell cap; this, 8 B per row and 12 B per run).
 #[derive(Debug, Clone)]
 pub struct RowRuns {
     /// Per row, (first, count) in `runs`.
     slots: Vec<(u32, u32)>,
-    runs: Vec<(u32, u32)>,
+    runs: Vec<EdgeRun>,
     /// Entries of `runs` that no row refers to.
     stale: usize,
 }
@@ -116,13 +131,13 @@ impl RowRuns {
 
     /// Row `row`'s runs.
     #[inline]
-    pub fn of(&self, row: usize) -> &[(u32, u32)] {
+    pub fn of(&self, row: usize) -> &[EdgeRun] {
         let (a, n) = self.slots[row];
         &self.runs[a as usize..(a + n) as usize]
     }
 
     /// Replace row `row`'s runs by `runs`.
-    fn set(&mut self, row: usize, runs: &[(u32, u32)]) {
+    fn set(&mut self, row: usize, runs: &[EdgeRun]) {
         let (a, n) = self.slots[row];
         let len = runs.len() as u32;
         if len <= n {
@@ -203,7 +218,7 @@ pub struct Grid {
 
 /// One z-plane's rows in [`Grid::new`]: per row its interior span, its inside extent and its
 /// edge runs, one after the other in one list, and each row's count of runs.
-type PlaneRows = (Vec<(u32, u32)>, Vec<u32>);
+type PlaneRows = (Vec<((u32, u32), (u32, u32))>, Vec<EdgeRun>, Vec<u32>);
 
 /// Most changes a grid's log keeps ([`Grid::changed_since`]).
 const CHANGE_LOG_LEN: usize = 64;
@@ -397,7 +412,8 @@ impl Grid {
         // codes, hence the same rows (n ≥ 3 along z)
         let ny = n[1];
         let rows_of = |k: usize| -> PlaneRows {
-            let (mut all, mut counts) = (Vec::new(), Vec::with_capacity(ny));
+            let (mut spans, mut all, mut counts) =
+                (Vec::with_capacity(ny), Vec::new(), Vec::with_capacity(ny));
             let mut runs = Vec::new();
             for row in k * ny..(k + 1) * ny {
                 let span = grid.interior_span(row);
@@ -407,16 +423,15 @@ impl Grid {
                     _ => (0, 0),
                 };
                 grid.edge_runs_between(row, span, extent, &mut runs);
-                all.push(span);
-                all.push(extent);
+                spans.push((span, extent));
                 all.extend_from_slice(&runs);
                 counts.push(runs.len() as u32);
             }
-            (all, counts)
+            (spans, all, counts)
         };
         let distinct: Vec<PlaneRows> = [0, 1, n[2] - 1].into_par_iter().map(rows_of).collect();
         for k in 0..n[2] {
-            let (all, counts) = &distinct[if k == 0 {
+            let (spans, all, counts) = &distinct[if k == 0 {
                 0
             } else if k + 1 == n[2] {
                 2
@@ -426,11 +441,10 @@ impl Grid {
             let mut at = 0;
             for (q, &count) in counts.iter().enumerate() {
                 let row = k * ny + q;
-                grid.interior_spans[row] = all[at];
-                grid.inside_extents[row] = all[at + 1];
+                (grid.interior_spans[row], grid.inside_extents[row]) = spans[q];
                 let count = count as usize;
-                grid.edge_runs.set(row, &all[at + 2..at + 2 + count]);
-                at += 2 + count;
+                grid.edge_runs.set(row, &all[at..at + count]);
+                at += count;
             }
         }
         Ok(grid)
@@ -590,7 +604,7 @@ impl Grid {
 
     /// [`Grid::edge_runs`] of x-row `row` from the current codes and interior span, into `runs`
     /// (cleared first; one buffer for all the rows of a build or an exclusion).
-    fn edge_runs_of(&self, row: usize, runs: &mut Vec<(u32, u32)>) {
+    fn edge_runs_of(&self, row: usize, runs: &mut Vec<EdgeRun>) {
         self.edge_runs_between(
             row,
             self.interior_spans[row],
@@ -605,7 +619,7 @@ impl Grid {
         row: usize,
         (i0, i1): (u32, u32),
         (e0, e1): (u32, u32),
-        runs: &mut Vec<(u32, u32)>,
+        runs: &mut Vec<EdgeRun>,
     ) {
         runs.clear();
         let base = row * self.n[0];
@@ -620,7 +634,11 @@ impl Grid {
                     j += 1;
                 }
                 if c[0] & INSIDE_BIT != 0 {
-                    runs.push((i as u32, j as u32));
+                    runs.push(EdgeRun {
+                        start: i as u32,
+                        end: j as u32,
+                        codes: c,
+                    });
                 }
                 i = j;
             }
@@ -1266,9 +1284,10 @@ mod tests {
                 covered[i as usize] += 1;
             }
             let mut last: Option<(usize, [u8; 3])> = None;
-            for &(a, b) in g.edge_runs.of(row) {
-                let (a, b) = (a as usize, b as usize);
+            for run in g.edge_runs.of(row) {
+                let (a, b) = (run.start as usize, run.end as usize);
                 assert!(a < b && b <= nx, "row {row}: run {a}..{b}");
+                assert_eq!(run.codes, code(a), "row {row}: the codes of run {a}..{b}");
                 if let Some((end, c)) = last {
                     assert!(end <= a, "row {row}: runs out of order");
                     assert!(end < a || c != code(a), "row {row}: run at {a} not maximal");
@@ -1296,13 +1315,17 @@ mod tests {
     fn row_runs_read_back_what_was_set_through_compactions() {
         let rows = 7;
         let mut runs = RowRuns::new(rows);
-        let mut want: Vec<Vec<(u32, u32)>> = vec![Vec::new(); rows];
+        let mut want: Vec<Vec<EdgeRun>> = vec![Vec::new(); rows];
         let mut compacted = 0;
         for round in 0..40u32 {
             let row = (round as usize * 3) % rows;
             let len = ((round * 5) % 4) as usize;
-            let list: Vec<(u32, u32)> = (0..len as u32)
-                .map(|i| (round + i, round + i + 1))
+            let list: Vec<EdgeRun> = (0..len as u32)
+                .map(|i| EdgeRun {
+                    start: round + i,
+                    end: round + i + 1,
+                    codes: [round as u8, i as u8, 7],
+                })
                 .collect();
             let before = runs.runs.len();
             runs.set(row, &list);
