@@ -265,7 +265,29 @@ fn stencil_plane(
     let centre = 1.0 - 6.0 * r;
     // a row end's outer x side sealed or open ([`row_end`])
     let end_sides = [0, 1].map(|open| OpenSides::new(open, r, cb));
-    for j in 0..ny {
+    // the plain stencil over the cells `a..b` of the plane
+    let planes = (zm, c, zp);
+    let saving = save.is_some();
+    let mut j = 0;
+    while j < ny {
+        let mut j2 = j;
+        while j2 < ny && whole_row(grid, k, j2, saving).is_some() {
+            j2 += 1;
+        }
+        if j2 > j + 1 {
+            let (a, b) = (j * nx, j2 * nx);
+            plain_span(planes, &mut out[a..b], a, nx, centre, r, isa);
+            if let Some(save) = save.as_deref_mut() {
+                save[a..b].copy_from_slice(&zp[a..b]);
+            }
+            for j in j..j2 {
+                let ends = whole_row(grid, k, j, saving).expect("a whole row");
+                let row = ([j * nx, j * nx + nx - 1], ends);
+                put_row_ends(planes, out, row, nx, (r, cb), end_sides, &mut inflow);
+            }
+            j = j2;
+            continue;
+        }
         let row = j + ny * k;
         let base = j * nx;
         if let Some(save) = save.as_deref_mut() {
@@ -291,30 +313,20 @@ fn stencil_plane(
         if s1 > s0 {
             // all six neighbours exist and are inside: plain 7-point stencil, branch-free; first,
             // so that the row's other cells find their neighbours' cache lines loaded
-            let (o, a) = (&mut out[base + s0..base + s1], base + s0);
-            match isa {
-                Isa::Portable => stencil_span(zm, c, zp, o, a, nx, centre, r),
-                // SAFETY: `Isa::detect` found the instruction set on this CPU
-                #[cfg(target_arch = "x86_64")]
-                Isa::Avx2 => unsafe { stencil_span_avx2(zm, c, zp, o, a, nx, centre, r) },
-                #[cfg(target_arch = "x86_64")]
-                Isa::Avx512 => unsafe { stencil_span_avx512(zm, c, zp, o, a, nx, centre, r) },
-            }
-        }
-        if let Some([left, right]) = ends {
-            let planes = (zm, c, zp);
-            let (q0, q1) = (base + s0, base + s1 - 1);
-            let (side0, side1) = (
-                (end_sides[usize::from(left)], left),
-                (end_sides[usize::from(right)], right),
+            plain_span(
+                planes,
+                &mut out[base + s0..base + s1],
+                base + s0,
+                nx,
+                centre,
+                r,
+                isa,
             );
-            #[cfg(target_arch = "x86_64")]
-            if left == right {
-                [out[q0], out[q1]] = row_end_pair(planes, [q0, q1], nx, r, cb, side0, &mut inflow);
-                continue;
-            }
-            out[q0] = row_end(planes, q0, q0 + 1, nx, r, cb, side0, &mut inflow);
-            out[q1] = row_end(planes, q1, q1 - 1, nx, r, cb, side1, &mut inflow);
+        }
+        if let Some(ends) = ends {
+            let row = ([base + s0, base + s1 - 1], ends);
+            put_row_ends(planes, out, row, nx, (r, cb), end_sides, &mut inflow);
+            j += 1;
             continue;
         }
         // runs of inside cells with the same codes: one branch-free pass per side
@@ -336,8 +348,77 @@ fn stencil_plane(
                 }
             }
         }
+        j += 1;
     }
     inflow
+}
+
+/// The plain 7-point stencil ([`stencil_span`]) into `o`, the cells `a..a + o.len()` of a
+/// plane, compiled for `isa`.
+#[inline(always)]
+fn plain_span(
+    (zm, c, zp): (&[f64], &[f64], &[f64]),
+    o: &mut [f64],
+    a: usize,
+    nx: usize,
+    centre: f64,
+    r: f64,
+    isa: Isa,
+) {
+    match isa {
+        Isa::Portable => stencil_span(zm, c, zp, o, a, nx, centre, r),
+        // SAFETY: `Isa::detect` found the instruction set on this CPU
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx2 => unsafe { stencil_span_avx2(zm, c, zp, o, a, nx, centre, r) },
+        #[cfg(target_arch = "x86_64")]
+        Isa::Avx512 => unsafe { stencil_span_avx512(zm, c, zp, o, a, nx, centre, r) },
+    }
+}
+
+/// Whether row `j` of plane `k` has every cell inside, with one end cell each side as
+/// [`row_ends`] (and, when `saving` the plane above, whether that plane's row `j` has every
+/// cell inside too): then as [`row_ends`]. Consecutive such rows are one stretch of the plane,
+/// which takes one pass of the stencil ([`stencil_plane`]; the rows of a box between its y
+/// faces).
+#[inline(always)]
+fn whole_row(grid: &Grid, k: usize, j: usize, saving: bool) -> Option<[bool; 2]> {
+    let [nx, ny, _] = grid.n;
+    let row = j + ny * k;
+    let whole = nx >= 3
+        && grid.interior_spans[row] == (1, nx as u32 - 1)
+        && (!saving || grid.inside_extents[j + ny * (k + 1)] == (0, nx as u32));
+    if whole {
+        row_ends(grid.edge_runs.of(row), 1, nx - 1)
+    } else {
+        None
+    }
+}
+
+/// The end cells `q0`, `q1` of a [`row_ends`] row (their outer x sides open or not, `ends`),
+/// put right in `out` after the span's stencil was taken over them ([`row_end`], or
+/// [`row_end_pair`] when the two sides are alike); `end_sides[open]` the sides of one open
+/// side or none.
+#[inline(always)]
+fn put_row_ends(
+    planes: (&[f64], &[f64], &[f64]),
+    out: &mut [f64],
+    ([q0, q1], [left, right]): ([usize; 2], [bool; 2]),
+    nx: usize,
+    (r, cb): (f64, f64),
+    end_sides: [OpenSides; 2],
+    inflow: &mut f64,
+) {
+    let (side0, side1) = (
+        (end_sides[usize::from(left)], left),
+        (end_sides[usize::from(right)], right),
+    );
+    #[cfg(target_arch = "x86_64")]
+    if left == right {
+        [out[q0], out[q1]] = row_end_pair(planes, [q0, q1], nx, r, cb, side0, inflow);
+        return;
+    }
+    out[q0] = row_end(planes, q0, q0 + 1, nx, r, cb, side0, inflow);
+    out[q1] = row_end(planes, q1, q1 - 1, nx, r, cb, side1, inflow);
 }
 
 /// Both sides of a direction code interior, the cell inside.
