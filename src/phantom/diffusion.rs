@@ -2939,8 +2939,11 @@ mod planned_tests {
     /// centre·C + r·Σ(neighbours) inside each row's interior span, and outside it the sum of
     /// the interior sides' terms C_n − C in x−, x+, y−, y+, z−, z+ order, C + r·sum, with the
     /// open sides implicit, (C + r·sum + s·C_b)/(1 + s), s = 2r·(open sides): the same bits,
-    /// out of place and in place, on boxes (open on every face, on two, sealed) and on a
-    /// cylinder with excluded cells. The inflow is Σ s·(C_b − C') over the open cells (to
+    /// out of place and in place, on boxes (open on every face, on two, sealed, and one with
+    /// cells taken out at its rows' ends: whole rows, taken in one pass with their ends put
+    /// right after, beside rows that are not) and on a cylinder with excluded cells. Fails when
+    /// the two ends' values are swapped or a row with a sealed y side at one end is taken as
+    /// whole. The inflow is Σ s·(C_b − C') over the open cells (to
     /// round-off: the step sums it plane by plane).
     #[test]
     fn explicit_step_matches_a_per_cell_reference() {
@@ -2990,11 +2993,28 @@ mod planned_tests {
         };
         let cyl = cylinder_with_hole();
         let size = [2.3e-3, 1.1e-3, 0.7e-3];
+        // a box with sealed x faces (a cell with an open side is never taken out) and cells
+        // taken out at or next to one end of some rows: rows whose two ends differ (one of
+        // them with a sealed y or z side), so that only some rows of a plane are whole (the
+        // kernel's one-pass stretches)
+        let open = [Face::YMinus, Face::YPlus, Face::Bottom, Face::Top];
+        let mut notched = Grid::new(Shape::Box { size }, 1e-4, &open).unwrap();
+        let [nx, ny, _] = notched.n;
+        let at = |i: usize, j: usize, k: usize| i + nx * (j + ny * k);
+        let taken = [
+            at(0, 3, 2),
+            at(nx - 1, 5, 4),
+            at(0, 7, 3),
+            at(1, 2, 4),
+            at(nx - 2, 8, 1),
+        ];
+        notched.set_excluded(&taken, true);
         let grids = [
             cyl,
             Grid::new(Shape::Box { size }, 1e-4, Shape::Box { size }.faces()).unwrap(),
             Grid::new(Shape::Box { size }, 1e-4, &[Face::Top, Face::XMinus]).unwrap(),
             Grid::new(Shape::Box { size }, 1e-4, &[]).unwrap(),
+            notched,
         ];
         let (d, cb) = (2.5e-9, 1.5);
         for g in &grids {
