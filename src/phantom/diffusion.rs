@@ -17,7 +17,13 @@
 //!   fields (`sim::OUT_OF_PLACE_BYTES`), which passes the gel over each plane it has just
 //!   written (`explicit_steps_into_passing_gel`); all give the same bits. A row's interior span takes the
 //!   plain 7-point stencil; its other cells the per-cell terms, side by side where a run of
-//!   them shares its face codes (`uniform_span`);
+//!   them shares its face codes (`uniform_span`). A row with one such cell at each end whose
+//!   other sides are interior (`row_ends`: most rows of a box or a cylinder) takes the span's
+//!   stencil over its ends too and puts them right after, the two in one SSE2 vector
+//!   (`row_end_pair`), and consecutive such rows that fill the plane's width (`whole_row`: a
+//!   box between its y faces) take one pass for all of them: the same bits, without a pass and
+//!   two cell-by-cell cells per row (on the 60³ cube a row is 60 cells, and the per-row work was
+//!   most of the step);
 //! - [`implicit_step`]: locally one-dimensional backward Euler (x, y, then z tridiagonal
 //!   solves, Thomas algorithm), unconditionally stable and positivity-preserving, used when
 //!   long holds allow large steps. For a box with uniform D the three 1-D operators commute,
