@@ -233,41 +233,6 @@ fn stencil_plane(
 ) -> f64 {
     let [nx, ny, _] = grid.n;
     let mut inflow = 0.0;
-    // an inside cell with a side that is not interior (`q` in the plane), `code` its run's codes
-    // (the per-cell arrays are not read)
-    let generic = |q: usize, code: [u8; 3], inflow: &mut f64| -> f64 {
-        let ui = c[q];
-        let mut acc = 0.0;
-        let mut open = 0;
-        for (dir, code) in code.into_iter().enumerate() {
-            let m = code & 3;
-            let p = (code >> 2) & 3;
-            if m == SIDE_INTERIOR {
-                acc += match dir {
-                    0 => c[q - 1],
-                    1 => c[q - nx],
-                    _ => zm[q],
-                } - ui;
-            } else if m == SIDE_OPEN {
-                open += 1;
-            }
-            if p == SIDE_INTERIOR {
-                acc += match dir {
-                    0 => c[q + 1],
-                    1 => c[q + nx],
-                    _ => zp[q],
-                } - ui;
-            } else if p == SIDE_OPEN {
-                open += 1;
-            }
-        }
-        let sides = OpenSides::new(open, r, cb);
-        let new = open_sides_implicit(ui, r * acc, sides);
-        if open > 0 {
-            *inflow += sides.s * (cb - new);
-        }
-        new
-    };
     let centre = 1.0 - 6.0 * r;
     // a row end's outer x side sealed or open ([`row_end`])
     let end_sides = [0, 1].map(|open| OpenSides::new(open, r, cb));
@@ -350,7 +315,7 @@ fn stencil_plane(
                 };
             } else {
                 for q in base + i..base + j {
-                    out[q] = generic(q, code, &mut inflow);
+                    out[q] = generic_cell(planes, q, code, nx, (r, cb), &mut inflow);
                 }
             }
         }
@@ -425,6 +390,54 @@ fn put_row_ends(
     }
     out[q0] = row_end(planes, q0, q0 + 1, nx, r, cb, side0, inflow);
     out[q1] = row_end(planes, q1, q1 - 1, nx, r, cb, side1, inflow);
+}
+
+/// [`stencil_plane`]'s path for an inside cell `q` of the plane with a side that is not
+/// interior, `code` its run's codes (the per-cell arrays are not read), from the old values of
+/// the plane below, the plane and the one above (`planes`): forward Euler for the interior
+/// sides in the order x−, x+, y−, y+, z−, z+, the open ones implicit ([`open_sides_implicit`]);
+/// adds what entered through open faces to `inflow`. A function inlined into the plane's loop
+/// (as a closure it was compiled apart and called per cell).
+#[inline(always)]
+fn generic_cell(
+    (zm, c, zp): (&[f64], &[f64], &[f64]),
+    q: usize,
+    code: [u8; 3],
+    nx: usize,
+    (r, cb): (f64, f64),
+    inflow: &mut f64,
+) -> f64 {
+    let ui = c[q];
+    let mut acc = 0.0;
+    let mut open = 0;
+    for (dir, code) in code.into_iter().enumerate() {
+        let m = code & 3;
+        let p = (code >> 2) & 3;
+        if m == SIDE_INTERIOR {
+            acc += match dir {
+                0 => c[q - 1],
+                1 => c[q - nx],
+                _ => zm[q],
+            } - ui;
+        } else if m == SIDE_OPEN {
+            open += 1;
+        }
+        if p == SIDE_INTERIOR {
+            acc += match dir {
+                0 => c[q + 1],
+                1 => c[q + nx],
+                _ => zp[q],
+            } - ui;
+        } else if p == SIDE_OPEN {
+            open += 1;
+        }
+    }
+    let sides = OpenSides::new(open, r, cb);
+    let new = open_sides_implicit(ui, r * acc, sides);
+    if open > 0 {
+        *inflow += sides.s * (cb - new);
+    }
+    new
 }
 
 /// Both sides of a direction code interior, the cell inside.
