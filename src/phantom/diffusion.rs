@@ -234,9 +234,8 @@ fn stencil_plane(
     let [nx, ny, _] = grid.n;
     let mut inflow = 0.0;
     let centre = 1.0 - 6.0 * r;
-    // a row end's outer x side sealed or open ([`row_end`])
+    // a row end's outer x side sealed or open ([`row_end_pair`])
     let end_sides = [0, 1].map(|open| OpenSides::new(open, r, cb));
-    // the plain stencil over the cells `a..b` of the plane
     let planes = (zm, c, zp);
     let saving = save.is_some();
     let mut j = 0;
@@ -352,7 +351,7 @@ fn plain_span(
 /// which takes one pass of the stencil ([`stencil_plane`]; the rows of a box between its y
 /// faces).
 #[inline(always)]
-fn whole_row(grid: &Grid, k: usize, j: usize, saving: bool) -> Option<[bool; 2]> {
+fn whole_row(grid: &Grid, k: usize, j: usize, saving: bool) -> Option<[EdgeRun; 2]> {
     let [nx, ny, _] = grid.n;
     let row = j + ny * k;
     let whole = nx >= 3
@@ -365,31 +364,32 @@ fn whole_row(grid: &Grid, k: usize, j: usize, saving: bool) -> Option<[bool; 2]>
     }
 }
 
-/// The end cells `q0`, `q1` of a [`row_ends`] row (their outer x sides open or not, `ends`),
-/// put right in `out` after the span's stencil was taken over them ([`row_end`], or
-/// [`row_end_pair`] when the two sides are alike); `end_sides[open]` the sides of one open
-/// side or none.
+/// The end cells `q0`, `q1` of a [`row_ends`] row (`ends` its two runs), put right in `out`
+/// after the span's stencil was taken over them: [`row_end_pair`] when their outer x sides are
+/// alike (`end_sides[open]` the sides of one open side or none), else [`generic_cell`] each.
 #[inline(always)]
 fn put_row_ends(
     planes: (&[f64], &[f64], &[f64]),
     out: &mut [f64],
-    ([q0, q1], [left, right]): ([usize; 2], [bool; 2]),
+    ([q0, q1], [left, right]): ([usize; 2], [EdgeRun; 2]),
     nx: usize,
     (r, cb): (f64, f64),
     end_sides: [OpenSides; 2],
     inflow: &mut f64,
 ) {
-    let (side0, side1) = (
-        (end_sides[usize::from(left)], left),
-        (end_sides[usize::from(right)], right),
-    );
     #[cfg(target_arch = "x86_64")]
-    if left == right {
-        [out[q0], out[q1]] = row_end_pair(planes, [q0, q1], nx, r, cb, side0, inflow);
-        return;
+    {
+        let open = [left.codes[0] & 3, (right.codes[0] >> 2) & 3].map(|side| side == SIDE_OPEN);
+        if open[0] == open[1] {
+            let sides = (end_sides[usize::from(open[0])], open[0]);
+            [out[q0], out[q1]] = row_end_pair(planes, [q0, q1], nx, r, cb, sides, inflow);
+            return;
+        }
     }
-    out[q0] = row_end(planes, q0, q0 + 1, nx, r, cb, side0, inflow);
-    out[q1] = row_end(planes, q1, q1 - 1, nx, r, cb, side1, inflow);
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = end_sides;
+    out[q0] = generic_cell(planes, q0, left.codes, nx, (r, cb), inflow);
+    out[q1] = generic_cell(planes, q1, right.codes, nx, (r, cb), inflow);
 }
 
 /// [`stencil_plane`]'s path for an inside cell `q` of the plane with a side that is not
@@ -445,13 +445,13 @@ const BOTH_INTERIOR: u8 = SIDE_INTERIOR | (SIDE_INTERIOR << 2) | INSIDE_BIT;
 
 /// Whether a row's cells outside its interior span `i0..i1` ([`Grid::edge_runs`] `runs`) are one
 /// cell at each end of it, i0 − 1 and i1, each with every side interior but its outer x one:
-/// then, per end, whether that side is open (else it is sealed). Such a row has a row of the
+/// then those two runs (the outer x side open or sealed). Such a row has a row of the
 /// plane on both sides and planes above and below (those sides are interior), so the span's
 /// stencil can be taken over its ends ([`stencil_plane`]). Every row of a box but those along
 /// its y and z faces is one, and most of a cylinder's.
 #[inline(always)]
-fn row_ends(runs: &[EdgeRun], i0: usize, i1: usize) -> Option<[bool; 2]> {
-    let [l, r] = runs else { return None };
+fn row_ends(runs: &[EdgeRun], i0: usize, i1: usize) -> Option<[EdgeRun; 2]> {
+    let &[l, r] = runs else { return None };
     let fits = i0 < i1
         && (l.start as usize, l.end as usize) == (i0 - 1, i0)
         && (r.start as usize, r.end as usize) == (i1, i1 + 1)
@@ -459,50 +459,14 @@ fn row_ends(runs: &[EdgeRun], i0: usize, i1: usize) -> Option<[bool; 2]> {
         && r.codes[1..] == [BOTH_INTERIOR; 2]
         && (l.codes[0] >> 2) & 3 == SIDE_INTERIOR
         && r.codes[0] & 3 == SIDE_INTERIOR;
-    fits.then(|| {
-        [
-            l.codes[0] & 3 == SIDE_OPEN,
-            (r.codes[0] >> 2) & 3 == SIDE_OPEN,
-        ]
-    })
+    fits.then_some([l, r])
 }
 
-/// The new value of an end cell `q` of a [`row_ends`] row, its inner x neighbour `inner`, its
-/// outer x side open or sealed (`open`, and `sides` for one open side or none), from the old values of the plane below, the
-/// plane and the one above (`planes`): the generic cell's terms in its order (the x side, y−,
-/// y+, z−, z+; the open side implicit, [`open_sides_implicit`]), so the same bits; adds what
-/// entered through the open side to `inflow`.
-#[inline(always)]
-#[allow(clippy::too_many_arguments)]
-fn row_end(
-    (zm, c, zp): (&[f64], &[f64], &[f64]),
-    q: usize,
-    inner: usize,
-    nx: usize,
-    r: f64,
-    cb: f64,
-    (sides, open): (OpenSides, bool),
-    inflow: &mut f64,
-) -> f64 {
-    let ui = c[q];
-    let mut acc = 0.0;
-    acc += c[inner] - ui;
-    acc += c[q - nx] - ui;
-    acc += c[q + nx] - ui;
-    acc += zm[q] - ui;
-    acc += zp[q] - ui;
-    let new = open_sides_implicit(ui, r * acc, sides);
-    if open {
-        *inflow += sides.s * (cb - new);
-    }
-    new
-}
-
-/// Both ends `[q0, q1]` of a [`row_ends`] row whose outer x sides are alike (`open`, `sides`
-/// as [`row_end`]'s), side by side in the two lanes of an SSE2 vector: each lane [`row_end`]'s
-/// operations in its order, so its bits, with one division for the two (the ends' divisions
-/// were the longest wait of the explicit kernel's rows); their inflows added to `inflow` in
-/// the order q0, q1.
+/// Both ends `[q0, q1]` of a [`row_ends`] row whose outer x sides are alike (open when `open`,
+/// `sides` those of one open side, else sealed and no side), side by side in the two lanes of an
+/// SSE2 vector: each lane [`generic_cell`]'s operations for such a cell in its order (the inner
+/// x side, y−, y+, z−, z+, then the open side implicit), so its bits, with one division for the
+/// two; their inflows added to `inflow` in the order q0, q1.
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
 fn row_end_pair(

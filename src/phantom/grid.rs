@@ -93,9 +93,9 @@ pub const INSIDE_BIT: u8 = 16;
 
 /// A run of neighbouring inside cells [start, end) of one x-row that share their face codes
 /// ([`Grid::edge_runs`]), with those codes (x, y, z; as [`Grid::codes`]). The explicit kernel
-/// reads a run's codes here, not from the per-cell arrays: those reads touched three cache lines
-/// per run (on the small cube's rows, whose runs are the two x-face cells, 1.4 MB of code lines
-/// per field and step beside the field's 1.7 MB).
+/// and the step-limit scans read a run's codes here, not from the per-cell arrays (three cache
+/// lines per run; on its own no measurable change, README "Speed", session 22), and the kernel's
+/// row ends are recognised from them (`diffusion::row_ends`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct EdgeRun {
     /// First cell, as a position along the row.
@@ -216,8 +216,8 @@ pub struct Grid {
     changes_from: u64,
 }
 
-/// One z-plane's rows in [`Grid::new`]: per row its interior span, its inside extent and its
-/// edge runs, one after the other in one list, and each row's count of runs.
+/// One z-plane's rows in [`Grid::new`]: per row its interior span and inside extent; the rows'
+/// edge runs one after the other in one list; and each row's count of runs.
 type PlaneRows = (Vec<((u32, u32), (u32, u32))>, Vec<EdgeRun>, Vec<u32>);
 
 /// Most changes a grid's log keeps ([`Grid::changed_since`]).
