@@ -716,7 +716,7 @@ pub fn explicit_steps_in_place(
 /// each going up all its planes in one block (no halo), the same bits. For as many fields as
 /// threads (`sim` chooses it then): each core streams its own field once, in place, with no
 /// fork and join per plane. Against the plane-parallel steps on the 2-core Intel machine (26
-/// Nov 2026, README "Speed", session 21, alternated): the lone small run −5 %, Fig. 5 −2 to −4 %.
+/// Nov 2026, docs/speed-history.md, session 21, alternated): the lone small run −5 %, Fig. 5 −2 to −4 %.
 pub fn explicit_steps_in_place_per_field(
     grid: &Grid,
     fields: &mut [&mut [f64]],
@@ -2548,7 +2548,7 @@ fn sweep_xy(
 /// The z sweep, columns in chunks (in parallel) small enough that a chunk's nz planes stay
 /// in the core's L2 cache between the forward and the backward pass (a quarter of a 2 MiB L2:
 /// on the Fig. 5 cylinder 1 136 columns, 9 KiB per plane; half that was 2 % slower on the
-/// dive, README "Speed", session 19).
+/// dive, docs/speed-history.md, session 19).
 fn sweep_z(grid: &Grid, plan: &LinePlan, table: &Tables, u: &mut [f64], isa: Isa) {
     let [nx, ny, nz] = grid.n;
     let plane = nx * ny;

@@ -94,7 +94,7 @@ pub const INSIDE_BIT: u8 = 16;
 /// A run of neighbouring inside cells [start, end) of one x-row that share their face codes
 /// ([`Grid::edge_runs`]), with those codes (x, y, z; as [`Grid::codes`]). The explicit kernel
 /// and the step-limit scans read a run's codes here, not from the per-cell arrays (three cache
-/// lines per run; on its own no measurable change, README "Speed", session 22), and the kernel's
+/// lines per run; on its own no measurable change, docs/speed-history.md, session 22), and the kernel's
 /// row ends are recognised from them (`diffusion::row_ends`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct EdgeRun {

@@ -26,7 +26,7 @@ use std::time::{Duration, Instant};
 /// Longest a spinner keeps its worker from sleeping. Serial phases longer than this (a frame's
 /// pass over the gel, a displacement on a big grid) let the worker sleep as before; the limit
 /// bounds the CPU time a long serial phase can waste on every other thread. 2 and 5 ms were
-/// within 1–2 % of this on the Fig. 5 dive (README, "Speed", session 20).
+/// within 1–2 % of this on the Fig. 5 dive (docs/speed-history.md, session 20).
 pub const SPIN_LIMIT: Duration = Duration::from_micros(500);
 
 thread_local! {

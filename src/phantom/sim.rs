@@ -52,9 +52,9 @@ const SPHERE_CACHE: usize = 16;
 /// than one thread; other runs step in place. Since session 21 (26 Nov 2026) a run with as
 /// many gases as threads steps a thread per field in place instead
 /// ([`diffusion::explicit_steps_in_place_per_field`]: the small cube −5 %, Fig. 5 −2 to −4 %,
-/// README "Speed"), except for the steps that end at a frame with the gel's state, which stay
+/// docs/speed-history.md), except for the steps that end at a frame with the gel's state, which stay
 /// out of place here to pass the gel while its planes are in cache. Measured on the 2-core Intel machine of
-/// 25 Nov 2026, alternated with in-place steps (README, "Speed"): the oscillation experiment
+/// 25 Nov 2026, alternated with in-place steps (docs/speed-history.md): the oscillation experiment
 /// (8.4 MB of fields) 0.91–0.94 s against 0.99–1.04 s; the Fig. 5 dive (15 MB) 5.55–5.78 s
 /// against 5.65–5.68 s, nothing for 12 MB more memory, so it stays in place; a small run on
 /// one thread, as `fit` runs it, was 10–20 % slower out of place (four fields of 1.7 MB no
