@@ -47,6 +47,7 @@
 
 use super::bubble::{Bubble, BubbleFate};
 use super::displacement::Displaced;
+use super::fields::Fields;
 use super::grid::Face;
 use super::params::PhantomParams;
 use super::sim::{
@@ -267,7 +268,7 @@ impl RunState {
     pub(super) fn capture(sim: &Simulation, looping: LoopState) -> RunState {
         RunState {
             time: sim.time,
-            fields: sim.fields.clone(),
+            fields: sim.fields.to_vecs(),
             bubbles: sim.bubbles.clone(),
             inflow: sim.inflow,
             initial_total: sim.initial_total,
@@ -371,7 +372,7 @@ impl RunState {
         nuclei.restore_crushing(&self.crushing)?;
         sim.nuclei = nuclei;
         sim.time = self.time;
-        sim.fields = self.fields;
+        sim.fields = Fields::new(self.fields, sim.grid.n[0] * sim.grid.n[1]);
         sim.tension_bound = None;
         sim.bubbles = self.bubbles;
         sim.inflow = self.inflow;

@@ -737,6 +737,115 @@ pub fn explicit_steps_in_place_per_field(
         });
 }
 
+/// [`explicit_steps_in_place_per_field`] without the copy of each plane's old values: the
+/// same bits, each field moved by two planes in its store (session 24; the copy was 11–16 % of
+/// the small cube's explicit step, docs/speed-history.md). `stores[f]` holds nz + 2 planes with
+/// field f in planes `from..from + nz` (`from` = 0 or 2, the same for every field). From 2
+/// the step goes up the planes and writes plane k's new values into store plane k; from 0 it
+/// goes down and writes them into store plane k + 2. Either way the store plane written held a
+/// plane whose old values no later plane reads, and the three it reads are not written before.
+/// The inside cells are written, and in a plane with cells taken out by bubbles every other
+/// cell is set to 0; the cells outside the phantom's shape (the same in every plane: shapes are
+/// prisms along z) keep what that store plane held, 0 when every field is 0 outside the gel
+/// ([`super::fields`]). Returns where the fields now start (2 − `from`).
+pub fn explicit_steps_shifting_per_field(
+    grid: &Grid,
+    stores: &mut [&mut [f64]],
+    from: usize,
+    dc: &[(f64, f64)],
+    dt: f64,
+    inflow: &mut [f64],
+) -> usize {
+    assert!(dc.len() == stores.len() && inflow.len() == stores.len());
+    assert!(from == 0 || from == 2, "fields start at store plane 0 or 2");
+    let [nx, ny, nz] = grid.n;
+    let plane = nx * ny;
+    assert!(stores.iter().all(|s| s.len() == (nz + 2) * plane));
+    let isa = Isa::detect();
+    let h2 = grid.h * grid.h;
+    stores
+        .par_iter_mut()
+        .zip(dc.par_iter())
+        .zip(inflow.par_iter_mut())
+        .for_each(|((store, &(d, cb)), inflow)| {
+            let mut flows = vec![0.0; nz];
+            step_shifting(grid, store, from == 2, d * dt / h2, cb, &mut flows, isa);
+            // in plane order, as `sum_planes`
+            *inflow = 0.0;
+            for x in flows {
+                *inflow += x;
+            }
+        });
+    2 - from
+}
+
+/// One field's step of [`explicit_steps_shifting_per_field`]: `up` from store planes 2.. to
+/// 0.., else from 0.. to 2..; plane k's inflow into `flows[k]`.
+fn step_shifting(
+    grid: &Grid,
+    store: &mut [f64],
+    up: bool,
+    r: f64,
+    cb: f64,
+    flows: &mut [f64],
+    isa: Isa,
+) {
+    let [nx, ny, nz] = grid.n;
+    let plane = nx * ny;
+    let empty: &[f64] = &[];
+    if up {
+        // old plane k in store plane k + 2, new into store plane k (which held old k − 2)
+        for k in 0..nz {
+            let (lo, hi) = store.split_at_mut((k + 1) * plane);
+            let out = &mut lo[k * plane..];
+            let zm = if k > 0 { &hi[..plane] } else { empty };
+            let c = &hi[plane..2 * plane];
+            let zp = if k + 1 < nz {
+                &hi[2 * plane..3 * plane]
+            } else {
+                empty
+            };
+            flows[k] = stencil_plane(grid, k, zm, c, zp, out, r, cb, isa, None);
+            zero_excluded(grid, k, out);
+        }
+    } else {
+        // old plane k in store plane k, new into store plane k + 2 (which held old k + 2)
+        for k in (0..nz).rev() {
+            let (lo, hi) = store.split_at_mut((k + 2) * plane);
+            let out = &mut hi[..plane];
+            let zm = if k > 0 {
+                &lo[(k - 1) * plane..k * plane]
+            } else {
+                empty
+            };
+            let c = &lo[k * plane..(k + 1) * plane];
+            let zp = if k + 1 < nz {
+                &lo[(k + 1) * plane..(k + 2) * plane]
+            } else {
+                empty
+            };
+            flows[k] = stencil_plane(grid, k, zm, c, zp, out, r, cb, isa, None);
+            zero_excluded(grid, k, out);
+        }
+    }
+}
+
+/// The cells of plane `k` that bubbles took out of the gel set to 0 in `out` (the plane's new
+/// values in a store plane that held another plane, where those cells may have been inside):
+/// every cell not inside, when the plane has any such cell ([`Grid::plane_has_excluded`]).
+fn zero_excluded(grid: &Grid, k: usize, out: &mut [f64]) {
+    if !grid.plane_has_excluded(k) {
+        return;
+    }
+    let plane = grid.n[0] * grid.n[1];
+    let codes = &grid.codes[0][k * plane..(k + 1) * plane];
+    for (o, &c) in out[..plane].iter_mut().zip(codes) {
+        if c & INSIDE_BIT == 0 {
+            *o = 0.0;
+        }
+    }
+}
+
 /// [`explicit_steps_in_place`] out of place: field `f`'s step from `src[f]` into `dst[f]`
 /// (the same bits; only the inside cells of `dst` are written), in one parallel pass over
 /// z-planes, each plane stepping every field in turn.
@@ -3661,6 +3770,89 @@ mod planned_tests {
                 g.n, g.open
             );
             assert_eq!(scans.weight_sum, weights, "{:?} open {:?}", g.n, g.open);
+        }
+    }
+
+    /// [`explicit_steps_shifting_per_field`] (a thread per field, each moved by two planes in
+    /// its store) against each field stepped alone out of place by [`explicit_step`]: the same
+    /// bits in every inside cell, 0 in every other (the fields start 0 outside the gel, as a
+    /// simulation's are, [`super::super::fields`]), the same inflows; 1–3 fields on 1–3
+    /// threads, in a cylinder with cells taken out and in an open box, over five steps (both
+    /// directions, twice, and once more), and a swap of the stores in between as the out-of-place
+    /// steps make.
+    #[test]
+    fn shifting_per_field_explicit_steps_are_each_fields_bits() {
+        use super::super::fields::Fields;
+        let dc = [(2.5e-9, 1.5), (1e-9, 0.2), (8e-9, 0.0)];
+        for g in [cylinder_with_hole(), boxed([13, 9, 7], all_box_faces())] {
+            let dt = 0.9 * explicit_limit(&g, 8e-9);
+            let plane = g.n[0] * g.n[1];
+            for nf in 1..=3 {
+                for threads in [1, 2, 3] {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .unwrap();
+                    let mut alone: Vec<Vec<f64>> = (0..nf)
+                        .map(|f| {
+                            (0..g.len())
+                                .map(|i| {
+                                    let v = ((i * 7919 + 13 * f + 5) % 101) as f64 / 100.0;
+                                    if g.inside(i) {
+                                        v
+                                    } else {
+                                        0.0
+                                    }
+                                })
+                                .collect()
+                        })
+                        .collect();
+                    let mut fields = Fields::new(alone.clone(), plane);
+                    for step in 0..5 {
+                        let want: Vec<f64> = (0..nf)
+                            .map(|f| {
+                                let mut out = alone[f].clone();
+                                let x =
+                                    explicit_step(&g, &alone[f], &mut out, dc[f].0, dt, dc[f].1);
+                                alone[f] = out;
+                                x
+                            })
+                            .collect();
+                        let mut got = vec![0.0; nf];
+                        let from = fields.offset_planes();
+                        let to = pool.install(|| {
+                            let (mut stores, from) = fields.stores_for_shift();
+                            explicit_steps_shifting_per_field(
+                                &g,
+                                &mut stores,
+                                from,
+                                &dc[..nf],
+                                dt,
+                                &mut got,
+                            )
+                        });
+                        assert_eq!(to, 2 - from);
+                        fields.shifted(to);
+                        for f in 0..nf {
+                            assert_eq!(want[f].to_bits(), got[f].to_bits(), "field {f}: inflow");
+                            for i in 0..g.len() {
+                                assert_eq!(
+                                    alone[f][i].to_bits(),
+                                    fields[f][i].to_bits(),
+                                    "{nf} fields, {threads} threads, step {step}, field {f}, cell {i}"
+                                );
+                            }
+                        }
+                        if step == 2 {
+                            // the stores swapped for copies of the views, as an out-of-place step
+                            // leaves them (the views from the stores' start)
+                            let mut back = fields.to_vecs();
+                            fields.swap_stores(&mut back);
+                            assert_eq!(fields.offset_planes(), 0);
+                        }
+                    }
+                }
+            }
         }
     }
 

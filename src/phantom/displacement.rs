@@ -87,9 +87,9 @@ pub fn covered_cells(grid: &Grid, centre: [f64; 3], r: f64) -> Vec<usize> {
 /// (cell, value per field in field order), per z-plane in plane order (each plane's list
 /// built by one task: no copy into one list); the caller writes it after updating which cells
 /// the bubble holds.
-pub fn remap(
+pub fn remap<F: AsRef<[f64]> + Sync>(
     grid: &Grid,
-    fields: &[Vec<f64>],
+    fields: &[F],
     wall: &[f64],
     centre: [f64; 3],
     r_old: f64,
@@ -127,7 +127,7 @@ pub fn remap(
                     let mut values = [0.0; Gas::ALL.len()];
                     let mut here = [0.0; Gas::ALL.len()];
                     for (h, f) in here.iter_mut().zip(fields) {
-                        *h = f[idx];
+                        *h = f.as_ref()[idx];
                     }
                     let ng = fields.len();
                     interpolate_gases(grid, fields, from, wall, &here[..ng], &mut values[..ng]);
@@ -145,9 +145,9 @@ pub fn remap(
 /// the field from farther out, and every displacement would then pull the wall layer toward
 /// the far field — measured: dissolution of a bubble of R0 = 4h 1.6 % early). Corners outside
 /// the phantom are dropped and the weights renormalised; `fallback[g]` if none is left.
-pub fn interpolate_gases(
+pub fn interpolate_gases<F: AsRef<[f64]>>(
     grid: &Grid,
-    fields: &[Vec<f64>],
+    fields: &[F],
     p: [f64; 3],
     wall: &[f64],
     fallback: &[f64],
@@ -156,7 +156,7 @@ pub fn interpolate_gases(
     grid.interpolate_many(p, fallback, out, |idx, v| {
         if grid.inside(idx) {
             for (v, f) in v.iter_mut().zip(fields) {
-                *v = f[idx];
+                *v = f.as_ref()[idx];
             }
             true
         } else if grid.is_excluded(idx) {

@@ -45,9 +45,9 @@ pub(super) fn same_plane_gel(a: &PlaneGel, b: &PlaneGel, ng: usize) -> bool {
 }
 
 /// [`PlaneGel`] of z-plane `kz` of the first `ng` fields, with `k[g]` = R_u·T/L_g.
-pub(super) fn plane_gel(
+pub(super) fn plane_gel<F: AsRef<[f64]>>(
     grid: &Grid,
-    fields: &[Vec<f64>],
+    fields: &[F],
     k: &[f64; Gas::ALL.len()],
     kz: usize,
 ) -> PlaneGel {
@@ -138,15 +138,15 @@ impl Lanes {
 }
 
 /// Plane `kz`'s codes and fields.
-fn plane_slices<'a>(
+fn plane_slices<'a, F: AsRef<[f64]>>(
     grid: &'a Grid,
-    fields: &'a [Vec<f64>],
+    fields: &'a [F],
     kz: usize,
 ) -> (&'a [u8], Vec<&'a [f64]>) {
     let plane = grid.n[0] * grid.n[1];
     let z = kz * plane;
     let codes = &grid.codes[0][z..z + plane];
-    let f = fields.iter().map(|f| &f[z..z + plane]).collect();
+    let f = fields.iter().map(|f| &f.as_ref()[z..z + plane]).collect();
     (codes, f)
 }
 

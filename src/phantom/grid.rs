@@ -546,6 +546,25 @@ impl Grid {
         cells
     }
 
+    /// Whether any cell of z-plane `k` is taken out of the gel by a bubble (a scan of the
+    /// plane's words of the exclusion bits: a few hundred words on the Fig. 5 grid).
+    pub fn plane_has_excluded(&self, k: usize) -> bool {
+        let plane = self.n[0] * self.n[1];
+        let (a, b) = (k * plane, (k + 1) * plane);
+        let (wa, wb) = (a / 64, b.div_ceil(64).min(self.excluded.len()));
+        (wa..wb).any(|w| {
+            let mut word = self.excluded[w];
+            // the bits of the word that belong to the plane
+            if w == a / 64 {
+                word &= u64::MAX << (a % 64);
+            }
+            if w == b / 64 && b % 64 != 0 {
+                word &= u64::MAX >> (64 - b % 64);
+            }
+            word != 0
+        })
+    }
+
     /// Whether cell `idx` is taken out of the gel by a bubble.
     #[inline]
     pub fn is_excluded(&self, idx: usize) -> bool {
@@ -1043,6 +1062,43 @@ impl Grid {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `plane_has_excluded` against a scan of every cell's `is_excluded`, for planes whose
+    /// cells start and end inside a word of the bits (7 × 5 = 35 cells a plane) and one cell
+    /// taken at a time at each end of a plane and in its middle.
+    #[test]
+    fn plane_has_excluded_is_a_scan_of_the_planes_cells() {
+        let open = [Face::Top];
+        let mut g = Grid::new(
+            Shape::Box {
+                size: [7e-4, 5e-4, 9e-4],
+            },
+            1e-4,
+            &open,
+        )
+        .unwrap();
+        let plane = 35;
+        let scan = |g: &Grid, k: usize| (k * plane..(k + 1) * plane).any(|i| g.is_excluded(i));
+        assert!((0..9).all(|k| !g.plane_has_excluded(k)));
+        for k in 0..9 {
+            for q in [0, 17, plane - 1] {
+                let idx = k * plane + q;
+                if g.has_open_side(idx) {
+                    continue;
+                }
+                g.set_excluded(&[idx], true);
+                for kk in 0..9 {
+                    assert_eq!(
+                        g.plane_has_excluded(kk),
+                        scan(&g, kk),
+                        "cell {idx}, plane {kk}"
+                    );
+                }
+                assert!(g.plane_has_excluded(k));
+                g.set_excluded(&[idx], false);
+            }
+        }
+    }
 
     proptest::proptest! {
         /// `row_within` keeps every cell of the box whose centre is within `a` of `p` (the

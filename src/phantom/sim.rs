@@ -23,6 +23,7 @@
 use super::bubble::{Balance, Bubble, BubbleFate};
 use super::diffusion;
 use super::displacement::{self, Displaced};
+use super::fields::Fields;
 use super::gel_pass::{plane_gel, same_plane_gel, PlaneGel};
 use super::grid::{Face, Grid, KernelCache};
 use super::nucleation::{Nucleus, NucleusPool};
@@ -423,7 +424,7 @@ pub struct Simulation<'a> {
     /// [`diffusion::LimitScans::implicit_cost_unit`] (the smallest over the gases); a step between the
     /// explicit limit and this is cut to the limit.
     implicit_threshold: f64,
-    pub(super) fields: Vec<Vec<f64>>,
+    pub(super) fields: Fields,
     /// The field before the step, for the field's error estimate (allocated when that is on).
     scratch: Vec<f64>,
     /// The explicit steps' second set of fields (one per gas) when stepped out of place
@@ -577,6 +578,7 @@ impl<'a> Simulation<'a> {
                     .collect()
             })
             .collect();
+        let fields = Fields::new(fields, grid.n[0] * grid.n[1]);
         let p0 = profile.ambient(0.0);
         let placements = place_bubbles(params, &grid)?;
         let partial: Vec<f64> = gases
@@ -798,14 +800,14 @@ impl<'a> Simulation<'a> {
     /// coupling sphere, from inside cells only (`fallback` where none is about it).
     #[inline(always)]
     fn sphere_point(&self, c: [f64; 3], rho: f64, u: [f64; 3], fallback: &[f64], out: &mut [f64]) {
-        let (grid, fields) = (&self.grid, &self.fields[..out.len()]);
+        let (grid, fields) = (&self.grid, &self.fields);
         let p = [c[0] + rho * u[0], c[1] + rho * u[1], c[2] + rho * u[2]];
         grid.interpolate_many(p, fallback, out, |idx, v| {
             if !grid.inside(idx) {
                 return false;
             }
-            for (v, f) in v.iter_mut().zip(fields) {
-                *v = f[idx];
+            for (g, v) in v.iter_mut().enumerate() {
+                *v = fields[g][idx];
             }
             true
         });
@@ -1710,7 +1712,7 @@ impl<'a> Simulation<'a> {
                     .collect();
                 displacement::remap(
                     &self.grid,
-                    &self.fields,
+                    &self.fields.slices(),
                     &wall,
                     centre,
                     st.radius,
@@ -1893,20 +1895,33 @@ impl<'a> Simulation<'a> {
             let pass_gel = self.pass_gel_next && self.params.numerics.record_gel;
             if !implicit && out_of_place && (pass_gel || !per_field) {
                 self.explicit_steps_out_of_place(&dc[..ng], dt, &mut inflow[..ng]);
+            } else if !implicit && per_field {
+                // a thread per field, each moved by two planes in its store instead of copying
+                // a plane per plane (`diffusion::explicit_steps_shifting_per_field`)
+                self.per_field_steps += 1;
+                let (mut stores, from) = self.fields.stores_for_shift();
+                let to = diffusion::explicit_steps_shifting_per_field(
+                    &self.grid,
+                    &mut stores,
+                    from,
+                    &dc[..ng],
+                    dt,
+                    &mut inflow[..ng],
+                );
+                self.fields.shifted(to);
             } else {
-                let mut fields: Vec<&mut [f64]> =
-                    self.fields.iter_mut().map(|f| f.as_mut_slice()).collect();
+                let mut fields = self.fields.slices_mut();
                 if implicit {
                     self.implicit
                         .steps(&self.grid, &mut fields, &dc[..ng], dt, &mut inflow[..ng]);
                 } else {
-                    let step = if per_field {
-                        self.per_field_steps += 1;
-                        diffusion::explicit_steps_in_place_per_field
-                    } else {
-                        diffusion::explicit_steps_in_place
-                    };
-                    step(&self.grid, &mut fields, &dc[..ng], dt, &mut inflow[..ng]);
+                    diffusion::explicit_steps_in_place(
+                        &self.grid,
+                        &mut fields,
+                        &dc[..ng],
+                        dt,
+                        &mut inflow[..ng],
+                    );
                 }
             }
             for (g, x) in inflow[..ng].iter().enumerate() {
@@ -1993,8 +2008,9 @@ impl<'a> Simulation<'a> {
             self.back_codes = id;
         }
         {
-            let src: Vec<&[f64]> = self.fields.iter().map(|f| f.as_slice()).collect();
-            let mut dst: Vec<&mut [f64]> = self.back.iter_mut().map(|f| f.as_mut_slice()).collect();
+            let src = self.fields.slices();
+            let cells = self.grid.len();
+            let mut dst: Vec<&mut [f64]> = self.back.iter_mut().map(|f| &mut f[..cells]).collect();
             if pass_gel {
                 self.gel_planes.resize(self.grid.n[2], PlaneGel::default());
                 diffusion::explicit_steps_into_passing_gel(
@@ -2010,7 +2026,7 @@ impl<'a> Simulation<'a> {
                 diffusion::explicit_steps_into(&self.grid, &src, &mut dst, dc, dt, inflow);
             }
         }
-        std::mem::swap(&mut self.fields, &mut self.back);
+        self.fields.swap_stores(&mut self.back);
         if pass_gel {
             self.gel_fresh = true;
             self.gel_dirty = (usize::MAX, 0);
@@ -2165,7 +2181,7 @@ impl<'a> Simulation<'a> {
 
     /// Health: no non-finite concentration (sampled every 97th cell; every 8th step).
     fn check_health(&self) -> Result<(), Error> {
-        for f in &self.fields {
+        for f in self.fields.iter() {
             if f.iter().step_by(97).any(|x| !x.is_finite()) {
                 return Err(Error::Solver(format!(
                     "non-finite concentration at t = {:.3} s",
@@ -2352,7 +2368,8 @@ impl<'a> Simulation<'a> {
         let ng = self.fields.len();
         let k = self.gel_factors();
         let nz = self.grid.n[2];
-        let pass = |kz: usize| plane_gel(&self.grid, &self.fields, &k, kz);
+        let fields = self.fields.slices();
+        let pass = |kz: usize| plane_gel(&self.grid, &fields, &k, kz);
         let planes: Vec<PlaneGel> = if self.gel_fresh && self.gel_planes.len() == nz {
             // the last step's pass, with the planes written since passed again
             let (lo, hi) = self.gel_dirty;
@@ -2865,7 +2882,7 @@ mod field_error_tests {
             let tol = 0.0; // always filtered
             let (imp1, _) = sim.diffuse(&profile, t0, dt1, tol, false);
             assert!(imp1);
-            let start = sim.fields[0].clone();
+            let start = sim.fields[0].to_vec();
             let (imp2, est) = sim.diffuse(&profile, t0 + dt1, dt2, tol, false);
             assert!(imp2);
             // reference from the same start
@@ -3075,7 +3092,7 @@ mod extrapolated_step_tests {
         for (i, c) in sim.fields[0].iter_mut().enumerate() {
             *c = init(i);
         }
-        let start = sim.fields[0].clone();
+        let start = sim.fields[0].to_vec();
         let cb = |s: f64| 0.014 * profile.inspired_partial_pressure(Gas::N2, s) / sim.rt;
         let (cb_half, cb_end) = (cb(0.5 * dt), cb(dt));
         let before = sim.inflow;
@@ -3095,7 +3112,7 @@ mod extrapolated_step_tests {
             (total1 - total0 - flow).abs() <= 1e-12 * total1.abs(),
             "{total1} {total0} {flow}"
         );
-        (sim.fields[0].clone(), flow, half, whole, total0)
+        (sim.fields[0].to_vec(), flow, half, whole, total0)
     }
 
     /// A smooth start: the step is 2·(two half steps) − (one whole step), cell by cell.
@@ -3173,7 +3190,7 @@ mod out_of_place_tests {
                     !out_of_place,
                     "{out_of_place} {per_field}"
                 );
-                (summary, rec.frames, sim.fields.clone(), sim.grid.clone())
+                (summary, rec.frames, sim.fields.to_vecs(), sim.grid.clone())
             };
             let (ps, inplace, pf, grid) = run(false, false);
             assert!(ps.steps.0 > 20, "{:?}", ps.steps);
