@@ -94,7 +94,7 @@ impl Fields {
     /// The whole stores, each grown to two planes more than the grid (new planes zero), and
     /// the views' offset in planes, for a shifting step; [`Self::shifted`] then sets the new
     /// offset.
-    pub(super) fn stores_for_shift(&mut self) -> (Vec<&mut [f64]>, usize) {
+    pub fn stores_for_shift(&mut self) -> (Vec<&mut [f64]>, usize) {
         let len = self.cells + 2 * self.plane;
         for f in &mut self.store {
             if f.len() < len {
@@ -106,7 +106,7 @@ impl Fields {
     }
 
     /// After a shifting step: the views start at plane `offset` (0 or 2).
-    pub(super) fn shifted(&mut self, offset: usize) {
+    pub fn shifted(&mut self, offset: usize) {
         assert!(offset == 0 || offset == 2, "a shift of 0 or 2 planes");
         self.offset = offset;
     }

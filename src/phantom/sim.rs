@@ -53,7 +53,8 @@ const SPHERE_CACHE: usize = 16;
 /// than one thread; other runs step in place. Since session 21 (26 Nov 2026) a run with as
 /// many gases as threads steps a thread per field in place instead
 /// ([`diffusion::explicit_steps_in_place_per_field`]: the small cube −5 %, Fig. 5 −2 to −4 %,
-/// docs/speed-history.md), except for the steps that end at a frame with the gel's state, which stay
+/// docs/speed-history.md; since session 24 without its plane copy,
+/// [`diffusion::explicit_steps_shifting_per_field`]), except for the steps that end at a frame with the gel's state, which stay
 /// out of place here to pass the gel while its planes are in cache. Measured on the 2-core Intel machine of
 /// 25 Nov 2026, alternated with in-place steps (docs/speed-history.md): the oscillation experiment
 /// (8.4 MB of fields) 0.91–0.94 s against 0.99–1.04 s; the Fig. 5 dive (15 MB) 5.55–5.78 s
@@ -436,7 +437,7 @@ pub struct Simulation<'a> {
     /// [`OUT_OF_PLACE_BYTES`] (a field so that a test can step in place).
     out_of_place_bytes: usize,
     /// Whether the explicit steps take a thread per field when there are as many gases as
-    /// threads and no gel pass is due ([`diffusion::explicit_steps_in_place_per_field`]; a test
+    /// threads and no gel pass is due ([`diffusion::explicit_steps_shifting_per_field`]; a test
     /// turns it off to compare).
     per_field: bool,
     /// Explicit steps taken a thread per field (a test's check that the path is taken).
@@ -1887,7 +1888,7 @@ impl<'a> Simulation<'a> {
             let threads = rayon::current_num_threads();
             let out_of_place = self.fields_bytes() <= self.out_of_place_bytes && threads > 1;
             // as many gases as threads: a thread per field
-            // (`diffusion::explicit_steps_in_place_per_field`), unless the step passes the gel
+            // (`diffusion::explicit_steps_shifting_per_field`), unless the step passes the gel
             // for one of the frames that carry it (out of place, on grids up to
             // `OUT_OF_PLACE_BYTES`); without `record_gel` only the last frame does, and a pass
             // of its own costs less than the second set of fields
