@@ -1887,12 +1887,13 @@ impl<'a> Simulation<'a> {
             let mut inflow = [0.0; Gas::ALL.len()];
             let threads = rayon::current_num_threads();
             let out_of_place = self.fields_bytes() <= self.out_of_place_bytes && threads > 1;
-            // as many gases as threads: a thread per field
-            // (`diffusion::explicit_steps_shifting_per_field`), unless the step passes the gel
+            // as many gases as threads: a thread per field, and on one thread the fields one
+            // after the other, each moved by two planes instead of copying a plane per plane
+            // (`diffusion::explicit_steps_shifting_per_field`); unless the step passes the gel
             // for one of the frames that carry it (out of place, on grids up to
-            // `OUT_OF_PLACE_BYTES`); without `record_gel` only the last frame does, and a pass
-            // of its own costs less than the second set of fields
-            let per_field = self.per_field && ng > 1 && ng == threads;
+            // `OUT_OF_PLACE_BYTES`, two or more threads); without `record_gel` only the last
+            // frame does, and a pass of its own costs less than the second set of fields
+            let per_field = self.per_field && (ng > 1 && ng == threads || threads == 1);
             let pass_gel = self.pass_gel_next && self.params.numerics.record_gel;
             if !implicit && out_of_place && (pass_gel || !per_field) {
                 self.explicit_steps_out_of_place(&dc[..ng], dt, &mut inflow[..ng]);
