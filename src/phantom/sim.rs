@@ -786,8 +786,9 @@ impl<'a> Simulation<'a> {
         let ng = out.len();
         let mut sum = [0.0; Gas::ALL.len()];
         let mut at = [0.0; Gas::ALL.len()];
+        let fields = self.field_views();
         for &u in sphere {
-            self.sphere_point(c, rho, u, fallback, &mut at[..ng]);
+            self.sphere_point(&fields, c, rho, u, fallback, &mut at[..ng]);
             for (s, a) in sum.iter_mut().zip(&at[..ng]) {
                 *s += a;
             }
@@ -797,18 +798,37 @@ impl<'a> Simulation<'a> {
         }
     }
 
-    /// Every gas's field (`out.len()` of them) interpolated at the point `c + rho·u` of a
-    /// coupling sphere, from inside cells only (`fallback` where none is about it).
+    /// Every gas's field view ([`Fields`]), the unused entries empty: taken once per sphere,
+    /// not per sample (a view is an offset and a bounds check).
+    fn field_views(&self) -> [&[f64]; Gas::ALL.len()] {
+        let mut v: [&[f64]; Gas::ALL.len()] = [&[]; Gas::ALL.len()];
+        for (v, f) in v.iter_mut().zip(self.fields.iter()) {
+            *v = f;
+        }
+        v
+    }
+
+    /// Every gas's field (`out.len()` of them; `fields` from [`Self::field_views`])
+    /// interpolated at the point `c + rho·u` of a coupling sphere, from inside cells only
+    /// (`fallback` where none is about it).
     #[inline(always)]
-    fn sphere_point(&self, c: [f64; 3], rho: f64, u: [f64; 3], fallback: &[f64], out: &mut [f64]) {
-        let (grid, fields) = (&self.grid, &self.fields);
+    fn sphere_point(
+        &self,
+        fields: &[&[f64]; Gas::ALL.len()],
+        c: [f64; 3],
+        rho: f64,
+        u: [f64; 3],
+        fallback: &[f64],
+        out: &mut [f64],
+    ) {
+        let grid = &self.grid;
         let p = [c[0] + rho * u[0], c[1] + rho * u[1], c[2] + rho * u[2]];
         grid.interpolate_many(p, fallback, out, |idx, v| {
             if !grid.inside(idx) {
                 return false;
             }
-            for (g, v) in v.iter_mut().enumerate() {
-                *v = fields[g][idx];
+            for (v, f) in v.iter_mut().zip(fields) {
+                *v = f[idx];
             }
             true
         });
@@ -941,6 +961,7 @@ impl<'a> Simulation<'a> {
         }
         vals.clear();
         vals.resize(total, [0.0; Gas::ALL.len()]);
+        let fields = self.field_views();
         vals.par_chunks_mut(CHUNK)
             .enumerate()
             .for_each(|(c, chunk)| {
@@ -952,7 +973,8 @@ impl<'a> Simulation<'a> {
                         s += 1;
                     }
                     let (start, c, rho, sphere) = segs[s];
-                    self.sphere_point(c, rho, sphere[idx - start], &fallback[..ng], &mut v[..ng]);
+                    let u = sphere[idx - start];
+                    self.sphere_point(&fields, c, rho, u, &fallback[..ng], &mut v[..ng]);
                 }
             });
         means.clear();
