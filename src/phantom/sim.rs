@@ -2556,15 +2556,10 @@ impl Simulation<'_> {
             Some(b) => b,
             None => {
                 let k: Vec<f64> = self.ostwald.iter().map(|l| self.rt / l).collect();
+                let fields = self.field_views();
                 (0..self.grid.len())
                     .filter(|&c| self.grid.inside(c))
-                    .map(|c| {
-                        self.fields
-                            .iter()
-                            .zip(&k)
-                            .map(|(f, kg)| f[c] * kg)
-                            .sum::<f64>()
-                    })
+                    .map(|c| fields.iter().zip(&k).map(|(f, kg)| f[c] * kg).sum::<f64>())
                     .fold(0.0, f64::max)
                     + fixed
             }
