@@ -3774,6 +3774,85 @@ mod planned_tests {
         }
     }
 
+    /// D and C_b of the per-field tests' three fields.
+    const PER_FIELD_DC: [(f64, f64); 3] = [(2.5e-9, 1.5), (1e-9, 0.2), (8e-9, 0.0)];
+
+    /// Every case of the per-field tests: a cylinder with cells taken out and an open box, 1–3
+    /// fields, on pools of 1–3 threads, dt 0.9 of the fastest field's explicit limit.
+    fn per_field_cases(mut case: impl FnMut(&Grid, usize, &rayon::ThreadPool, f64)) {
+        for g in [cylinder_with_hole(), boxed([13, 9, 7], all_box_faces())] {
+            let dt = 0.9 * explicit_limit(&g, 8e-9);
+            for nf in 1..=3 {
+                for threads in [1, 2, 3] {
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(threads)
+                        .build()
+                        .unwrap();
+                    case(&g, nf, &pool, dt);
+                }
+            }
+        }
+    }
+
+    /// The inflows (`flows`: want, got) and the cells `checked` (the reference `alone`, the
+    /// fields under test `got`) the same bits.
+    fn assert_per_field_bits(
+        g: &Grid,
+        (want, got_flow): (&[f64], &[f64]),
+        (alone, got): (&[Vec<f64>], &[&[f64]]),
+        checked: impl Fn(usize) -> bool,
+        step: usize,
+    ) {
+        for f in 0..alone.len() {
+            assert_eq!(
+                want[f].to_bits(),
+                got_flow[f].to_bits(),
+                "field {f}: inflow"
+            );
+            for i in (0..g.len()).filter(|&i| checked(i)) {
+                assert_eq!(
+                    alone[f][i].to_bits(),
+                    got[f][i].to_bits(),
+                    "{} fields, step {step}, field {f}, cell {i}",
+                    alone.len()
+                );
+            }
+        }
+    }
+
+    /// `nf` fields of different values in every cell (0 outside the gel when `zero_outside`).
+    fn per_field_start(g: &Grid, nf: usize, zero_outside: bool) -> Vec<Vec<f64>> {
+        (0..nf)
+            .map(|f| {
+                (0..g.len())
+                    .map(|i| {
+                        let v = ((i * 7919 + 13 * f + 5) % 101) as f64 / 100.0;
+                        if zero_outside && !g.inside(i) {
+                            0.0
+                        } else {
+                            v
+                        }
+                    })
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The per-field steps' reference: each field of `alone` stepped alone out of place by
+    /// [`explicit_step`] (`dc[f]` its D and C_b); returns the inflows.
+    fn step_each_alone(g: &Grid, alone: &mut [Vec<f64>], dc: &[(f64, f64)], dt: f64) -> Vec<f64> {
+        alone
+            .iter_mut()
+            .zip(dc)
+            .map(|(u, &(d, cb))| {
+                let mut out = u.clone();
+                let x = explicit_step(g, u, &mut out, d, dt, cb);
+                *u = out;
+                x
+            })
+            .collect()
+    }
+
     /// [`explicit_steps_shifting_per_field`] (a thread per field, each moved by two planes in
     /// its store) against each field stepped alone out of place by [`explicit_step`]: the same
     /// bits in every inside cell, 0 in every other (the fields start 0 outside the gel, as a
@@ -3784,77 +3863,31 @@ mod planned_tests {
     #[test]
     fn shifting_per_field_explicit_steps_are_each_fields_bits() {
         use super::super::fields::Fields;
-        let dc = [(2.5e-9, 1.5), (1e-9, 0.2), (8e-9, 0.0)];
-        for g in [cylinder_with_hole(), boxed([13, 9, 7], all_box_faces())] {
-            let dt = 0.9 * explicit_limit(&g, 8e-9);
-            let plane = g.n[0] * g.n[1];
-            for nf in 1..=3 {
-                for threads in [1, 2, 3] {
-                    let pool = rayon::ThreadPoolBuilder::new()
-                        .num_threads(threads)
-                        .build()
-                        .unwrap();
-                    let mut alone: Vec<Vec<f64>> = (0..nf)
-                        .map(|f| {
-                            (0..g.len())
-                                .map(|i| {
-                                    let v = ((i * 7919 + 13 * f + 5) % 101) as f64 / 100.0;
-                                    if g.inside(i) {
-                                        v
-                                    } else {
-                                        0.0
-                                    }
-                                })
-                                .collect()
-                        })
-                        .collect();
-                    let mut fields = Fields::new(alone.clone(), plane);
-                    for step in 0..5 {
-                        let want: Vec<f64> = (0..nf)
-                            .map(|f| {
-                                let mut out = alone[f].clone();
-                                let x =
-                                    explicit_step(&g, &alone[f], &mut out, dc[f].0, dt, dc[f].1);
-                                alone[f] = out;
-                                x
-                            })
-                            .collect();
-                        let mut got = vec![0.0; nf];
-                        let from = fields.offset_planes();
-                        let to = pool.install(|| {
-                            let (mut stores, from) = fields.stores_for_shift();
-                            explicit_steps_shifting_per_field(
-                                &g,
-                                &mut stores,
-                                from,
-                                &dc[..nf],
-                                dt,
-                                &mut got,
-                            )
-                        });
-                        assert_eq!(to, 2 - from);
-                        fields.shifted(to);
-                        for f in 0..nf {
-                            assert_eq!(want[f].to_bits(), got[f].to_bits(), "field {f}: inflow");
-                            for i in 0..g.len() {
-                                assert_eq!(
-                                    alone[f][i].to_bits(),
-                                    fields[f][i].to_bits(),
-                                    "{nf} fields, {threads} threads, step {step}, field {f}, cell {i}"
-                                );
-                            }
-                        }
-                        if step == 2 {
-                            // the stores swapped for copies of the views, as an out-of-place step
-                            // leaves them (the views from the stores' start)
-                            let mut back = fields.to_vecs();
-                            fields.swap_stores(&mut back);
-                            assert_eq!(fields.offset_planes(), 0);
-                        }
-                    }
+        per_field_cases(|g, nf, pool, dt| {
+            let dc = &PER_FIELD_DC[..nf];
+            let mut alone = per_field_start(g, nf, true);
+            let mut fields = Fields::new(alone.clone(), g.n[0] * g.n[1]);
+            for step in 0..5 {
+                let want = step_each_alone(g, &mut alone, dc, dt);
+                let mut got = vec![0.0; nf];
+                let from = fields.offset_planes();
+                let to = pool.install(|| {
+                    let (mut stores, from) = fields.stores_for_shift();
+                    explicit_steps_shifting_per_field(g, &mut stores, from, dc, dt, &mut got)
+                });
+                assert_eq!(to, 2 - from);
+                fields.shifted(to);
+                let views: Vec<&[f64]> = fields.iter().collect();
+                assert_per_field_bits(g, (&want, &got), (&alone, &views), |_| true, step);
+                if step == 2 {
+                    // the stores swapped for copies of the views, as an out-of-place step
+                    // leaves them (the views from the stores' start)
+                    let mut back = fields.to_vecs();
+                    fields.swap_stores(&mut back);
+                    assert_eq!(fields.offset_planes(), 0);
                 }
             }
-        }
+        });
     }
 
     /// [`explicit_steps_in_place_per_field`] (a thread per field) against each field stepped
@@ -3863,58 +3896,21 @@ mod planned_tests {
     /// out and in an open box, over three steps.
     #[test]
     fn per_field_explicit_steps_are_each_fields_bits() {
-        let dc = [(2.5e-9, 1.5), (1e-9, 0.2), (8e-9, 0.0)];
-        for g in [cylinder_with_hole(), boxed([13, 9, 7], all_box_faces())] {
-            let dt = 0.9 * explicit_limit(&g, 8e-9);
-            for nf in 1..=3 {
-                for threads in [1, 2, 3] {
-                    let pool = rayon::ThreadPoolBuilder::new()
-                        .num_threads(threads)
-                        .build()
-                        .unwrap();
-                    let mut alone: Vec<Vec<f64>> = (0..nf)
-                        .map(|f| {
-                            (0..g.len())
-                                .map(|i| ((i * 7919 + 13 * f + 5) % 101) as f64 / 100.0)
-                                .collect()
-                        })
-                        .collect();
-                    let mut together = alone.clone();
-                    for step in 0..3 {
-                        let want: Vec<f64> = (0..nf)
-                            .map(|f| {
-                                let mut out = alone[f].clone();
-                                let x =
-                                    explicit_step(&g, &alone[f], &mut out, dc[f].0, dt, dc[f].1);
-                                alone[f] = out;
-                                x
-                            })
-                            .collect();
-                        let mut got = vec![0.0; nf];
-                        pool.install(|| {
-                            let mut fields: Vec<&mut [f64]> =
-                                together.iter_mut().map(|f| f.as_mut_slice()).collect();
-                            explicit_steps_in_place_per_field(
-                                &g,
-                                &mut fields,
-                                &dc[..nf],
-                                dt,
-                                &mut got,
-                            )
-                        });
-                        for f in 0..nf {
-                            assert_eq!(want[f].to_bits(), got[f].to_bits(), "field {f}: inflow");
-                            for i in (0..g.len()).filter(|&i| g.inside(i)) {
-                                assert_eq!(
-                                    alone[f][i].to_bits(),
-                                    together[f][i].to_bits(),
-                                    "{nf} fields, {threads} threads, step {step}, field {f}, cell {i}"
-                                );
-                            }
-                        }
-                    }
-                }
+        per_field_cases(|g, nf, pool, dt| {
+            let dc = &PER_FIELD_DC[..nf];
+            let mut alone = per_field_start(g, nf, false);
+            let mut together = alone.clone();
+            for step in 0..3 {
+                let want = step_each_alone(g, &mut alone, dc, dt);
+                let mut got = vec![0.0; nf];
+                pool.install(|| {
+                    let mut fields: Vec<&mut [f64]> =
+                        together.iter_mut().map(|f| f.as_mut_slice()).collect();
+                    explicit_steps_in_place_per_field(g, &mut fields, dc, dt, &mut got)
+                });
+                let views: Vec<&[f64]> = together.iter().map(|f| f.as_slice()).collect();
+                assert_per_field_bits(g, (&want, &got), (&alone, &views), |i| g.inside(i), step);
             }
-        }
+        });
     }
 }
