@@ -7,8 +7,11 @@
 //! 0 or plane 2 of it ([`Fields::offset_planes`]). Every field has the same offset.
 //!
 //! Invariant: every cell that is not inside the gel (outside the shape, or taken by a bubble)
-//! holds 0 in every field. The shifting step writes only the inside cells of a plane into a
-//! store plane that held another plane, so the outside cells it leaves are that plane's zeros.
+//! holds 0 in every field: the initial fields are 0 there, and a cell a bubble takes is set to
+//! 0. The shifting step relies on it. It writes a plane's inside cells into a store plane that
+//! held another plane; the cells outside the shape are the same in every plane (shapes are
+//! prisms along z), so they keep that plane's zeros, and in a plane with cells taken by bubbles
+//! the step sets every cell not inside to 0 (`diffusion::zero_excluded`).
 
 use std::ops::{Index, IndexMut};
 

@@ -697,7 +697,9 @@ impl<'a> Simulation<'a> {
         &self.fields[g]
     }
 
-    /// Mutable concentration field (for tests that set an initial state).
+    /// Mutable concentration field (for tests that set an initial state). Only the cells inside
+    /// the gel are part of the model: the others should stay 0 ([`Fields`]' invariant); the
+    /// explicit step that moves the fields by two planes does not carry them along.
     pub fn field_mut(&mut self, g: usize) -> &mut [f64] {
         self.tension_bound = None;
         self.gel_fresh = false;
