@@ -11,10 +11,10 @@
 //!   held every grid with an open corner to ⅔ of the step); the simulation uses
 //!   [`explicit_steps_in_place`], the same bits without a second field (z-plane blocks in
 //!   parallel, each keeping the old planes it still needs in per-thread buffers), with as
-//!   many gases as threads [`explicit_steps_shifting_per_field`] (a thread per field, each
-//!   moved by two planes in a store with two planes to spare, so that no plane is copied;
-//!   [`explicit_steps_in_place_per_field`] is the same with the copy), and on small grids with more than one thread, when
-//!   the step ends at a frame with the gel's state, [`explicit_steps_into`] a second set of
+//!   many gases as threads or on one thread [`explicit_steps_shifting_per_field`] (a thread
+//!   per field, each moved by two planes in a store with two planes to spare, so that no plane
+//!   is copied; [`explicit_steps_in_place_per_field`] is the same with the copy), and on small
+//!   grids with more than one thread, when the step ends at a frame with the gel's state, [`explicit_steps_into`] a second set of
 //!   fields (`sim::OUT_OF_PLACE_BYTES`), which passes the gel over each plane it has just
 //!   written (`explicit_steps_into_passing_gel`); all give the same bits. A row's interior span takes the
 //!   plain 7-point stencil; its other cells the per-cell terms, side by side where a run of
