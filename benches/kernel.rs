@@ -5,6 +5,7 @@ use criterion::{criterion_group, criterion_main, BenchmarkId, Criterion, Through
 use decophantom::gas::GasMix;
 use decophantom::phantom::diffusion;
 use decophantom::phantom::displacement;
+use decophantom::phantom::fields::Fields;
 use decophantom::phantom::grid::{Face, Grid, Shape};
 use decophantom::phantom::params::{BubblePlacement, PhantomParams};
 use decophantom::phantom::sim::{Recorder, Simulation};
@@ -88,6 +89,53 @@ fn kernels(c: &mut Criterion) {
                 })
             },
         );
+        // two gases with a thread per field, as a run with as many gases as threads steps them
+        // (an iteration steps both fields: two gas-steps): each field moved by two planes in
+        // its store, and the same with a copy of each plane's old values (session 24)
+        let dc = [(D, 0.5), (D, 0.5)];
+        group.throughput(Throughput::Elements(2 * cells));
+        group.bench_with_input(
+            BenchmarkId::new("explicit_steps_per_field_shifting", label),
+            g,
+            |b, g| {
+                let mut fields = Fields::new(vec![u0.clone(), u0.clone()], g.n[0] * g.n[1]);
+                let mut inflow = [0.0; 2];
+                b.iter(|| {
+                    let (mut stores, from) = fields.stores_for_shift();
+                    let to = diffusion::explicit_steps_shifting_per_field(
+                        g,
+                        &mut stores,
+                        from,
+                        &dc,
+                        dt_explicit,
+                        &mut inflow,
+                    );
+                    fields.shifted(to);
+                    inflow[0]
+                })
+            },
+        );
+        group.bench_with_input(
+            BenchmarkId::new("explicit_steps_per_field_copying", label),
+            g,
+            |b, g| {
+                let mut fields = [u0.clone(), u0.clone()];
+                let mut inflow = [0.0; 2];
+                b.iter(|| {
+                    let [f0, f1] = &mut fields;
+                    let mut views = [f0.as_mut_slice(), f1.as_mut_slice()];
+                    diffusion::explicit_steps_in_place_per_field(
+                        g,
+                        &mut views,
+                        &dc,
+                        dt_explicit,
+                        &mut inflow,
+                    );
+                    inflow[0]
+                })
+            },
+        );
+        group.throughput(Throughput::Elements(cells));
         group.bench_with_input(BenchmarkId::new("implicit_step", label), g, |b, g| {
             let mut u = u0.clone();
             let mut solver = diffusion::ImplicitSolver::new();
