@@ -764,19 +764,22 @@ pub fn explicit_steps_shifting_per_field(
     assert!(stores.iter().all(|s| s.len() == (nz + 2) * plane));
     let isa = Isa::detect();
     let h2 = grid.h * grid.h;
+    // per field, its planes' inflows (the calling thread's buffer, as the other steps')
+    let mut per_plane = take_plane_flows(nz * stores.len());
     stores
         .par_iter_mut()
         .zip(dc.par_iter())
         .zip(inflow.par_iter_mut())
-        .for_each(|((store, &(d, cb)), inflow)| {
-            let mut flows = vec![0.0; nz];
-            step_shifting(grid, store, from == 2, d * dt / h2, cb, &mut flows, isa);
+        .zip(per_plane.par_chunks_mut(nz))
+        .for_each(|(((store, &(d, cb)), inflow), flows)| {
+            step_shifting(grid, store, from == 2, d * dt / h2, cb, flows, isa);
             // in plane order, as `sum_planes`
             *inflow = 0.0;
-            for x in flows {
+            for x in flows.iter() {
                 *inflow += x;
             }
         });
+    PLANE_FLOWS.set(per_plane);
     2 - from
 }
 

@@ -143,15 +143,6 @@ impl IndexMut<usize> for Fields {
     }
 }
 
-impl<'a> IntoIterator for &'a Fields {
-    type Item = &'a [f64];
-    type IntoIter = Box<dyn Iterator<Item = &'a [f64]> + 'a>;
-
-    fn into_iter(self) -> Self::IntoIter {
-        Box::new(self.iter())
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -2027,7 +2027,7 @@ impl<'a> Simulation<'a> {
         let id = self.grid.codes_id();
         if self.back.len() != self.fields.len() || self.back_codes != id {
             self.back.resize_with(self.fields.len(), Vec::new);
-            for (b, f) in self.back.iter_mut().zip(&self.fields) {
+            for (b, f) in self.back.iter_mut().zip(self.fields.iter()) {
                 b.clear();
                 b.extend_from_slice(f);
             }
@@ -2662,7 +2662,7 @@ impl Simulation<'_> {
             let rho = self.coupling_radius_at(pool.activation_radius(index), false);
             let ng = k.len();
             let (mut here, mut mean) = ([0.0; Gas::ALL.len()], [0.0; Gas::ALL.len()]);
-            for (h, f) in here.iter_mut().zip(&self.fields) {
+            for (h, f) in here.iter_mut().zip(self.fields.iter()) {
                 *h = f[e.cell];
             }
             self.prepare_sphere_at(rho);
