@@ -714,10 +714,13 @@ pub fn explicit_steps_in_place(
 }
 
 /// [`explicit_steps_in_place`] with a thread per field: the fields in parallel, one task each,
-/// each going up all its planes in one block (no halo), the same bits. For as many fields as
-/// threads (`sim` chooses it then): each core streams its own field once, in place, with no
-/// fork and join per plane. Against the plane-parallel steps on the 2-core Intel machine (26
-/// Nov 2026, docs/speed-history.md, session 21, alternated): the lone small run −5 %, Fig. 5 −2 to −4 %.
+/// each going up all its planes in one block (no halo), the same bits: each core streams its
+/// own field once, in place, with no fork and join per plane. Against the plane-parallel steps
+/// on the 2-core Intel machine (26 Nov 2026, docs/speed-history.md, session 21, alternated):
+/// the lone small run −5 %, Fig. 5 −2 to −4 %. Since session 24 `sim` takes
+/// [`explicit_steps_shifting_per_field`] instead (the same without this step's copy of each
+/// plane's old values); this one stays as the reference the tests and the kernel bench compare
+/// it with.
 pub fn explicit_steps_in_place_per_field(
     grid: &Grid,
     fields: &mut [&mut [f64]],
