@@ -9,6 +9,7 @@ use crate::phantom::config::load_phantom;
 use crate::phantom::params::PhantomParams;
 use crate::phantom::sim::{
     BubbleFrame, Ending, Event, Frame, Observer, Recorder, RunSummary, Simulation, StepRecord,
+    StepWall,
 };
 use crate::profile::{load, LoadOptions, PressureHistory};
 use crate::report::output::OutputSet;
@@ -61,6 +62,9 @@ pub struct SimRun {
     /// Every step the loop took (only when asked: `--trace-steps`; of a resumed run, the
     /// steps after the checkpoint).
     pub steps: Vec<TracedStep>,
+    /// The wall time of the time loop's phases summed over the run's steps (of a resumed run,
+    /// the steps after the checkpoint): `timing.toml`.
+    pub phases: StepWall,
 }
 
 /// A step as `--trace-steps` keeps it: the loop's record and the wall time.
@@ -68,9 +72,8 @@ pub struct SimRun {
 pub struct TracedStep {
     /// What the loop reported.
     pub record: StepRecord,
-    /// Wall time since the run (or its continuation) started when the step's physics was
-    /// done, s: the difference between two steps is the later step's cost, with the frame
-    /// recorded after the earlier one.
+    /// Wall time since the run (or its continuation) started when the step was done with its
+    /// frame, s: the difference between two steps is the later step's cost.
     pub wall_s: f64,
 }
 
@@ -78,6 +81,8 @@ struct WithProgress<'a> {
     rec: Recorder,
     /// The steps taken, when they are traced.
     steps: Option<Vec<TracedStep>>,
+    /// The steps' phase times, summed.
+    phases: StepWall,
     /// When the run started (the steps' wall times count from it).
     start: std::time::Instant,
     progress: &'a mut (dyn FnMut(f64, f64) + Send),
@@ -96,6 +101,7 @@ impl Observer for WithProgress<'_> {
         self.rec.frame(frame);
     }
     fn step(&mut self, step: &StepRecord) {
+        self.phases.add(&step.wall);
         if let Some(steps) = &mut self.steps {
             steps.push(TracedStep {
                 record: *step,
@@ -177,6 +183,7 @@ pub fn simulate_checkpointed(
     let mut obs = WithProgress {
         rec: Recorder::default(),
         steps: trace.then(Vec::new),
+        phases: StepWall::default(),
         start,
         progress,
         stop,
@@ -202,6 +209,7 @@ pub fn simulate_checkpointed(
     })?;
     let frames = obs.rec.frames;
     let steps = obs.steps.unwrap_or_default();
+    let phases = obs.phases;
     Ok(SimRun {
         summary,
         frames,
@@ -210,6 +218,7 @@ pub fn simulate_checkpointed(
         checkpoints: checkpointer.map(|c| c.stats.clone()),
         resumed_at,
         steps,
+        phases,
     })
 }
 
@@ -400,9 +409,24 @@ fn event_text(e: &Event) -> String {
 /// summary of the same inputs is byte-identical from run to run (and a committed report does
 /// not change when it is regenerated).
 pub fn timing_toml(run: &SimRun) -> String {
+    let p = &run.phases;
     format!(
-        "# wall-clock time of this run on the machine that ran it (not a result)\nwall_seconds = {}\n",
-        run.wall_seconds
+        "# wall-clock time of this run on the machine that ran it (not a result)\n\
+         wall_seconds = {}\n\n\
+         # of it, the time loop's phases summed over the steps, s (src/phantom/sim.rs, StepWall):\n\
+         # prepare: the bubbles' fluxes at the start of each step, the step's choice, the exchange;\n\
+         # gel: the gel's diffusion; events: perfusion, radii, corrector, coalescence, nucleation,\n\
+         # displacement (of them: corrector, displacement); frames: the frames recorded\n\
+         [phases]\n\
+         prepare_s = {:.6}\ngel_s = {:.6}\nevents_s = {:.6}\ncorrector_s = {:.6}\n\
+         displacement_s = {:.6}\nframes_s = {:.6}\n",
+        run.wall_seconds,
+        p.prepare_s,
+        p.gel_s,
+        p.events_s,
+        p.corrector_s,
+        p.displacement_s,
+        p.frame_s
     )
 }
 
@@ -502,7 +526,9 @@ fn plot_err(e: impl std::fmt::Display) -> Error {
 /// (`inf`: no limit), the wall time since the run started ([`TracedStep::wall_s`]: not a
 /// result, it differs from run to run), and the bubble that gave the error estimate (empty
 /// without one) with its flux of each gas at the start and at the end of the step (mol/s,
-/// positive into the bubble; the end is the corrector's, before its correction).
+/// positive into the bubble; the end is the corrector's, before its correction), then the wall
+/// time of the step's phases, s ([`StepWall`]: prepare, gel, events, of them the corrector and
+/// the displacement, and the frame; not results either).
 pub fn steps_csv(steps: &[TracedStep], gases: &[Gas]) -> String {
     let mut s = String::from(
         "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,next_loading_dt_s,wall_s,bubble",
@@ -512,7 +538,7 @@ pub fn steps_csv(steps: &[TracedStep], gases: &[Gas]) -> String {
             s.push_str(&format!(",flux_{when}_{}_mol_s", g.name()));
         }
     }
-    s.push('\n');
+    s.push_str(",prepare_s,gel_s,events_s,corrector_s,displacement_s,frame_s\n");
     for t in steps {
         let r = &t.record;
         s.push_str(&format!(
@@ -539,6 +565,17 @@ pub fn steps_csv(steps: &[TracedStep], gases: &[Gas]) -> String {
                     s.push(',');
                 }
             }
+        }
+        let w = &r.wall;
+        for x in [
+            w.prepare_s,
+            w.gel_s,
+            w.events_s,
+            w.corrector_s,
+            w.displacement_s,
+            w.frame_s,
+        ] {
+            s.push_str(&format!(",{x:.7}"));
         }
         s.push('\n');
     }

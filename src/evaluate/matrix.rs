@@ -114,6 +114,8 @@ pub fn run_matrix_journaled(
                         checkpoints: None,
                         resumed_at: None,
                         steps: Vec::new(),
+                        // not kept by the journal: a run read back took no steps here
+                        phases: Default::default(),
                     }),
                 _ => None,
             };

@@ -34,6 +34,7 @@ use crate::profile::PressureHistory;
 use crate::units::GAS_CONSTANT;
 use rand::{Rng, SeedableRng};
 use std::f64::consts::PI;
+use std::time::Instant;
 
 /// Largest relative gas-balance error a healthy run may show. The scheme is conservative to
 /// round-off (1e-14 measured), so an error this large means something went wrong, not that the
@@ -233,6 +234,59 @@ pub struct StepRecord {
     pub flux_start: [f64; Gas::ALL.len()],
     /// Its fluxes at the end of the step (the corrector's, before the correction).
     pub flux_end: [f64; Gas::ALL.len()],
+    /// The wall time of the step's phases (not a result: it differs from run to run).
+    pub wall: StepWall,
+}
+
+/// The wall time of one step's phases, s, as the time loop took them ([`StepRecord::wall`];
+/// `simulate` sums them over the run into `timing.toml`, `--trace-steps` writes them per step
+/// into `steps.csv`). What a speed study needs to see where a run's time goes without a build
+/// of its own (README "Speed").
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StepWall {
+    /// Phases 1–3: the bubbles' fluxes at the start of the step, the step's choice and the
+    /// exchange (the predictor).
+    pub prepare_s: f64,
+    /// Phase 4: the gel's diffusion (explicit, implicit or extrapolated), with the field's and
+    /// the loading's error estimates.
+    pub gel_s: f64,
+    /// Phases 5–8: perfusion, the radii, the corrector, coalescence, nucleation, the
+    /// displacement of the gel and the health check.
+    pub events_s: f64,
+    /// Of `events_s`, the corrector of the bubbles' exchange ([`Simulation::correct`]: the
+    /// fluxes at the end of the step and the correction).
+    pub corrector_s: f64,
+    /// Of `events_s`, the gel's displacement by the bubbles (the remap, and the cells taken
+    /// and given back).
+    pub displacement_s: f64,
+    /// The frame recorded at the end of the step, if one was due (the gel pass, the bubbles'
+    /// fluxes and the observer's own work).
+    pub frame_s: f64,
+}
+
+impl StepWall {
+    /// The sum of the phases (`corrector_s` and `displacement_s` are within `events_s`).
+    pub fn total_s(&self) -> f64 {
+        self.prepare_s + self.gel_s + self.events_s + self.frame_s
+    }
+
+    /// Add `other` phase by phase (a run's totals).
+    pub fn add(&mut self, other: &StepWall) {
+        self.prepare_s += other.prepare_s;
+        self.gel_s += other.gel_s;
+        self.events_s += other.events_s;
+        self.corrector_s += other.corrector_s;
+        self.displacement_s += other.displacement_s;
+        self.frame_s += other.frame_s;
+    }
+}
+
+/// Seconds since `from`, and `from` moved to now (the time loop's phase clock).
+fn lap(from: &mut Instant) -> f64 {
+    let now = Instant::now();
+    let s = (now - *from).as_secs_f64();
+    *from = now;
+    s
 }
 
 /// The bubble whose exchange gave the corrector's largest error estimate over a step, with its
@@ -1148,6 +1202,8 @@ impl<'a> Simulation<'a> {
         // the pool's other workers kept awake through the serial phases of a lone run
         let warm = super::keep_warm::KeepWarm::new();
         while self.time < end - 1e-9 {
+            let mut clock = Instant::now();
+            let mut wall = StepWall::default();
             let t = self.time;
             let p = profile.ambient(t);
             self.bubble_fluxes(profile, p, &mut fluxes, &mut tensions);
@@ -1167,6 +1223,7 @@ impl<'a> Simulation<'a> {
                 && ((self.params.numerics.record_gel && t1 >= log.next_record - 1e-9)
                     || t1 >= end - 1e-9);
             let scheme;
+            wall.prepare_s = lap(&mut clock);
             warm.parallel_phase();
             (field_dt, loading_dt, scheme) = self.gel_step(
                 profile,
@@ -1176,11 +1233,28 @@ impl<'a> Simulation<'a> {
                 &mut log,
             );
             warm.serial_phase();
+            wall.gel_s = lap(&mut clock);
             self.perfuse(profile, t, dt);
-            let (err, worst) =
-                self.events(profile, (t, t1, dt), &mut tensions, &mut fluxes, &mut log)?;
+            let (err, worst) = self.events(
+                profile,
+                (t, t1, dt),
+                &mut tensions,
+                &mut fluxes,
+                &mut log,
+                &mut wall,
+            )?;
+            wall.events_s = lap(&mut clock);
             let tol = self.params.numerics.bubble_tolerance;
             bubble_dt = self.bubble_step(dt, err, lim);
+            self.observe(
+                profile,
+                profile.ambient(t1),
+                &tensions,
+                observer,
+                &mut log,
+                false,
+            )?;
+            wall.frame_s = lap(&mut clock);
             observer.step(&StepRecord {
                 time: t,
                 dt,
@@ -1194,15 +1268,8 @@ impl<'a> Simulation<'a> {
                 bubble: worst.map(|w| w.0),
                 flux_start: worst.map_or([0.0; Gas::ALL.len()], |w| w.1),
                 flux_end: worst.map_or([0.0; Gas::ALL.len()], |w| w.2),
+                wall,
             });
-            self.observe(
-                profile,
-                profile.ambient(t1),
-                &tensions,
-                observer,
-                &mut log,
-                false,
-            )?;
             if log.ending != Ending::Completed || self.time >= end - 1e-9 {
                 break;
             }
@@ -1291,7 +1358,8 @@ impl<'a> Simulation<'a> {
     /// Phases 6–8 of the step [t0, t1] of length dt (t1 − t0 but for its rounding) after the
     /// gel's diffusion and perfusion: the clock, the radii, the corrector of the bubbles'
     /// exchange, coalescence, nucleation, displacement and the health check. Returns the
-    /// corrector's error estimate and the bubble that gave it ([`Self::correct`]).
+    /// corrector's error estimate and the bubble that gave it ([`Self::correct`]), and puts the
+    /// corrector's and the displacement's wall times in `wall`.
     fn events(
         &mut self,
         profile: &PressureHistory,
@@ -1299,15 +1367,20 @@ impl<'a> Simulation<'a> {
         tensions: &mut Vec<f64>,
         fluxes: &mut Vec<Vec<f64>>,
         log: &mut RunLog,
+        wall: &mut StepWall,
     ) -> Result<(f64, WorstExchange), Error> {
         let end = profile.duration_s();
         let p1 = profile.ambient(t1);
         self.time = t1;
         self.update_radii(p1)?;
+        let mut clock = Instant::now();
         let err = self.correct(profile, p1, dt, &mut log.events)?;
+        wall.corrector_s = lap(&mut clock);
         self.coalesce(t1, p1, &mut log.events)?;
         self.nucleate(profile, t0, p1, tensions, fluxes, &mut log.events)?;
+        lap(&mut clock);
         self.displace(p1);
+        wall.displacement_s = lap(&mut clock);
         // a non-finite value spreads a cell per step: every 8th step is soon enough
         if (log.steps.0 + log.steps.1).is_multiple_of(8) || self.time >= end - 1e-9 {
             self.check_health()?;

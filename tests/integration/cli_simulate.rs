@@ -549,7 +549,8 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
         lines.next().unwrap(),
         "time_s,dt_s,scheme,limit,physics_dt_s,bubble_error,next_bubble_dt_s,next_field_dt_s,\
          next_loading_dt_s,wall_s,bubble,flux_start_n2_mol_s,flux_start_o2_mol_s,\
-         flux_end_n2_mol_s,flux_end_o2_mol_s"
+         flux_end_n2_mol_s,flux_end_o2_mol_s,prepare_s,gel_s,events_s,corrector_s,\
+         displacement_s,frame_s"
     );
     let rows: Vec<Vec<String>> = lines
         .map(|l| l.split(',').map(str::to_string).collect())
@@ -568,9 +569,26 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
         .parse()
         .unwrap();
     let mut wall = 0.0;
+    // the phases' sums over the steps (timing.toml's [phases], below)
+    let mut sums = [0.0; 6];
     for r in &rows {
         let w = num(&r[9]);
         assert!(w >= wall, "the wall time went back from {wall} to {w} s");
+        // a step's phases (prepare, gel, events, of them corrector and displacement, frame) are
+        // timed within the interval the observer's own clock gives the step: between the
+        // last step's record and this one's (both printed to 1 µs, the phases to 0.1 µs)
+        let phase: Vec<f64> = r[15..21].iter().map(|x| num(x)).collect();
+        assert!(phase.iter().all(|x| *x >= 0.0), "{phase:?}");
+        assert!(phase[3] + phase[4] <= phase[2] + 1e-6, "{phase:?}");
+        let total = phase[0] + phase[1] + phase[2] + phase[5];
+        assert!(
+            total <= w - wall + 3e-6,
+            "phases of {total} s in a step of {} s on the wall clock",
+            w - wall
+        );
+        for (s, x) in sums.iter_mut().zip(&phase) {
+            *s += x;
+        }
         wall = w;
         let (start, dt, physics) = (num(&r[0]), num(&r[1]), num(&r[4]));
         assert!(
@@ -600,6 +618,26 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
         wall <= run_wall,
         "{wall} s of steps in a run of {run_wall} s"
     );
+    // timing.toml's phases are the steps' sums (to the 1e-6 s it prints and the 5e-8 s of
+    // each row), and within the run's wall time; the diffusion took some of it
+    let phases = timing["phases"].as_table().unwrap();
+    let names = [
+        "prepare_s",
+        "gel_s",
+        "events_s",
+        "corrector_s",
+        "displacement_s",
+        "frames_s",
+    ];
+    for (name, sum) in names.iter().zip(sums) {
+        let x = phases[*name].as_float().unwrap();
+        assert!(
+            (x - sum).abs() <= 1e-6 + 1e-7 * rows.len() as f64,
+            "{name}: {x} s in timing.toml, {sum} s over steps.csv"
+        );
+    }
+    assert!(sums[1] > 0.0);
+    assert!(sums[0] + sums[1] + sums[2] + sums[5] <= run_wall);
     assert!((t - 2500.0).abs() < 1e-3, "the steps end at {t} s");
     // without the flag there is no steps.csv
     let plain = dir.join("plain");
