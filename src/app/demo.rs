@@ -16,6 +16,7 @@ use crate::evaluate::tables::summary_text;
 use crate::evaluate::{algorithms_from_text, plan_candidates};
 use crate::phantom::config::parse_phantom;
 use crate::phantom::elasticity::{law_names, AllLawParams};
+use crate::phantom::sim::StepWall;
 use crate::profile::toml as profile_toml;
 use crate::report::html::Page;
 use crate::report::output::OutputSet;
@@ -254,9 +255,13 @@ pub fn run_sized(
         table.to_csv().map_err(Error::Solver)?,
     );
     // wall times apart from the results, so a regenerated report is byte-identical
-    let mut timing = String::from("law,wall_s\n");
+    let mut timing = format!("law,wall_s,{}\n", StepWall::CSV_HEADER);
     for (name, run) in names.iter().zip(&runs) {
-        timing.push_str(&format!("{name},{}\n", run.wall_seconds));
+        timing.push_str(&format!(
+            "{name},{},{}\n",
+            run.wall_seconds,
+            run.phases.csv_fields()
+        ));
     }
     set.add("elasticity-oscillation-timing.csv", timing);
     set.add(

@@ -538,7 +538,7 @@ pub fn steps_csv(steps: &[TracedStep], gases: &[Gas]) -> String {
             s.push_str(&format!(",flux_{when}_{}_mol_s", g.name()));
         }
     }
-    s.push_str(",prepare_s,gel_s,events_s,corrector_s,displacement_s,frame_s\n");
+    s.push_str(&format!(",{}\n", StepWall::CSV_HEADER));
     for t in steps {
         let r = &t.record;
         s.push_str(&format!(
@@ -566,18 +566,7 @@ pub fn steps_csv(steps: &[TracedStep], gases: &[Gas]) -> String {
                 }
             }
         }
-        let w = &r.wall;
-        for x in [
-            w.prepare_s,
-            w.gel_s,
-            w.events_s,
-            w.corrector_s,
-            w.displacement_s,
-            w.frame_s,
-        ] {
-            s.push_str(&format!(",{x:.7}"));
-        }
-        s.push('\n');
+        s.push_str(&format!(",{}\n", r.wall.csv_fields()));
     }
     s
 }

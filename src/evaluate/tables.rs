@@ -7,6 +7,7 @@ use super::Evaluation;
 use crate::algorithm::schedule::gas_text;
 use crate::app::simulate::ending_text;
 use crate::error::Error;
+use crate::phantom::sim::StepWall;
 use crate::report::table::{Cell, Column, Table};
 
 pub(super) fn fmt_min(x: f64) -> String {
@@ -270,12 +271,19 @@ pub(super) fn runs_table(ev: &Evaluation) -> Result<Table, Error> {
     Ok(t)
 }
 
-/// `timing.csv`: the wall time of every phantom run (schedule, elasticity, wall_s).
+/// `timing.csv`: the wall time of every phantom run (schedule, elasticity, wall_s), and of it
+/// the time loop's phases summed over the run's steps ([`StepWall`]; 0 for a run read back
+/// from a journal).
 pub(super) fn timing_csv(ev: &Evaluation) -> String {
-    let mut out = String::from("schedule,elasticity,wall_s\n");
+    let mut out = format!("schedule,elasticity,wall_s,{}\n", StepWall::CSV_HEADER);
     for r in &ev.runs {
         let label = ev.candidates[r.candidate].label.replace('"', "\"\"");
-        out.push_str(&format!("\"{label}\",{},{}\n", r.law, r.run.wall_seconds));
+        out.push_str(&format!(
+            "\"{label}\",{},{},{}\n",
+            r.law,
+            r.run.wall_seconds,
+            r.run.phases.csv_fields()
+        ));
     }
     out
 }

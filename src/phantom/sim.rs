@@ -270,6 +270,24 @@ impl StepWall {
         self.prepare_s + self.gel_s + self.events_s + self.frame_s
     }
 
+    /// The phases' names as CSV columns, in the order of [`Self::csv_fields`].
+    pub const CSV_HEADER: &'static str =
+        "prepare_s,gel_s,events_s,corrector_s,displacement_s,frame_s";
+
+    /// The phases as CSV fields, to 0.1 µs ([`Self::CSV_HEADER`]).
+    pub fn csv_fields(&self) -> String {
+        [
+            self.prepare_s,
+            self.gel_s,
+            self.events_s,
+            self.corrector_s,
+            self.displacement_s,
+            self.frame_s,
+        ]
+        .map(|x| format!("{x:.7}"))
+        .join(",")
+    }
+
     /// Add `other` phase by phase (a run's totals).
     pub fn add(&mut self, other: &StepWall) {
         self.prepare_s += other.prepare_s;
