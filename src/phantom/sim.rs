@@ -3476,3 +3476,48 @@ mod frame_round_tests {
         }
     }
 }
+
+#[cfg(test)]
+mod step_wall_tests {
+    use super::StepWall;
+
+    /// A run's totals are the phases' sums, the sub-phases of `events_s` are not counted twice
+    /// in the total, and the CSV fields follow the header (values worked out by hand).
+    #[test]
+    fn step_walls_add_phase_by_phase_and_print_in_header_order() {
+        let a = StepWall {
+            prepare_s: 0.001,
+            gel_s: 0.010,
+            events_s: 0.004,
+            corrector_s: 0.002,
+            displacement_s: 0.001,
+            frame_s: 0.003,
+        };
+        let mut sum = StepWall::default();
+        sum.add(&a);
+        sum.add(&a);
+        assert_eq!(sum.gel_s, 0.020);
+        assert_eq!(sum.corrector_s, 0.004);
+        // 2 × (1 + 10 + 4 + 3) ms: the corrector's and the displacement's time is in events
+        assert!((sum.total_s() - 0.036).abs() < 1e-15, "{}", sum.total_s());
+        let names: Vec<&str> = StepWall::CSV_HEADER.split(',').collect();
+        let fields: Vec<f64> = a
+            .csv_fields()
+            .split(',')
+            .map(|x| x.parse().unwrap())
+            .collect();
+        assert_eq!(names.len(), fields.len());
+        let expect = [
+            ("prepare_s", 0.001),
+            ("gel_s", 0.010),
+            ("events_s", 0.004),
+            ("corrector_s", 0.002),
+            ("displacement_s", 0.001),
+            ("frame_s", 0.003),
+        ];
+        for ((n, x), (en, ex)) in names.iter().zip(&fields).zip(expect) {
+            assert_eq!(*n, en);
+            assert_eq!(*x, ex);
+        }
+    }
+}
