@@ -9,7 +9,7 @@ use crate::phantom::config::load_phantom;
 use crate::phantom::params::PhantomParams;
 use crate::phantom::sim::{
     BubbleFrame, Ending, Event, Frame, Observer, Recorder, RunSummary, Simulation, StepRecord,
-    StepWall,
+    StepScheme, StepWall,
 };
 use crate::profile::{load, LoadOptions, PressureHistory};
 use crate::report::output::OutputSet;
@@ -65,6 +65,9 @@ pub struct SimRun {
     /// The wall time of the time loop's phases summed over the run's steps (of a resumed run,
     /// the steps after the checkpoint): `timing.toml`.
     pub phases: StepWall,
+    /// Per scheme of the gel's step ([`StepScheme::ALL`] order), the steps taken and the wall
+    /// time of their diffusion phase (`StepWall::gel_s`), s: `timing.toml`.
+    pub gel_by_scheme: [(usize, f64); 3],
 }
 
 /// A step as `--trace-steps` keeps it: the loop's record and the wall time.
@@ -83,6 +86,8 @@ struct WithProgress<'a> {
     steps: Option<Vec<TracedStep>>,
     /// The steps' phase times, summed.
     phases: StepWall,
+    /// Per scheme, the steps and their diffusion's wall time ([`SimRun::gel_by_scheme`]).
+    gel_by_scheme: [(usize, f64); 3],
     /// When the run started (the steps' wall times count from it).
     start: std::time::Instant,
     progress: &'a mut (dyn FnMut(f64, f64) + Send),
@@ -102,6 +107,9 @@ impl Observer for WithProgress<'_> {
     }
     fn step(&mut self, step: &StepRecord) {
         self.phases.add(&step.wall);
+        let (n, s) = &mut self.gel_by_scheme[step.scheme.index()];
+        *n += 1;
+        *s += step.wall.gel_s;
         if let Some(steps) = &mut self.steps {
             steps.push(TracedStep {
                 record: *step,
@@ -184,6 +192,7 @@ pub fn simulate_checkpointed(
         rec: Recorder::default(),
         steps: trace.then(Vec::new),
         phases: StepWall::default(),
+        gel_by_scheme: Default::default(),
         start,
         progress,
         stop,
@@ -209,7 +218,7 @@ pub fn simulate_checkpointed(
     })?;
     let frames = obs.rec.frames;
     let steps = obs.steps.unwrap_or_default();
-    let phases = obs.phases;
+    let (phases, gel_by_scheme) = (obs.phases, obs.gel_by_scheme);
     Ok(SimRun {
         summary,
         frames,
@@ -219,6 +228,7 @@ pub fn simulate_checkpointed(
         resumed_at,
         steps,
         phases,
+        gel_by_scheme,
     })
 }
 
@@ -427,7 +437,20 @@ pub fn timing_toml(run: &SimRun) -> String {
         p.corrector_s,
         p.displacement_s,
         p.frame_s
-    )
+    ) + &gel_by_scheme_toml(&run.gel_by_scheme)
+}
+
+/// `timing.toml`'s `[gel_by_scheme]`: per scheme of the gel's step, the steps taken and the
+/// wall time of their diffusion (the cost of one step of each scheme is the ratio).
+fn gel_by_scheme_toml(by: &[(usize, f64); 3]) -> String {
+    let mut s = String::from(
+        "\n# the steps of each scheme and the wall time of their diffusion (gel_s), s\n[gel_by_scheme]\n",
+    );
+    for (scheme, (n, t)) in StepScheme::ALL.iter().zip(by) {
+        let name = scheme.name();
+        s.push_str(&format!("{name}_steps = {n}\n{name}_s = {t:.6}\n"));
+    }
+    s
 }
 
 /// `summary.toml` text (results only: identical for identical inputs; the wall time is in

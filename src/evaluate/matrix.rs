@@ -116,6 +116,7 @@ pub fn run_matrix_journaled(
                         steps: Vec::new(),
                         // not kept by the journal: a run read back took no steps here
                         phases: Default::default(),
+                        gel_by_scheme: Default::default(),
                     }),
                 _ => None,
             };

@@ -144,6 +144,22 @@ pub enum StepScheme {
 }
 
 impl StepScheme {
+    /// Every scheme, in the order of [`Self::index`].
+    pub const ALL: [StepScheme; 3] = [
+        StepScheme::Explicit,
+        StepScheme::Implicit,
+        StepScheme::Extrapolated,
+    ];
+
+    /// Position in [`Self::ALL`].
+    pub fn index(self) -> usize {
+        match self {
+            StepScheme::Explicit => 0,
+            StepScheme::Implicit => 1,
+            StepScheme::Extrapolated => 2,
+        }
+    }
+
     /// Name in `steps.csv`.
     pub fn name(self) -> &'static str {
         match self {

@@ -569,8 +569,10 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
         .parse()
         .unwrap();
     let mut wall = 0.0;
-    // the phases' sums over the steps (timing.toml's [phases], below)
+    // the phases' sums over the steps (timing.toml's [phases], below), and per scheme the
+    // steps and their diffusion's time ([gel_by_scheme])
     let mut sums = [0.0; 6];
+    let mut by_scheme: std::collections::BTreeMap<String, (i64, f64)> = Default::default();
     for r in &rows {
         let w = num(&r[9]);
         assert!(w >= wall, "the wall time went back from {wall} to {w} s");
@@ -589,6 +591,9 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
         for (s, x) in sums.iter_mut().zip(&phase) {
             *s += x;
         }
+        let e = by_scheme.entry(r[2].clone()).or_default();
+        e.0 += 1;
+        e.1 += phase[1];
         wall = w;
         let (start, dt, physics) = (num(&r[0]), num(&r[1]), num(&r[4]));
         assert!(
@@ -638,6 +643,23 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
     }
     assert!(sums[1] > 0.0);
     assert!(sums[0] + sums[1] + sums[2] + sums[5] <= run_wall);
+    let schemes = timing["gel_by_scheme"].as_table().unwrap();
+    for name in ["explicit", "implicit", "extrapolated"] {
+        let (n, t) = by_scheme.get(name).copied().unwrap_or_default();
+        assert_eq!(schemes[&format!("{name}_steps")].as_integer().unwrap(), n);
+        let x = schemes[&format!("{name}_s")].as_float().unwrap();
+        assert!(
+            (x - t).abs() <= 1e-6 + 1e-7 * rows.len() as f64,
+            "{name}: {x} s in timing.toml, {t} s over steps.csv"
+        );
+    }
+    // the scheme counts are summary.toml's (extrapolated steps count as implicit there)
+    let count_of = |name: &str| schemes[&format!("{name}_steps")].as_integer().unwrap() as usize;
+    assert_eq!(count_of("explicit"), count("steps_explicit"));
+    assert_eq!(
+        count_of("implicit") + count_of("extrapolated"),
+        count("steps_implicit")
+    );
     assert!((t - 2500.0).abs() < 1e-3, "the steps end at {t} s");
     // without the flag there is no steps.csv
     let plain = dir.join("plain");
