@@ -1,0 +1,49 @@
+#!/usr/bin/env bash
+# Compare decophantom binaries on the issue-13 runs, alternated run by run (README "Speed",
+# "How to measure"): this machine's speed drifts by up to 2x within minutes, so two codes
+# compare only when their runs interleave.
+#
+# usage: benches/alternate.sh ROUNDS BINARY...
+#   e.g. git worktree add /tmp/base REV && (cd /tmp/base && cargo build --release)
+#        benches/alternate.sh 3 /tmp/base/target/release/decophantom target/release/decophantom
+#
+# For each run (the Fig. 5 dive, the oscillation, the small cube as fits run it) and binary,
+# prints the wall times of the rounds and, from each run's timing.toml, the time loop's phases
+# of the last round (gel = diffusion; events; frames). Run from the repository's top folder.
+set -euo pipefail
+rounds=${1:?usage: $0 ROUNDS BINARY...}
+shift
+[ $# -ge 1 ] || { echo "usage: $0 ROUNDS BINARY..." >&2; exit 2; }
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+# the small cube without the gel pass of every frame, as fits run it
+sed 's/^record_interval_s = 0.0$/record_interval_s = 0.0\nrecord_gel = false/' \
+    benches/small-cube/phantom.toml > "$work/small.toml"
+runs=(
+  "fig5|--profile profiles/fig5-dive.toml --phantom profiles/phantoms/hydrogel.toml"
+  "oscillation|--profile profiles/oscillation-30s.toml --phantom profiles/phantoms/oscillation.toml"
+  "small-cube|--profile benches/small-cube/profile.toml --phantom $work/small.toml"
+)
+field() { sed -n "s/^$1 = //p" "$2"; }
+for run in "${runs[@]}"; do
+  name=${run%%|*}
+  args=${run#*|}
+  declare -A walls=()
+  for _ in $(seq "$rounds"); do
+    for b in "$@"; do
+      out="$work/$name-$(echo "$b" | md5sum | cut -c1-8)"
+      # shellcheck disable=SC2086
+      "$b" simulate $args --out "$out" --quiet --force > /dev/null
+      walls[$b]="${walls[$b]:-} $(printf '%.3f' "$(field wall_seconds "$out/timing.toml")")"
+    done
+  done
+  for b in "$@"; do
+    t="$work/$name-$(echo "$b" | md5sum | cut -c1-8)/timing.toml"
+    phases=""
+    if grep -q '^gel_s' "$t"; then
+      phases=" | gel $(field gel_s "$t") events $(field events_s "$t") frames $(field frames_s "$t")"
+    fi
+    echo "$name $b: wall${walls[$b]} s$phases"
+  done
+  unset walls
+done
