@@ -51,8 +51,8 @@ use super::fields::Fields;
 use super::grid::Face;
 use super::params::PhantomParams;
 use super::sim::{
-    BubbleFrame, Ending, Event, Frame, LoopState, Observer, RunLog, RunSummary, Simulation,
-    StepExchange,
+    BubbleFrame, Ending, Event, Frame, LoadingHistory, LoopState, Observer, RunLog, RunSummary,
+    Simulation, StepExchange,
 };
 use crate::error::{Error, InputError};
 use crate::gas::Gas;
@@ -61,7 +61,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 /// Version of the file format written; files of other versions are refused.
-pub const FORMAT_VERSION: u32 = 3;
+pub const FORMAT_VERSION: u32 = 4;
 /// The first eight bytes of every checkpoint file.
 pub const MAGIC: &[u8; 8] = b"DCPHCKPT";
 /// Name of the checkpoint file in its folder.
@@ -351,7 +351,7 @@ impl RunState {
         {
             return Err("its step state does not fit its bubbles".into());
         }
-        if lp.last_flow.len() != ng {
+        if lp.loading.last.len() != ng || lp.loading.before.len() != ng {
             return Err("its loading history does not fit its gases".into());
         }
         // the cells held out of the gel: give back those set-up took, take the saved ones
@@ -592,8 +592,10 @@ impl Enc {
         self.f64(lp.bubble_dt);
         self.f64(lp.field_dt);
         self.f64(lp.loading_dt);
-        self.f64s(&lp.last_flow);
-        self.f64(lp.last_flow_dt);
+        self.f64s(&lp.loading.last);
+        self.f64(lp.loading.last_dt);
+        self.f64s(&lp.loading.before);
+        self.f64(lp.loading.before_dt);
         self.f64s(&lp.tensions);
         self.usize(lp.fluxes.len());
         for f in &lp.fluxes {
@@ -883,8 +885,12 @@ impl Dec<'_> {
         let bubble_dt = self.f64()?;
         let field_dt = self.f64()?;
         let loading_dt = self.f64()?;
-        let last_flow = self.f64s()?;
-        let last_flow_dt = self.f64()?;
+        let loading = LoadingHistory {
+            last: self.f64s()?,
+            last_dt: self.f64()?,
+            before: self.f64s()?,
+            before_dt: self.f64()?,
+        };
         let tensions = self.f64s()?;
         let n = self.len(8)?;
         let fluxes = (0..n).map(|_| self.f64s()).collect::<Res<Vec<_>>>()?;
@@ -916,8 +922,7 @@ impl Dec<'_> {
                 bubble_dt,
                 field_dt,
                 loading_dt,
-                last_flow,
-                last_flow_dt,
+                loading,
                 tensions,
                 fluxes,
             },

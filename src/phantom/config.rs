@@ -106,6 +106,7 @@ struct RawNumerics {
     explicit_tolerance_factor: Option<f64>,
     field_tolerance: Option<f64>,
     loading_tolerance: Option<f64>,
+    extrapolate_holds: Option<bool>,
     kernel_min_cells: Option<f64>,
     coupling_gap_cells: Option<f64>,
     record_interval_s: Option<f64>,
@@ -620,6 +621,7 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
         )?,
         implicit_cost_ratio: d.implicit_cost_ratio,
         record_gel: n.record_gel.unwrap_or(d.record_gel),
+        extrapolate_holds: n.extrapolate_holds.unwrap_or(d.extrapolate_holds),
         displace_gel: n.displace_gel.unwrap_or(d.displace_gel),
         displace_min_cells: in_range(
             "numerics.displace_min_cells",
