@@ -114,6 +114,28 @@ impl Fields {
         self.offset = offset;
     }
 
+    /// Field `g`'s whole store (its view is `[a, a + cells)` of it, a = [`Self::offset_planes`]
+    /// × the plane's cells).
+    pub(super) fn store(&self, g: usize) -> &[f64] {
+        &self.store[g]
+    }
+
+    /// Exchange field `g`'s store with `other`, a vector of the store's length laid out as it
+    /// (the same offset): field `g`'s view is then `other`'s cells at the views' range.
+    pub(super) fn swap_store(&mut self, g: usize, other: &mut Vec<f64>) {
+        assert_eq!(
+            other.len(),
+            self.store[g].len(),
+            "a store of field {g}'s length"
+        );
+        std::mem::swap(&mut self.store[g], other);
+    }
+
+    /// The views' range in the stores, [a, b).
+    pub(super) fn view_range(&self) -> (usize, usize) {
+        self.range()
+    }
+
     /// Exchange the stores with `back` (one vector of at least a grid's cells per field, the
     /// grid's cells from its start): the views are then `back`'s first cells, and `back` holds
     /// the old stores.
@@ -175,5 +197,27 @@ mod tests {
         f.swap_stores(&mut back);
         assert_eq!((f.offset_planes(), f[1][0]), (0, 8.0));
         assert_eq!(back[0][2 * plane + 3], -1.0);
+    }
+
+    /// One field's store exchanged at an offset of two planes: its view is the new store's
+    /// cells at the same range, the other field and the offset untouched.
+    #[test]
+    fn one_store_swaps_at_the_offset() {
+        let plane = 4;
+        let a: Vec<f64> = (0..12).map(f64::from).collect();
+        let b: Vec<f64> = (100..112).map(f64::from).collect();
+        let mut f = Fields::new(vec![a, b], plane);
+        let _ = f.stores_for_shift();
+        f.shifted(2);
+        let (lo, hi) = f.view_range();
+        assert_eq!((lo, hi), (2 * plane, 2 * plane + 12));
+        let mut other: Vec<f64> = (0..12 + 2 * plane).map(|i| -(i as f64)).collect();
+        let want: Vec<f64> = other[lo..hi].to_vec();
+        let (before, second) = (f[0].to_vec(), f[1].to_vec());
+        f.swap_store(0, &mut other);
+        assert_eq!((&f[0], f.offset_planes()), (&want[..], 2));
+        assert_eq!(f.store(0).len(), 12 + 2 * plane);
+        assert_eq!(&other[lo..hi], &before[..]);
+        assert_eq!(&f[1], &second[..]);
     }
 }

@@ -2233,30 +2233,39 @@ impl<'a> Simulation<'a> {
         use rayon::prelude::*;
         // the grid-wide passes in parallel chunks (element by element: the same bits)
         const CHUNK: usize = 1 << 14;
+        // the whole step in a copy of the field's whole store (the same layout, so that the
+        // stores can be swapped below)
         let mut whole = std::mem::take(&mut self.extra);
-        whole.resize(self.fields[g].len(), 0.0);
+        whole.resize(self.fields.store(g).len(), 0.0);
         whole
             .par_chunks_mut(CHUNK)
-            .zip(self.fields[g].par_chunks(CHUNK))
+            .zip(self.fields.store(g).par_chunks(CHUNK))
             .for_each(|(w, f)| w.copy_from_slice(f));
-        let f_whole = self.implicit.step(&self.grid, &mut whole, d, dt, cb_end);
+        let (a, b) = self.fields.view_range();
+        let f_whole = self
+            .implicit
+            .step(&self.grid, &mut whole[a..b], d, dt, cb_end);
         let half = &mut self.fields[g];
         let f_half = self.implicit.step(&self.grid, half, d, 0.5 * dt, cb_half)
             + self.implicit.step(&self.grid, half, d, 0.5 * dt, cb_end);
-        let negative = half
-            .par_chunks(CHUNK)
-            .zip(whole.par_chunks(CHUNK))
-            .any(|(h, w)| h.iter().zip(w).any(|(h, w)| 2.0 * h - w < 0.0));
+        // the extrapolation into the whole step's buffer, in one pass with the check for a
+        // negative cell; kept (the stores swapped) only if there is none
+        let negative = whole[a..b]
+            .par_chunks_mut(CHUNK)
+            .zip(half.par_chunks(CHUNK))
+            .map(|(w, h)| {
+                let mut negative = false;
+                for (w, h) in w.iter_mut().zip(h) {
+                    *w = 2.0 * h - *w;
+                    negative |= *w < 0.0;
+                }
+                negative
+            })
+            .reduce(|| false, |x, y| x || y);
         let flow = if negative {
             f_half
         } else {
-            half.par_chunks_mut(CHUNK)
-                .zip(whole.par_chunks(CHUNK))
-                .for_each(|(h, w)| {
-                    for (h, w) in h.iter_mut().zip(w) {
-                        *h = 2.0 * *h - w;
-                    }
-                });
+            self.fields.swap_store(g, &mut whole);
             2.0 * f_half - f_whole
         };
         self.extra = whole;
@@ -3682,8 +3691,14 @@ mod loading_error_tests {
         assert!((r2 - 1.0).abs() < 0.015, "{ratios:?}");
         // at first order: each 4× shorter step brings the ratios 3× nearer 1 or more
         for w in ratios.windows(2) {
-            assert!((w[1].0 - 1.0).abs() < (w[0].0 - 1.0).abs() / 3.0, "{ratios:?}");
-            assert!((w[1].1 - 1.0).abs() < (w[0].1 - 1.0).abs() / 3.0, "{ratios:?}");
+            assert!(
+                (w[1].0 - 1.0).abs() < (w[0].0 - 1.0).abs() / 3.0,
+                "{ratios:?}"
+            );
+            assert!(
+                (w[1].1 - 1.0).abs() < (w[0].1 - 1.0).abs() / 3.0,
+                "{ratios:?}"
+            );
         }
     }
 }
