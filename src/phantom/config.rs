@@ -107,6 +107,7 @@ struct RawNumerics {
     field_tolerance: Option<f64>,
     loading_tolerance: Option<f64>,
     extrapolate_holds: Option<bool>,
+    hold_tolerance_factor: Option<f64>,
     kernel_min_cells: Option<f64>,
     coupling_gap_cells: Option<f64>,
     record_interval_s: Option<f64>,
@@ -622,6 +623,16 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
         implicit_cost_ratio: d.implicit_cost_ratio,
         record_gel: n.record_gel.unwrap_or(d.record_gel),
         extrapolate_holds: n.extrapolate_holds.unwrap_or(d.extrapolate_holds),
+        hold_tolerance_factor: in_range(
+            "numerics.hold_tolerance_factor",
+            positive(
+                "numerics.hold_tolerance_factor",
+                n.hold_tolerance_factor.unwrap_or(d.hold_tolerance_factor),
+            )?,
+            1.0,
+            100.0,
+            "(multiple of loading_tolerance)",
+        )?,
         displace_gel: n.displace_gel.unwrap_or(d.displace_gel),
         displace_min_cells: in_range(
             "numerics.displace_min_cells",

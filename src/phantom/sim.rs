@@ -2326,7 +2326,7 @@ impl<'a> Simulation<'a> {
                 next = 0.9
                     * dt
                     * if second {
-                        (tol / worst).cbrt()
+                        (self.params.numerics.hold_tolerance_factor * tol / worst).cbrt()
                     } else {
                         (tol / worst).sqrt()
                     };
