@@ -141,10 +141,11 @@ pub struct Numerics {
     /// first-order one. Default true (27 Nov 2026; false before). Backward Euler's steps lag
     /// the gel's unloading at first order: on the demo's twenty dive runs (45 m / 25 min,
     /// `hydrogel-dive.toml`), against an evaluation with every step within 0.5 s and ¼ of
-    /// every limit, the scores' mean distance goes from 1.50 % to 0.96 % (peak volume), 0.70 %
-    /// to 0.22 % (peak supersaturation) and 1.68 % to 0.90 % (hazard), in about the same time,
-    /// with the preset's cap raised from 30 to 600 s (with backward-Euler stops a 600 s cap had
-    /// moved the scores 3–4 %); README "Time stepping". `hydrogel.toml` sets false: on the
+    /// every limit, the scores' mean distance goes from 1.50 % to 1.00 % (peak volume), 0.70 %
+    /// to 0.29 % (peak supersaturation) and 1.68 % to 0.96 % (hazard) at the default
+    /// `hold_tolerance_factor`, with the preset's cap raised from 30 to 600 s (with
+    /// backward-Euler stops a 600 s cap had moved the scores 3–4 %), and the demo 6–9 % faster;
+    /// README "Time stepping". `hydrogel.toml` sets false: on the
     /// Fig. 5 dive's 4 h hold the extrapolated steps cost 0.2–0.4 s more and move nothing
     /// (peak volume 6.5210 against 6.5205 mm³, R_max 848.18 against 848.14 µm).
     pub extrapolate_holds: bool,
