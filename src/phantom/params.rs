@@ -126,10 +126,10 @@ pub struct Numerics {
     /// step is 0.9·dt·√(tol/e). After a Richardson-extrapolated step at a steady pressure (a
     /// hold or a stop with every bubble shut) the estimate is that scheme's own, second order,
     /// e = dt³·|M[t₋₂, t₋₁, t, t + dt]| (the third divided difference of the content over this
-    /// step and the two before it), and the next step 0.9·dt·∛(tol/e). It costs nothing (the
-    /// flows are summed anyway) and keeps a
-    /// hold's steps short while the gel is still loading after a descent, where backward
-    /// Euler's steps would otherwise grow to `max_step` and lag the loading. Default 1e-3: on a
+    /// step and the two before it), and the next step 0.9·dt·∛(tol/e) (at
+    /// `hold_tolerance_factor` × this tolerance). It costs nothing (the flows are summed
+    /// anyway) and keeps a hold's steps short while the gel is still loading after a descent,
+    /// where backward Euler's steps would otherwise grow to `max_step` and lag the loading. Default 1e-3: on a
     /// 20 min hold at 130 psi with `profiles/phantoms/hydrogel.toml` (600 s cap) the peak
     /// volume is 2.928 mm³ against 2.928 for a run with ¼ of every limit and a 5 s cap, and
     /// 2.845 (−2.8 %) without it; the Fig. 5 dive takes 1 307 + 499 steps instead of
@@ -145,9 +145,9 @@ pub struct Numerics {
     /// to 0.29 % (peak supersaturation) and 1.68 % to 0.96 % (hazard) at the default
     /// `hold_tolerance_factor`, with the preset's cap raised from 30 to 600 s (with
     /// backward-Euler stops a 600 s cap had moved the scores 3–4 %), and the demo 6–9 % faster;
-    /// README "Time stepping". `hydrogel.toml` sets false: on the
-    /// Fig. 5 dive's 4 h hold the extrapolated steps cost 0.2–0.4 s more and move nothing
-    /// (peak volume 6.5210 against 6.5205 mm³, R_max 848.18 against 848.14 µm).
+    /// README "Time stepping". `hydrogel.toml` sets false: on the Fig. 5 dive's 4 h hold the
+    /// extrapolated steps cost 0.2–0.4 s more and move nothing (peak volume 6.5207–6.5210
+    /// against 6.5205 mm³, R_max 848.08–848.18 against 848.14 µm).
     pub extrapolate_holds: bool,
     /// The loading's tolerance for the extrapolated steps of a hold or a stop with every bubble
     /// shut (`extrapolate_holds`, their second-order estimate), as a multiple of
