@@ -2280,15 +2280,16 @@ impl<'a> Simulation<'a> {
     /// [`loading_error_first_order`] and the next step 0.9·dt·√(tol/e); after a
     /// Richardson-extrapolated step at a steady pressure (`second`: a hold or a stop with every
     /// bubble shut) with two steps of history it is [`loading_error_second_order`], the
-    /// scheme's own, and the next step 0.9·dt·∛(tol/e) (with one, the first-order estimate,
-    /// which over-states its error). A descent's extrapolated steps keep the first-order
-    /// estimate: with the second-order one the ramp of
-    /// `verification::a_descent_loads_the_gel_as_duhamels_series` lagged by 0.118 % of the
-    /// load (its bound 0.1 %, 0.048 % with the first-order estimate) in 85 + 17 steps. Returns the next step it allows:
-    /// ∞ without history or with the estimate off, and after a breakpoint at most the
-    /// explicit limit if the gel has open faces, the step the run starts with (the flow's rate
-    /// jumps there, and the estimate has no history to see it: the steps then grow again from
-    /// the limit by at most 2× per step until it has).
+    /// scheme's own, and the next step 0.9·dt·∛(k·tol/e), k = `hold_tolerance_factor` (with
+    /// one step of history, the first-order estimate, which over-states its error). A
+    /// descent's extrapolated steps keep the first-order estimate: with the second-order one
+    /// the ramp of `verification::a_descent_loads_the_gel_as_duhamels_series` lagged by
+    /// 0.118 % of the load (its bound 0.1 %, 0.048 % with the first-order estimate) in
+    /// 85 + 17 steps. Returns the next step it allows: ∞ without history or with the estimate
+    /// off, and after a breakpoint at most the explicit limit if the gel has open faces, the
+    /// step the run starts with (the flow's rate jumps there, and the estimate has no history
+    /// to see it: the steps then grow again from the limit by at most 2× per step until it
+    /// has).
     ///
     /// [`Numerics::loading_tolerance`]: super::params::Numerics::loading_tolerance
     fn loading_step(
