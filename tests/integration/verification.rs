@@ -828,7 +828,8 @@ fn fig3_sensitivity_directions() {
 /// and, since 27 Nov 2026, in the hold. During the ramp the default steps are within 0.1 %
 /// (0.048 %) of the load c_b(T_r) − c_0 of a run at a twentieth of h²/(9D), whose difference
 /// from the series (−0.76 % at the end of the ramp, then falling) is the cell-centred grid's
-/// own; in the hold within 0.1 % (0.025 %; backward Euler's steps there lagged by up to
+/// own; in the hold within 0.1 % (0.025 %, in steps the second-order estimate sizes, not the
+/// cap: with a 600 s cap the same 88 + 11 steps; backward Euler's steps there lagged by up to
 /// 0.098 % before, and by 0.48 % without the loading estimate), and without the loading
 /// estimate (extrapolated steps straight to the 20 s cap) within 0.1 % too (0.030 %). The ramp
 /// taken in 20 s steps stays within 0.25 % (0.19 %); plain backward Euler in the same steps
