@@ -177,6 +177,70 @@ fn a_run_resumed_from_a_random_step_is_byte_identical() {
     }
 }
 
+/// The gel of [`PHANTOM`] open at the top, with one bubble that the compression shuts
+/// (R_min = 90 µm): the 140 s at 130 psi is a hold with every bubble shut, taken in
+/// Richardson-extrapolated steps sized by the loading's second-order estimate, whose two
+/// steps of history the checkpoint carries (format 4).
+const HOLD_PHANTOM: &str = r#"
+name = "checkpoint test, extrapolated hold"
+[geometry]
+shape = "box"
+size_m = [2.0e-3, 2.0e-3, 2.0e-3]
+grid_step_m = 100e-6
+open_faces = ["top"]
+[material]
+surface_tension = 0.07
+[material.elasticity]
+law = "none"
+[gases.n2]
+diffusivity = 2.5e-9
+ostwald = 0.014
+[gases.o2]
+diffusivity = 2.5e-9
+ostwald = 0.027
+[nuclei]
+min_radius_m = 90e-6
+[[bubbles]]
+position_m = [1.0e-3, 1.0e-3, 0.8e-3]
+initial_radius_m = 100e-6
+[numerics]
+record_interval_s = 1.0
+"#;
+
+#[test]
+fn a_run_resumed_within_an_extrapolated_hold_is_byte_identical() {
+    let c = Case::with_phantom("checkpoint-hold", HOLD_PHANTOM);
+    let o = c.run("whole", &["--trace-steps"]);
+    assert!(o.status.success(), "{}", text(&o.stderr));
+    let whole = c.dir.join("whole");
+    // the steps of the hold at 130 psi (60–200 s) that are extrapolated, by their number
+    let steps = std::fs::read_to_string(whole.join("steps.csv")).unwrap();
+    let held: Vec<usize> = steps
+        .lines()
+        .skip(1)
+        .enumerate()
+        .filter(|(_, l)| {
+            let f: Vec<&str> = l.split(',').collect();
+            let t: f64 = f[0].parse().unwrap();
+            f[2] == "extrapolated" && t > 60.0 && t < 200.0
+        })
+        .map(|(i, _)| i + 1)
+        .collect();
+    assert!(held.len() >= 5, "{} extrapolated steps in the hold", held.len());
+    // stop after the hold's third extrapolated step (two steps of history behind the next)
+    // and after its second-to-last
+    for (k, n) in [held[2], held[held.len() - 2]].into_iter().enumerate() {
+        let out = format!("stopped{k}");
+        let o = c.run(&out, &["--checkpoint-at-step", &n.to_string()]);
+        assert_eq!(o.status.code(), Some(130), "{}", text(&o.stderr));
+        let ck = c.checkpoint_dir(&out);
+        let resumed = format!("resumed{k}");
+        let o = c.run(&resumed, &["--resume", ck.to_str().unwrap()]);
+        assert!(o.status.success(), "{}", text(&o.stderr));
+        assert_same_outputs(&whole, &c.dir.join(&resumed), &format!("step {n}"));
+    }
+}
+
 /// The gel of [`PHANTOM`] open at the top, without placed bubbles, holding 20 micronuclei with
 /// VPM skins (γc = 0.257 N/m): the compression crushes them (each cell keeps the largest crushing
 /// pressure it has seen, part of the state) and the ascent activates some.
