@@ -226,7 +226,11 @@ fn a_run_resumed_within_an_extrapolated_hold_is_byte_identical() {
         })
         .map(|(i, _)| i + 1)
         .collect();
-    assert!(held.len() >= 5, "{} extrapolated steps in the hold", held.len());
+    assert!(
+        held.len() >= 5,
+        "{} extrapolated steps in the hold",
+        held.len()
+    );
     // stop after the hold's third extrapolated step (two steps of history behind the next)
     // and after its second-to-last
     for (k, n) in [held[2], held[held.len() - 2]].into_iter().enumerate() {
