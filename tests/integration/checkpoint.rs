@@ -177,39 +177,23 @@ fn a_run_resumed_from_a_random_step_is_byte_identical() {
     }
 }
 
-/// The gel of [`PHANTOM`] open at the top, with one bubble that the compression shuts
+/// The gel of [`SKIN_PHANTOM`] (open at the top), with one bubble that the compression shuts
 /// (R_min = 90 µm): the 140 s at 130 psi is a hold with every bubble shut, taken in
 /// Richardson-extrapolated steps sized by the loading's second-order estimate, whose two
 /// steps of history the checkpoint carries (format 4).
-const HOLD_PHANTOM: &str = r#"
-name = "checkpoint test, extrapolated hold"
-[geometry]
-shape = "box"
-size_m = [2.0e-3, 2.0e-3, 2.0e-3]
-grid_step_m = 100e-6
-open_faces = ["top"]
-[material]
-surface_tension = 0.07
-[material.elasticity]
-law = "none"
-[gases.n2]
-diffusivity = 2.5e-9
-ostwald = 0.014
-[gases.o2]
-diffusivity = 2.5e-9
-ostwald = 0.027
-[nuclei]
-min_radius_m = 90e-6
-[[bubbles]]
-position_m = [1.0e-3, 1.0e-3, 0.8e-3]
-initial_radius_m = 100e-6
-[numerics]
-record_interval_s = 1.0
-"#;
+fn hold_phantom() -> String {
+    // SKIN_PHANTOM's gel, without its nucleation
+    let gel = SKIN_PHANTOM.split("[nucleation]").next().unwrap();
+    format!(
+        "{}[nuclei]\nmin_radius_m = 90e-6\n[[bubbles]]\nposition_m = [1.0e-3, 1.0e-3, 0.8e-3]\n\
+         initial_radius_m = 100e-6\n[numerics]\nrecord_interval_s = 1.0\n",
+        gel.replace("nucleating", "extrapolated hold")
+    )
+}
 
 #[test]
 fn a_run_resumed_within_an_extrapolated_hold_is_byte_identical() {
-    let c = Case::with_phantom("checkpoint-hold", HOLD_PHANTOM);
+    let c = Case::with_phantom("checkpoint-hold", &hold_phantom());
     let o = c.run("whole", &["--trace-steps"]);
     assert!(o.status.success(), "{}", text(&o.stderr));
     let whole = c.dir.join("whole");
@@ -233,7 +217,12 @@ fn a_run_resumed_within_an_extrapolated_hold_is_byte_identical() {
     );
     // stop after the hold's third extrapolated step (two steps of history behind the next)
     // and after its second-to-last
-    for (k, n) in [held[2], held[held.len() - 2]].into_iter().enumerate() {
+    stop_and_resume(&c, &whole, &[held[2], held[held.len() - 2]]);
+}
+
+/// Stop `c`'s run after each of `steps` and resume it: the same bytes as `whole`.
+fn stop_and_resume(c: &Case, whole: &Path, steps: &[usize]) {
+    for (k, n) in steps.iter().enumerate() {
         let out = format!("stopped{k}");
         let o = c.run(&out, &["--checkpoint-at-step", &n.to_string()]);
         assert_eq!(o.status.code(), Some(130), "{}", text(&o.stderr));
@@ -241,7 +230,7 @@ fn a_run_resumed_within_an_extrapolated_hold_is_byte_identical() {
         let resumed = format!("resumed{k}");
         let o = c.run(&resumed, &["--resume", ck.to_str().unwrap()]);
         assert!(o.status.success(), "{}", text(&o.stderr));
-        assert_same_outputs(&whole, &c.dir.join(&resumed), &format!("step {n}"));
+        assert_same_outputs(whole, &c.dir.join(&resumed), &format!("step {n}"));
     }
 }
 
@@ -294,16 +283,7 @@ fn a_nucleating_run_with_crushed_skins_resumes_to_the_same_bytes() {
             .parse::<usize>()
             .unwrap();
     // stop at the bottom (after the crushing, before the activations) and near the end
-    for (k, n) in [steps / 4, 3 * steps / 4].into_iter().enumerate() {
-        let out = format!("stopped{k}");
-        let o = c.run(&out, &["--checkpoint-at-step", &n.to_string()]);
-        assert_eq!(o.status.code(), Some(130), "{}", text(&o.stderr));
-        let ck = c.checkpoint_dir(&out);
-        let resumed = format!("resumed{k}");
-        let o = c.run(&resumed, &["--resume", ck.to_str().unwrap()]);
-        assert!(o.status.success(), "{}", text(&o.stderr));
-        assert_same_outputs(&whole, &c.dir.join(&resumed), &format!("step {n}"));
-    }
+    stop_and_resume(&c, &whole, &[steps / 4, 3 * steps / 4]);
 }
 
 #[test]
