@@ -423,7 +423,7 @@ pub fn timing_toml(run: &SimRun) -> String {
     format!(
         "# wall-clock time of this run on the machine that ran it (not a result)\n\
          wall_seconds = {}\n\n\
-         # of it, the time loop's phases summed over the steps, s (src/phantom/sim.rs, StepWall):\n\
+         # of it, the time loop's phases summed over the steps, s (src/phantom/sim/record.rs, StepWall):\n\
          # prepare: the bubbles' fluxes at the start of each step, the step's choice, the exchange;\n\
          # gel: the gel's diffusion; events: perfusion, radii, corrector, coalescence, nucleation,\n\
          # displacement (of them: corrector, displacement); frames: the frames recorded\n\
