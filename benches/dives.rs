@@ -3,9 +3,9 @@
 //! `cargo bench --bench dives` (about 2–3 minutes: ten samples of each).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use decophantom::app::simulate::simulate;
 use decophantom::phantom::config::load_phantom;
 use decophantom::profile::{load, LoadOptions};
+use decophantom::run::simulate;
 use std::path::Path;
 use std::time::Duration;
 

@@ -8,10 +8,10 @@
 //! of ~40 s per case).
 
 use criterion::{criterion_group, criterion_main, Criterion};
-use decophantom::app::simulate::simulate;
 use decophantom::phantom::config::load_phantom;
 use decophantom::phantom::nucleation::critical_radius::{CriticalRadius, SizeDistribution};
 use decophantom::profile::{load, LoadOptions};
+use decophantom::run::simulate;
 use std::path::Path;
 use std::sync::Arc;
 use std::time::Duration;

@@ -18,11 +18,11 @@
 //! threshold of [`GridThreads::Auto`].
 
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use decophantom::app::simulate::{simulate, with_grid_threads, GridThreads};
 use decophantom::phantom::config::load_phantom;
 use decophantom::phantom::grid::Shape;
 use decophantom::phantom::sim::Simulation;
 use decophantom::profile::{load, LoadOptions};
+use decophantom::run::{simulate, with_grid_threads, GridThreads};
 use rayon::prelude::*;
 use std::path::Path;
 use std::time::Duration;

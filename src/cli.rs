@@ -573,7 +573,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             let run = decophantom::app::simulate::run(&req, &mut |t, e| bar.update(t, e));
             bar.finish();
             let run = run?;
-            print!("{}", decophantom::app::simulate::describe(&run));
+            print!("{}", decophantom::run::text::describe(&run));
             wrote(&a.out);
             if let Some(c) = run.checkpoints.as_ref().filter(|c| c.written > 0) {
                 if matches!(
@@ -595,7 +595,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             })
         }
         Command::Elasticity(a) => {
-            let req = decophantom::app::elasticity::ElasticityRequest {
+            let req = decophantom::phantom::elasticity_compare::ElasticityRequest {
                 p0: a.p0,
                 pf: a.pf,
                 gamma: a.gamma,
@@ -606,8 +606,11 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 },
                 r0: a.r0,
             };
-            let rows = decophantom::app::elasticity::compare(&req)?;
-            print!("{}", decophantom::app::elasticity::to_csv(&rows));
+            let rows = decophantom::phantom::elasticity_compare::compare(&req)?;
+            print!(
+                "{}",
+                decophantom::phantom::elasticity_compare::to_csv(&rows)
+            );
             Ok(0)
         }
         Command::Demo(a) => {
@@ -798,10 +801,10 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
 
 /// Refuse runs estimated above 6 h unless `--force` (the library itself sets no limit).
 fn long_runs(force: bool) {
-    decophantom::app::cost::set_limit(if force {
+    decophantom::run::cost::set_limit(if force {
         f64::INFINITY
     } else {
-        decophantom::app::cost::DEFAULT_LIMIT_S
+        decophantom::run::cost::DEFAULT_LIMIT_S
     });
 }
 
@@ -866,7 +869,7 @@ impl Progress {
     }
 }
 
-/// A flag that Ctrl-C sets (with the library's [`decophantom::app::INTERRUPT`]): `simulate`
+/// A flag that Ctrl-C sets (with the library's [`decophantom::run::INTERRUPT`]): `simulate`
 /// stops at its next step and writes what it has; `check` and `evaluate` stop their runs and
 /// write nothing half-done. A second Ctrl-C ends the process at once, but never in the middle
 /// of writing an output (it waits the few ms that takes), so no staging folder is left behind.
@@ -876,7 +879,7 @@ fn interrupt_flag() -> std::sync::Arc<std::sync::atomic::AtomicBool> {
     let f = flag.clone();
     let _ = ctrlc::set_handler(move || {
         let again = f.swap(true, Ordering::SeqCst);
-        decophantom::app::INTERRUPT.store(true, Ordering::SeqCst);
+        decophantom::run::INTERRUPT.store(true, Ordering::SeqCst);
         if again {
             while decophantom::report::output::commit_in_progress() {
                 std::thread::sleep(std::time::Duration::from_millis(5));

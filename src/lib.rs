@@ -21,5 +21,6 @@ pub mod profile;
 pub mod report;
 pub mod reproduce;
 pub mod risk;
+pub mod run;
 pub mod sweep;
 pub mod units;

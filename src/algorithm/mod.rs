@@ -8,12 +8,14 @@ pub mod conventions;
 pub mod loading;
 pub mod oxygen;
 pub mod registry;
+pub mod request;
 pub mod schedule;
 pub mod vpmb;
 pub mod waypoints;
 
 pub use config::{load_algorithm, LoadedAlgorithm};
 pub use conventions::Conventions;
+pub use request::plan_dive;
 pub use schedule::{DecoGas, DivePlan, GasSwitch, Leg, LegKind, Schedule, Stop, TravelGas};
 
 /// A decompression algorithm: dive plan in, schedule out.

@@ -6,8 +6,6 @@
 //! experiment (§4.1) under each law, and the laws without mass transfer (the paper's Fig. 2a).
 //! Every input is compiled in, so the demo runs from any folder.
 
-use super::elasticity::{compare, ElasticityRequest};
-use super::simulate::{add_run_files, describe, describe_results, radius_plot, simulate, SimRun};
 use crate::error::Error;
 use crate::evaluate::link::{PhantomSpec, HYDROGEL_PHANTOM, HYDROGEL_PHANTOM_PATH};
 use crate::evaluate::matrix::run_matrix;
@@ -16,6 +14,7 @@ use crate::evaluate::tables::summary_text;
 use crate::evaluate::{algorithms_from_text, plan_candidates};
 use crate::phantom::config::parse_phantom;
 use crate::phantom::elasticity::{law_names, AllLawParams};
+use crate::phantom::elasticity_compare::{compare, ElasticityRequest};
 use crate::phantom::sim::StepWall;
 use crate::profile::toml as profile_toml;
 use crate::report::html::Page;
@@ -23,6 +22,10 @@ use crate::report::output::OutputSet;
 use crate::report::plot::{LinePlot, Series};
 use crate::report::table::{Cell, Column, Table};
 use crate::risk::parse_criteria;
+use crate::run::files::add_run_files;
+use crate::run::plots::radius_plot;
+use crate::run::text::{describe, describe_results};
+use crate::run::{simulate, SimRun};
 use rayon::prelude::*;
 use std::path::Path;
 use std::sync::Arc;
@@ -280,7 +283,10 @@ pub fn run_sized(
         laws,
         r0,
     })?;
-    set.add("elasticity-fig2a.csv", super::elasticity::to_csv(&rows));
+    set.add(
+        "elasticity-fig2a.csv",
+        crate::phantom::elasticity_compare::to_csv(&rows),
+    );
     let mut fig2a = LinePlot::new(
         "Final radius without mass transfer, 1e6 → 1e4 Pa (Fig. 2a)",
         "initial radius R0 (µm)",

@@ -209,7 +209,7 @@ fn runs(ev: &Evaluation) -> Vec<RunJson> {
         .map(|r| RunJson {
             schedule: ev.candidates[r.candidate].label.clone(),
             elasticity: r.law.to_string(),
-            ending: super::simulate::ending_text(&r.run.summary.ending),
+            ending: crate::run::text::ending_text(&r.run.summary.ending),
             simulated_s: r.run.summary.end_time,
             all_pass: r.scores.iter().all(|s| s.pass),
             scores: r.scores.iter().map(ScoreJson::from).collect(),

@@ -1,16 +1,12 @@
 //! One library function per subcommand; the CLI only parses arguments and prints what these
-//! return. Nothing here touches the terminal.
-
-/// Set when the user asks the process to stop (the binary's Ctrl-C handler). Every phantom
-/// run started through [`simulate::simulate`] checks it each step and ends with
-/// [`crate::error::Error::Interrupted`]; commands then write nothing half-done.
-pub static INTERRUPT: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+//! return. Nothing here touches the terminal. What more than one command (or a library module)
+//! needs lives in the library: a phantom run in [`crate::run`], a dive planned from the
+//! command line's strings in [`crate::algorithm::plan_dive`], the elasticity laws' final radii
+//! in [`crate::phantom::elasticity_compare`] (the `elasticity` command calls it directly).
 
 pub mod check;
-pub mod cost;
 pub mod demo;
 pub mod discover;
-pub mod elasticity;
 pub mod evaluate;
 pub mod fit;
 pub mod json;

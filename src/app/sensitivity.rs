@@ -1,9 +1,9 @@
 //! `decophantom sensitivity` and `decophantom merge`: wiring only; the work is in
 //! [`crate::sweep`].
 
-use crate::app::simulate::load_profile_or_schedule;
 use crate::error::{Error, InputError};
 use crate::profile::LoadOptions;
+use crate::run::load_profile_or_schedule;
 use crate::sweep::run::{merge, run_study, Results, Shard, Study};
 use crate::sweep::{Method, Metric, Param, StudySpec};
 use std::path::PathBuf;

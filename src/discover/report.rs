@@ -3,13 +3,13 @@
 
 use super::diagnose::Diagnostics;
 use super::search::Discovery;
-use crate::app::simulate::SimRun;
 use crate::error::Error;
 use crate::fit::data::{Experiments, Measurements};
 use crate::fit::report::{add_overlays, estimates_table, sig};
 use crate::report::html::Page;
 use crate::report::output::OutputSet;
 use crate::report::table::{Cell, Column, Table};
+use crate::run::SimRun;
 use serde::Serialize;
 
 #[derive(Serialize)]

@@ -4,12 +4,12 @@
 
 use super::link::{breathed_gas_params, PhantomSpec};
 use super::{Candidate, Evaluation, RunOutcome};
-use crate::app::simulate::{simulate_in_batch, SimRun};
 use crate::error::Error;
 use crate::phantom::params::PhantomParams;
 use crate::profile::PressureHistory;
 use crate::report::journal::Journal;
 use crate::risk::{CriteriaSet, RunData};
+use crate::run::{simulate_in_batch, SimRun};
 use rayon::prelude::*;
 use std::path::Path;
 use std::sync::Mutex;

@@ -21,12 +21,12 @@ pub mod report;
 pub mod tables;
 
 use crate::algorithm::config::parse_algorithm;
+use crate::algorithm::plan_dive;
 use crate::algorithm::{LoadedAlgorithm, Schedule};
-use crate::app::plan::plan_dive;
-use crate::app::simulate::SimRun;
 use crate::error::InputError;
 use crate::profile::PressureHistory;
 use crate::risk::{CriteriaSet, Protocol, Score};
+use crate::run::SimRun;
 use link::{dive_history, PhantomSpec};
 use std::path::{Path, PathBuf};
 

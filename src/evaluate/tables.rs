@@ -5,10 +5,10 @@
 use super::rank::{ranking, ties};
 use super::Evaluation;
 use crate::algorithm::schedule::gas_text;
-use crate::app::simulate::ending_text;
 use crate::error::Error;
 use crate::phantom::sim::StepWall;
 use crate::report::table::{Cell, Column, Table};
+use crate::run::text::ending_text;
 
 pub(super) fn fmt_min(x: f64) -> String {
     if (x - x.round()).abs() < 1e-9 {

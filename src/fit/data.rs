@@ -407,12 +407,11 @@ pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
             vapour_pa: e.vapour_pa,
             dive: None,
         };
-        let profile =
-            match crate::app::simulate::load_profile_or_schedule(&dir.join(&e.profile), &opts) {
-                Ok(p) => p,
-                Err(Error::Input(x)) => return Err(entry("profile", x).into()),
-                Err(other) => return Err(other),
-            };
+        let profile = match crate::run::load_profile_or_schedule(&dir.join(&e.profile), &opts) {
+            Ok(p) => p,
+            Err(Error::Input(x)) => return Err(entry("profile", x).into()),
+            Err(other) => return Err(other),
+        };
         let phantom_path = dir.join(&e.phantom);
         let ptext = crate::error::read_text(&phantom_path, "the phantom file")
             .map_err(|x| entry("phantom", x))?;

@@ -11,10 +11,10 @@ use super::journal::{self, Evaluations};
 use super::lsq::{infer_with, minimize, Inference, LsqOptions, LsqResult};
 use super::paths::{self, ParamSpec};
 use super::stats::aicc;
-use crate::app::simulate::SimRun;
 use crate::error::Error;
 use crate::phantom::params::Numerics;
 use crate::phantom::sim::{Event, Frame};
+use crate::run::SimRun;
 use rayon::prelude::*;
 use std::sync::Arc;
 
@@ -259,12 +259,12 @@ fn sample_experiment(
 }
 
 /// One simulation as one of many run at once: serial grid loops on a small grid
-/// ([`crate::app::simulate::GridThreads::batch`]; results are identical across thread counts).
+/// ([`crate::run::GridThreads::batch`]; results are identical across thread counts).
 pub fn run_one(
     params: &crate::phantom::params::PhantomParams,
     profile: &crate::profile::PressureHistory,
 ) -> Result<SimRun, Error> {
-    crate::app::simulate::simulate_in_batch(params, profile, &mut |_, _| {})
+    crate::run::simulate_in_batch(params, profile, &mut |_, _| {})
 }
 
 /// The simulated radius at every observation (measurement order) from runs of every experiment.

@@ -5,12 +5,12 @@ use super::data::{Experiments, Measurements};
 use super::growth::{compare_growth, fit_growth, GrowthFit};
 use super::lsq::Estimate;
 use super::model::{radius_at, Fitted};
-use crate::app::simulate::SimRun;
 use crate::error::Error;
 use crate::report::html::Page;
 use crate::report::output::OutputSet;
 use crate::report::overlay::Overlay;
 use crate::report::table::{Cell, Column, Table};
+use crate::run::SimRun;
 use serde::Serialize;
 
 /// A number with `sig` significant figures in plain or scientific notation as fits its size.

@@ -6,6 +6,7 @@ pub mod config;
 pub mod diffusion;
 pub mod displacement;
 pub mod elasticity;
+pub mod elasticity_compare;
 pub mod fields;
 mod gel_pass;
 pub mod grid;

@@ -1,15 +1,15 @@
 //! Fig. 2a: final against initial radius of a bubble taken from 10⁶ to 10⁴ Pa without mass
 //! transfer, for every elasticity form and Ω = 0 (§2.1.2). The gas content is fixed by the
 //! Laplace balance (2.4) at P0 and R0; the final radius solves the same balance at P_f
-//! ([`crate::app::elasticity::compare`], the `elasticity` command). The caption does not pin μ
+//! ([`crate::phantom::elasticity_compare::compare`], the `elasticity` command). The caption does not pin μ
 //! ("γ and μ taken from table 1", whose μ spans 0–4 MPa): shown at μ = 40 Pa (the value of the
 //! Figs 4–5 captions) and at a stiffer μ.
 
 use super::{add_verdicts, c, discrepancies, report_err, s3, Agreement, FigureOutput, Progress};
 use super::{Settings, Verdict};
-use crate::app::elasticity::{compare, ElasticityRequest, ElasticityRow};
 use crate::error::Error;
 use crate::phantom::elasticity::{law_names, AllLawParams};
+use crate::phantom::elasticity_compare::{compare, ElasticityRequest, ElasticityRow};
 use crate::report::html::Page;
 use crate::report::output::OutputSet;
 use crate::report::plot::{LinePlot, Series};

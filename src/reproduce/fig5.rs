@@ -9,7 +9,6 @@
 
 use super::{add_verdicts, c, discrepancies, report_err, s3, Agreement, FigureOutput, Progress};
 use super::{halve_steps, Settings, Verdict};
-use crate::app::simulate::SimRun;
 use crate::error::{Error, InputError};
 use crate::fit::data::build_params;
 use crate::fit::model::run_one;
@@ -21,6 +20,7 @@ use crate::report::html::Page;
 use crate::report::output::OutputSet;
 use crate::report::overlay::Overlay;
 use crate::report::table::{Cell, Column, Table};
+use crate::run::SimRun;
 use crate::sweep::Metric;
 use crate::units::{ATM_PA, PSI_PA};
 use rayon::prelude::*;

@@ -6,7 +6,6 @@
 use super::fig5::{dive, growth, hydrogel, simulate, GRID_STEP, GRID_STEP_QUICK, STATS_NOTE};
 use super::{add_verdicts, c, discrepancies, report_err, s3, Agreement, FigureOutput, Progress};
 use super::{exceeds, grade, halve_steps, Part, Settings, Verdict};
-use crate::app::simulate::SimRun;
 use crate::error::{Error, InputError};
 use crate::fit::paths;
 use crate::fit::stats::linear_fit;
@@ -14,6 +13,7 @@ use crate::report::html::Page;
 use crate::report::output::OutputSet;
 use crate::report::plot::{LinePlot, Series};
 use crate::report::table::{Cell, Column, Table};
+use crate::run::SimRun;
 use rayon::prelude::*;
 use std::sync::atomic::{AtomicUsize, Ordering};
 

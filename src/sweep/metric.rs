@@ -4,9 +4,9 @@
 //! `peak_volume`; `final_radius`. Over all bubbles (the largest at each time; `peak_volume`:
 //! the total) or one bubble (`r_max:0`, the 0-based index of the phantom's `[[bubbles]]`).
 
-use crate::app::simulate::SimRun;
 use crate::error::InputError;
 use crate::fit::growth::fit_growth;
+use crate::run::SimRun;
 
 /// The metric names.
 pub const NAMES: [&str; 6] = [

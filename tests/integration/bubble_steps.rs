@@ -136,11 +136,11 @@ fn default_steps_are_within_0_3_percent_of_16x_smaller_steps() {
 /// 387.5 against 386.7 µm (+0.2 %), peak volume 0.2436 against 0.2422 mm³ (+0.6 %).
 #[test]
 fn implicit_steps_near_a_growing_bubble_stay_near_an_all_explicit_run() {
-    use decophantom::app::simulate::simulate;
     use decophantom::phantom::config::load_phantom;
     use decophantom::phantom::diffusion::explicit_limit;
     use decophantom::phantom::grid::Grid;
     use decophantom::profile::{load, LoadOptions};
+    use decophantom::run::simulate;
     let dir = crate::common::root().join("benches/small-cube");
     let history = load(&dir.join("profile.toml"), &LoadOptions::default()).unwrap();
     let params = load_phantom(&dir.join("phantom.toml")).unwrap().params;

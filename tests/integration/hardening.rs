@@ -182,7 +182,7 @@ fn tiny_record_interval_is_refused_and_never_hangs() {
         .unwrap()
         .history;
     let t = std::time::Instant::now();
-    let r = decophantom::app::simulate::simulate(&params, &profile, &mut |_, _| {}).unwrap();
+    let r = decophantom::run::simulate(&params, &profile, &mut |_, _| {}).unwrap();
     assert!(r.frames.len() > 1 && t.elapsed().as_secs() < 20);
 }
 
@@ -267,9 +267,9 @@ fn runs_estimated_at_hours_need_force() {
         decophantom::profile::toml::parse(&std::fs::read_to_string(&month).unwrap(), &month)
             .unwrap()
             .history;
-    let e = decophantom::app::cost::estimate(&params, &history);
+    let e = decophantom::run::cost::estimate(&params, &history);
     assert!(
-        e.cells == 8e6 && e.seconds > decophantom::app::cost::DEFAULT_LIMIT_S,
+        e.cells == 8e6 && e.seconds > decophantom::run::cost::DEFAULT_LIMIT_S,
         "{e:?}"
     );
     let o = run(&[

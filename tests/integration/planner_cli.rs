@@ -496,7 +496,7 @@ fn dive_profile_plot_and_the_tissue_loading_it_draws() {
         assert!(rects > 16 * 50, "heat map cells: {rects}");
 
         let alg = load_algorithm(&root().join(file)).unwrap();
-        let (_, sched) = decophantom::app::plan::plan_dive(
+        let (_, sched) = decophantom::algorithm::plan_dive(
             &alg,
             60.0,
             20.0,
@@ -644,7 +644,7 @@ fn travel_gas_descent_loading_matches_an_independent_schreiner_computation() {
     let (ps, bpm, wv) = (1.01325, 0.09985, 0.0627);
     let alg = load_algorithm(&root().join("algorithms/zhl16c-gf30-85.toml")).unwrap();
     let fn2_surface = alg.conventions.surface_tissue_n2_fraction;
-    let (_, s) = decophantom::app::plan::plan_dive(
+    let (_, s) = decophantom::algorithm::plan_dive(
         &alg,
         110.0,
         20.0,

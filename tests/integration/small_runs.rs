@@ -3,11 +3,10 @@
 //! ([`GridThreads::Parallel`]) give the same bits — summary and every frame.
 
 use crate::common::root;
-use decophantom::app::simulate::{
-    estimated_cells, simulate, with_grid_threads, GridThreads, SMALL_GRID_CELLS,
-};
 use decophantom::phantom::config::load_phantom;
 use decophantom::profile::{load, LoadOptions};
+use decophantom::run::threads::{estimated_cells, SMALL_GRID_CELLS};
+use decophantom::run::{simulate, with_grid_threads, GridThreads};
 use rayon::prelude::*;
 
 #[test]

@@ -238,7 +238,7 @@ fn sweep_oat_matches_direct_simulations_and_the_solubility_direction() {
         .collect();
     assert_eq!(rows.len(), 4);
     // each row against a simulation run here, its peak radius read from the frames
-    let profile = decophantom::app::simulate::load_profile_or_schedule(
+    let profile = decophantom::run::load_profile_or_schedule(
         &pr,
         &decophantom::profile::LoadOptions::default(),
     )

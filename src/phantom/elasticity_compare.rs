@@ -1,5 +1,5 @@
-//! `decophantom elasticity`: final radius after a pressure change with no mass transfer, for
-//! every tissue-elasticity form (the paper's Fig. 2a).
+//! Final radius after a pressure change with no mass transfer, for every tissue-elasticity
+//! form (the paper's Fig. 2a; the `elasticity` command and `reproduce fig2a`).
 
 use crate::error::{Error, InputError};
 use crate::phantom::bubble::Balance;

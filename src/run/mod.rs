@@ -1,0 +1,240 @@
+//! One phantom run, as every command runs it: a pressure profile through a phantom, every
+//! frame recorded, with its progress, stop flag, checkpoints and the wall time of its phases
+//! ([`simulate`] and its variants). `simulate`, `fit`, `discover`, `sweep`, `evaluate`,
+//! `reproduce` and `demo` all run phantoms through here; the files of a run are in [`files`],
+//! its plots in [`plots`], its texts for the terminal and reports in [`text`], the estimate of
+//! its cost before it starts in [`cost`], and how many threads its grid loops take in
+//! [`threads`].
+
+pub mod cost;
+pub mod files;
+pub mod plots;
+pub mod text;
+pub mod threads;
+
+pub use threads::{simulate_in_batch, with_grid_threads, GridThreads};
+
+use crate::error::Error;
+use crate::phantom::checkpoint::{self, Checkpoint, Checkpointer};
+use crate::phantom::params::PhantomParams;
+use crate::phantom::sim::{
+    Frame, Observer, Recorder, RunSummary, Simulation, StepRecord, StepWall,
+};
+use crate::profile::{load, LoadOptions, PressureHistory};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Set when the user asks the process to stop (the binary's Ctrl-C handler). Every phantom
+/// run started through [`simulate`] checks it each step and ends with
+/// [`crate::error::Error::Interrupted`]; commands then write nothing half-done.
+pub static INTERRUPT: AtomicBool = AtomicBool::new(false);
+
+/// A finished run: its summary, frames and wall time.
+#[derive(Debug, Clone)]
+pub struct SimRun {
+    /// The summary.
+    pub summary: RunSummary,
+    /// Recorded frames.
+    pub frames: Vec<Frame>,
+    /// Wall-clock seconds.
+    pub wall_seconds: f64,
+    /// Import notes of the profile (dive logs: defaults used, repairs, watch time).
+    pub notes: Vec<String>,
+    /// Checkpoints written (a checkpointed run), and the simulated time it resumed from.
+    pub checkpoints: Option<checkpoint::Stats>,
+    /// Simulated time the run was resumed from, s (`--resume`).
+    pub resumed_at: Option<f64>,
+    /// Every step the loop took (only when asked: `--trace-steps`; of a resumed run, the
+    /// steps after the checkpoint).
+    pub steps: Vec<TracedStep>,
+    /// The wall time of the time loop's phases summed over the run's steps (of a resumed run,
+    /// the steps after the checkpoint): `timing.toml`.
+    pub phases: StepWall,
+    /// Per scheme of the gel's step ([`StepScheme::ALL`](crate::phantom::sim::StepScheme::ALL) order), the steps taken and the wall
+    /// time of their diffusion phase (`StepWall::gel_s`), s: `timing.toml`.
+    pub gel_by_scheme: [(usize, f64); 3],
+}
+
+/// A step as `--trace-steps` keeps it: the loop's record and the wall time.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TracedStep {
+    /// What the loop reported.
+    pub record: StepRecord,
+    /// Wall time since the run (or its continuation) started when the step was done with its
+    /// frame, s: the difference between two steps is the later step's cost.
+    pub wall_s: f64,
+}
+
+struct WithProgress<'a> {
+    rec: Recorder,
+    /// The steps taken, when they are traced.
+    steps: Option<Vec<TracedStep>>,
+    /// The steps' phase times, summed.
+    phases: StepWall,
+    /// Per scheme, the steps and their diffusion's wall time ([`SimRun::gel_by_scheme`]).
+    gel_by_scheme: [(usize, f64); 3],
+    /// When the run started (the steps' wall times count from it).
+    start: std::time::Instant,
+    progress: &'a mut (dyn FnMut(f64, f64) + Send),
+    stop: Option<&'a AtomicBool>,
+    checkpointer: Option<&'a mut Checkpointer>,
+}
+
+impl WithProgress<'_> {
+    fn stop_requested(&self) -> bool {
+        self.stop.is_some_and(|s| s.load(Ordering::Relaxed))
+    }
+}
+
+impl Observer for WithProgress<'_> {
+    fn frame(&mut self, frame: &Frame) {
+        self.rec.frame(frame);
+    }
+    fn step(&mut self, step: &StepRecord) {
+        self.phases.add(&step.wall);
+        let (n, s) = &mut self.gel_by_scheme[step.scheme.index()];
+        *n += 1;
+        *s += step.wall.gel_s;
+        if let Some(steps) = &mut self.steps {
+            steps.push(TracedStep {
+                record: *step,
+                wall_s: self.start.elapsed().as_secs_f64(),
+            });
+        }
+    }
+    fn progress(&mut self, time: f64, end: f64) {
+        (self.progress)(time, end);
+    }
+    fn should_stop(&self) -> bool {
+        let asked = self.stop_requested();
+        match &self.checkpointer {
+            Some(c) => c.let_stop(asked),
+            None => asked,
+        }
+    }
+    fn checkpoint_due(&mut self, step: usize) -> bool {
+        let asked = self.stop_requested();
+        self.checkpointer
+            .as_mut()
+            .is_some_and(|c| c.due(step, asked))
+    }
+    fn checkpoint(&mut self, state: checkpoint::RunState) -> Result<(), Error> {
+        match self.checkpointer.as_mut() {
+            Some(c) => c.write(&state, &self.rec.frames),
+            None => Ok(()),
+        }
+    }
+}
+
+/// Run a profile through a phantom, recording every frame.
+pub fn simulate(
+    params: &PhantomParams,
+    profile: &PressureHistory,
+    progress: &mut (dyn FnMut(f64, f64) + Send),
+) -> Result<SimRun, Error> {
+    let run = simulate_until(params, profile, progress, Some(&INTERRUPT))?;
+    if let crate::phantom::sim::Ending::Interrupted { time } = run.summary.ending {
+        return Err(Error::Interrupted(format!(
+            "run '{}' stopped at t = {time:.1} s of {:.1} s; its results are incomplete and were not used",
+            profile.label,
+            profile.duration_s()
+        )));
+    }
+    Ok(run)
+}
+
+/// [`simulate`], stopping early (as [`Ending::Interrupted`](crate::phantom::sim::Ending::Interrupted)) once `stop` becomes true.
+pub fn simulate_until(
+    params: &PhantomParams,
+    profile: &PressureHistory,
+    progress: &mut (dyn FnMut(f64, f64) + Send),
+    stop: Option<&AtomicBool>,
+) -> Result<SimRun, Error> {
+    simulate_checkpointed(params, profile, progress, stop, None, None, false)
+}
+
+/// [`simulate_until`] with checkpoints (`checkpointer`) and/or continued from a checkpoint
+/// (`resume`: the checkpoint and its file, already checked against these inputs by
+/// [`checkpoint::read`]); `trace`: keep every step ([`SimRun::steps`]).
+///
+/// The run itself executes on a thread of the current rayon pool (`rayon::scope`; inline when
+/// called from one, as the batch runners do). Called from another thread, such as the
+/// command line's main thread, its grid loops would otherwise start every parallel region
+/// from outside the pool, which hands each one to a worker and back: on the small cube
+/// (`benches/small-cube/`, one thread) 0.55–0.57 s against 0.45–0.48 s wall (session 11).
+pub fn simulate_checkpointed(
+    params: &PhantomParams,
+    profile: &PressureHistory,
+    progress: &mut (dyn FnMut(f64, f64) + Send),
+    stop: Option<&AtomicBool>,
+    mut checkpointer: Option<&mut Checkpointer>,
+    resume: Option<(Checkpoint, &std::path::Path)>,
+    trace: bool,
+) -> Result<SimRun, Error> {
+    let start = std::time::Instant::now();
+    cost::check(params, profile)?;
+    let mut obs = WithProgress {
+        rec: Recorder::default(),
+        steps: trace.then(Vec::new),
+        phases: StepWall::default(),
+        gel_by_scheme: Default::default(),
+        start,
+        progress,
+        stop,
+        checkpointer: checkpointer.as_deref_mut(),
+    };
+    // a run started from outside the pool is its only work: it keeps the pool's workers awake
+    // through its serial phases (`phantom::keep_warm`)
+    let lone = rayon::current_thread_index().is_none();
+    let (summary, resumed_at) = rayon::scope(|_| -> Result<_, Error> {
+        crate::phantom::keep_warm::lone_run(lone, || {
+            Ok(match resume {
+                None => (
+                    Simulation::new(params, profile)?.run(profile, &mut obs)?,
+                    None,
+                ),
+                Some((mut cp, file)) => {
+                    let at = cp.state.time();
+                    obs.rec.frames = std::mem::take(&mut cp.frames);
+                    (cp.resume(params, profile, &mut obs, file)?, Some(at))
+                }
+            })
+        })
+    })?;
+    let frames = obs.rec.frames;
+    let steps = obs.steps.unwrap_or_default();
+    let (phases, gel_by_scheme) = (obs.phases, obs.gel_by_scheme);
+    Ok(SimRun {
+        summary,
+        frames,
+        wall_seconds: start.elapsed().as_secs_f64(),
+        notes: Vec::new(),
+        checkpoints: checkpointer.map(|c| c.stats.clone()),
+        resumed_at,
+        steps,
+        phases,
+        gel_by_scheme,
+    })
+}
+
+/// Load a pressure profile; a schedule TOML written by `plan --out` (it has `legs`) is accepted
+/// too and becomes its pressure history (ambient at the gel, breathed gas with the schedule's
+/// water vapour at the open faces).
+pub fn load_profile_or_schedule(
+    path: &std::path::Path,
+    opts: &LoadOptions,
+) -> Result<PressureHistory, Error> {
+    let is_schedule = path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
+        && std::fs::read_to_string(path)
+            .ok()
+            .and_then(|t| t.parse::<toml::Table>().ok())
+            .is_some_and(|t| t.contains_key("legs"));
+    if is_schedule {
+        let schedule = crate::algorithm::Schedule::read(path)?;
+        return schedule
+            .to_pressure_history()
+            .map_err(|m| Error::Input(crate::error::InputError::new(m).in_file(path)));
+    }
+    Ok(load(path, opts)?)
+}
