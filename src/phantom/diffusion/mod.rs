@@ -5,7 +5,7 @@
 //! Two schemes, both conservative to round-off (the interior face fluxes cancel in pairs):
 //! - [`explicit_step`]: forward Euler for the interior sides, the open sides' term
 //!   2r·(C_b − C') taken implicitly in the cell itself (a division per boundary cell,
-//!   [`explicit::open_sides_implicit`]), used when the step the physics asks for is below the
+//!   `explicit::open_sides_implicit`), used when the step the physics asks for is below the
 //!   positivity limit dt ≤ h²/(6D) (6 the largest number of interior sides; with explicit
 //!   open sides, counted 2 each, it was h²/(9D) in a corner with three open faces, which
 //!   held every grid with an open corner to ⅔ of the step); the simulation uses
@@ -153,7 +153,7 @@ fn max_interior_sides(grid: &Grid) -> f64 {
     max_side_sum(grid, |c| f64::from(u8::from(c == SIDE_INTERIOR))).max(1.0)
 }
 
-/// The two scans of a grid behind the step limits ([`max_interior_sides`] and the largest
+/// The two scans of a grid behind the step limits (`max_interior_sides` and the largest
 /// stencil weight sum w_max, an open side counted 2), done once for a run's every gas.
 #[derive(Debug, Clone, Copy)]
 pub struct LimitScans {

@@ -473,7 +473,7 @@ impl<'a> Simulation<'a> {
     }
 
     /// Change of the grid's gas by the gel's displacement since the balance reference, mol
-    /// ([`Self::displace`]; part of the gas balance).
+    /// (`Self::displace`; part of the gas balance).
     pub fn displaced_gas(&self) -> f64 {
         self.displaced_gas
     }
@@ -489,11 +489,11 @@ impl<'a> Simulation<'a> {
     }
 
     /// Run the profile to its end (or until a bubble reaches a face). Each step is the physics
-    /// in order: the bubbles' fluxes at the start of the step ([`Self::bubble_fluxes`]), the step
-    /// the physics allows ([`Self::choose_step`]), the gas exchange between bubbles and gel
-    /// ([`Self::exchange`]), diffusion ([`Self::diffuse`]), perfusion ([`Self::perfuse`]), the
-    /// radii at the new pressure ([`Self::update_radii`]), coalescence, health checks, and the
-    /// record ([`Self::observe`]).
+    /// in order: the bubbles' fluxes at the start of the step (`Self::bubble_fluxes`), the step
+    /// the physics allows (`Self::choose_step`), the gas exchange between bubbles and gel
+    /// (`Self::exchange`), diffusion (`Self::diffuse`), perfusion (`Self::perfuse`), the
+    /// radii at the new pressure (`Self::update_radii`), coalescence, health checks, and the
+    /// record (`Self::observe`).
     pub fn run(
         &mut self,
         profile: &PressureHistory,

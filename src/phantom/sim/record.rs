@@ -96,7 +96,7 @@ pub struct StepWall {
     /// Phases 5–8: perfusion, the radii, the corrector, coalescence, nucleation, the
     /// displacement of the gel and the health check.
     pub events_s: f64,
-    /// Of `events_s`, the corrector of the bubbles' exchange ([`Simulation::correct`]: the
+    /// Of `events_s`, the corrector of the bubbles' exchange (`Simulation::correct`: the
     /// fluxes at the end of the step and the correction).
     pub corrector_s: f64,
     /// Of `events_s`, the gel's displacement by the bubbles (the remap, and the cells taken
