@@ -59,13 +59,13 @@ impl Fields {
 
     /// Each field's view, in gas order.
     pub fn iter(&self) -> impl Iterator<Item = &[f64]> {
-        let (a, b) = self.range();
+        let (a, b) = self.view_range();
         self.store.iter().map(move |f| &f[a..b])
     }
 
     /// Each field's view, mutable.
     pub fn iter_mut(&mut self) -> impl Iterator<Item = &mut [f64]> {
-        let (a, b) = self.range();
+        let (a, b) = self.view_range();
         self.store.iter_mut().map(move |f| &mut f[a..b])
     }
 
@@ -89,7 +89,8 @@ impl Fields {
         self.offset
     }
 
-    fn range(&self) -> (usize, usize) {
+    /// The views' range in the stores, [a, b).
+    pub(super) fn view_range(&self) -> (usize, usize) {
         let a = self.offset * self.plane;
         (a, a + self.cells)
     }
@@ -131,11 +132,6 @@ impl Fields {
         std::mem::swap(&mut self.store[g], other);
     }
 
-    /// The views' range in the stores, [a, b).
-    pub(super) fn view_range(&self) -> (usize, usize) {
-        self.range()
-    }
-
     /// Exchange the stores with `back` (one vector of at least a grid's cells per field, the
     /// grid's cells from its start): the views are then `back`'s first cells, and `back` holds
     /// the old stores.
@@ -153,14 +149,14 @@ impl Index<usize> for Fields {
     type Output = [f64];
 
     fn index(&self, g: usize) -> &[f64] {
-        let (a, b) = self.range();
+        let (a, b) = self.view_range();
         &self.store[g][a..b]
     }
 }
 
 impl IndexMut<usize> for Fields {
     fn index_mut(&mut self, g: usize) -> &mut [f64] {
-        let (a, b) = self.range();
+        let (a, b) = self.view_range();
         &mut self.store[g][a..b]
     }
 }
