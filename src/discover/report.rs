@@ -132,7 +132,7 @@ pub fn discover_toml(d: &Discovery) -> Result<String, Error> {
 fn diagnostics_section(page: &mut Page, title: &str, d: &Diagnostics) -> Result<(), Error> {
     page.heading(3, title);
     if d.signatures.is_empty() {
-        page.text("No systematic signature at p < 0.01: the residuals look like noise by every grouping below.");
+        page.text(format!("No systematic signature at a Holm-adjusted p < 0.01 over the {} tests below (phases, covariates, each bubble's runs test): the residuals look like noise by every grouping. The tables give the unadjusted p-values.", d.family));
     } else {
         page.text(
             d.signatures
@@ -268,7 +268,7 @@ pub fn discover_outputs(
         )
     };
     page.text(format!(
-        "How an effect is accepted: each round every candidate is refitted on top of the current model; the extra sum-of-squares F-test (nested least-squares models, independent Gaussian errors) compares it with the current model. The best is added only if p < α/m (Bonferroni over the m candidates tried in that round, α = {}) and it lowers the RMSE by more than the simulation's numerical error, {} µm (the Richardson estimate of a first-order scheme: twice the RMS change of the simulated radii when the grid step and every step limit are halved). Every test weights an observation by 1/(sd² + e²), with sd {} and e its bubble's numerical error, so grid error is never read as physics.",
+        "How an effect is accepted: each round every candidate is refitted on top of the current model; the extra sum-of-squares F-test (nested least-squares models, independent Gaussian errors) compares it with the current model. The best is added only if p < α/m (Bonferroni over the m candidates tried in that round, α = {}) and it lowers the RMSE by more than the simulation's numerical error, {} µm (the Richardson estimate of a first-order scheme: twice the RMS change of the simulated radii when the grid step and every step limit are halved). Every test weights an observation by 1/(sd² + e²), with sd {} and e its bubble's numerical error, so grid error is never read as physics. The 95 % intervals are sandwich (HC1) intervals: covariance (JᵀJ)⁻¹(Σ rᵢ²JᵢᵀJᵢ)(JᵀJ)⁻¹·n/(n − p) on the weighted residuals rᵢ and Jacobian rows Jᵢ (MacKinnon & White 1985), Student t with n − p degrees of freedom, and the delta method for parameters fitted in log space (exponentiated, so asymmetric): the weights carry a numerical error the data may not contain. ΔAICc is the candidate's AICc (K = p + 1) less the current model's, from each fit's own SSR.",
         d.options.alpha,
         sig(d.numerical.rms * 1e6, 3),
         sd_text

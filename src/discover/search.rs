@@ -209,9 +209,12 @@ pub fn numerical_error(
     })
 }
 
+/// `discrete`: the degrees of freedom of the current model's accepted discrete effects (a
+/// sealed face), which `current.p()` (its continuous parameters) does not count.
 fn try_candidate(
     cand: &dyn super::CandidateEffect,
     current: &Fitted,
+    discrete: usize,
     experiments: &Experiments,
     data: &Measurements,
     weights: &[f64],
@@ -324,12 +327,16 @@ fn try_candidate(
         Err(e) => return failed(e.to_string()),
     };
     let p_extra = dof;
-    let df0 = current.dof();
-    let df1 = current.n.saturating_sub(current.p() + p_extra);
+    let p0 = current.p() + discrete;
+    let df0 = current.n.saturating_sub(p0);
+    let df1 = current.n.saturating_sub(p0 + p_extra);
+    // the F-test's SSR is capped at the current model's: a nested candidate's fit that stopped
+    // above its null is the optimiser's shortfall, not evidence (F ≤ 0 gives p = 1 either way).
+    // ΔAICc uses the fit's own SSR: a discrete candidate (a sealed face) has no null inside it,
+    // so a worse fit is real and its ΔAICc is more than the parameter's penalty
     let ssr1 = f.ssr.min(current.ssr);
     let f_test = extra_ss_f_test(current.ssr, df0, ssr1, df1);
-    let delta_aicc =
-        aicc(ssr1, current.n, current.p() + p_extra) - aicc(current.ssr, current.n, current.p());
+    let delta_aicc = aicc(f.ssr, current.n, p0 + p_extra) - aicc(current.ssr, current.n, p0);
     let k0 = f.p() - n_effect;
     CandidateOutcome {
         name,
@@ -420,6 +427,8 @@ pub fn discover_with(
     let diagnostics_before = diagnose_fit(&baseline, experiments, data)?;
     let mut current = baseline.clone();
     let mut effects: Vec<String> = Vec::new();
+    // degrees of freedom of accepted discrete effects (not among the fit's parameters)
+    let mut discrete = 0usize;
     let mut added: Vec<(Added, Vec<String>)> = Vec::new();
     let mut rounds = Vec::new();
     let total_guess = all_candidates(&current.model.docs).len() * (opts.max_effects.min(2) + 1);
@@ -436,7 +445,15 @@ pub fn discover_with(
         let outcomes: Vec<CandidateOutcome> = cands
             .par_iter()
             .map(|c| {
-                let o = try_candidate(c.as_ref(), &current, experiments, data, &weights, opts);
+                let o = try_candidate(
+                    c.as_ref(),
+                    &current,
+                    discrete,
+                    experiments,
+                    data,
+                    &weights,
+                    opts,
+                );
                 let k = done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1;
                 progress(k, total_guess.max(k));
                 o
@@ -483,6 +500,7 @@ pub fn discover_with(
         );
         if significant && above_numerics {
             let fitted = b.fitted.clone().expect("a fitted candidate keeps its fit");
+            let accepted_dof = b.dof;
             let name = b.name.clone();
             let claimed: Vec<String> = b.estimates.iter().map(|e| e.name.clone()).collect();
             for (_, paths) in added.iter_mut() {
@@ -514,6 +532,7 @@ pub fn discover_with(
             ));
             round.accepted = Some(name.clone());
             effects.push(name);
+            discrete += accepted_dof.saturating_sub(fitted.p().saturating_sub(current.p()));
             current = *fitted;
             rounds.push(round);
         } else {

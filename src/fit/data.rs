@@ -67,7 +67,8 @@ impl Measurements {
     pub fn is_empty(&self) -> bool {
         self.len() == 0
     }
-    /// Weights 1/sd² in measurement order (1 where a row has no sd).
+    /// Weights 1/sd² in measurement order (1 where a row has no sd: the reader accepts an
+    /// `sd_m` on every row or on none, so the weights are all 1 or all 1/sd²).
     pub fn weights(&self) -> Vec<f64> {
         self.series
             .iter()
@@ -87,8 +88,9 @@ impl Measurements {
 }
 
 /// Read `measurements.csv`. Refused (exit 2, file/row/field named): a missing column, a value
-/// that is not a finite number, a negative radius, a non-positive sd, a bubble index that is
-/// not a non-negative integer, and a time that does not increase within a bubble.
+/// that is not a finite number, a negative radius, a non-positive sd, an `sd_m` column filled on
+/// some rows and empty on others, a bubble index that is not a non-negative integer, and a time
+/// that does not increase within a bubble.
 pub fn read_measurements(path: &Path) -> Result<Measurements, InputError> {
     let text = crate::error::read_text(path, "the measurements")?;
     parse_measurements(&text, path)
@@ -125,6 +127,9 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
         })?;
     }
     let sd_col = col("sd_m");
+    // the first line with an sd and the first without one: a fit weights rows with 1/sd² and
+    // could give a row without one no weight of the same scale, so the column is all or none
+    let (mut with_sd, mut without_sd) = (None, None);
     let mut groups: BTreeMap<(String, usize), Vec<Observation>> = BTreeMap::new();
     for rec in rdr.records() {
         let rec = rec.map_err(|e| {
@@ -199,6 +204,10 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
             }
             _ => None,
         };
+        match sd {
+            Some(_) => with_sd = with_sd.or(Some(line)),
+            None => without_sd = without_sd.or(Some(line)),
+        }
         groups
             .entry((experiment, bubble))
             .or_default()
@@ -208,6 +217,14 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
                 sd,
                 line,
             });
+    }
+    if let (Some(with), Some(without)) = (with_sd, without_sd) {
+        return Err(InputError::new(format!(
+            "line {with} gives a standard deviation and line {without} does not: give sd_m on every row or on none (a fit weights each row by 1/sd², about 1e11 for a few µm, and a row without one would count for nothing against them)"
+        ))
+        .in_file(path)
+        .at_line(without)
+        .field("sd_m"));
     }
     let mut series = Vec::new();
     for ((experiment, bubble), mut points) in groups {
@@ -499,4 +516,32 @@ pub fn check_against(m: &Measurements, e: &Experiments) -> Result<(), InputError
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// An `sd_m` column filled on some rows only is refused at the first row without one
+    /// (weights 1/sd² ≈ 1e11 against 1 would drop those rows from a fit); a column that is empty
+    /// on every row is no sd at all.
+    #[test]
+    fn an_sd_column_is_filled_on_every_row_or_on_none() {
+        let path = Path::new("m.csv");
+        let partial = "experiment,bubble,time_s,radius_m,sd_m\n\
+                       a,0,0,1e-4,2e-6\na,0,10,1.1e-4,2e-6\nb,0,0,1e-4,\nb,0,10,1.1e-4,2e-6\n";
+        let e = parse_measurements(partial, path).unwrap_err();
+        assert_eq!(e.line, Some(4), "{e}");
+        assert_eq!(e.field.as_deref(), Some("sd_m"), "{e}");
+        let empty = "experiment,bubble,time_s,radius_m,sd_m\na,0,0,1e-4,\na,0,10,1.1e-4,\n";
+        let m = parse_measurements(empty, path).unwrap();
+        assert!(!m.has_sd());
+        assert_eq!(m.weights(), vec![1.0, 1.0]);
+        let full = "experiment,bubble,time_s,radius_m,sd_m\na,0,0,1e-4,2e-6\na,0,10,1.1e-4,4e-6\n";
+        let m = parse_measurements(full, path).unwrap();
+        assert!(m.has_sd());
+        // 1/sd², computed by hand: 1/(2e-6)² = 2.5e11, 1/(4e-6)² = 6.25e10
+        let w = m.weights();
+        assert!((w[0] / 2.5e11 - 1.0).abs() < 1e-12 && (w[1] / 6.25e10 - 1.0).abs() < 1e-12);
+    }
 }

@@ -2,7 +2,7 @@
 //! the pieces `discover` shares with it: parameter tables and measured-vs-simulated overlays.
 
 use super::data::{Experiments, Measurements};
-use super::growth::{compare_growth, fit_growth, GrowthFit};
+use super::growth::{compare_to_curve, fit_growth, GrowthFit};
 use super::lsq::Estimate;
 use super::model::{radius_at, Fitted};
 use crate::error::Error;
@@ -201,7 +201,10 @@ pub fn growth_rows(
         }
         let fm: Option<GrowthFit> = fit_growth(&m, w.as_deref()).ok().filter(|g| g.converged);
         let fs: Option<GrowthFit> = fit_growth(&sim, None).ok().filter(|g| g.converged);
-        let p = compare_growth(&m, &sim).ok().map(|t| t.p_value);
+        let p = fs
+            .as_ref()
+            .and_then(|f| compare_to_curve(&m, w.as_deref(), f).ok())
+            .map(|t| t.p_value);
         let note = match (&fm, &fs) {
             (Some(_), Some(_)) => String::new(),
             _ => "the exponential growth curve does not describe this series (no converged fit)"

@@ -108,6 +108,14 @@ pub fn runs_test(residuals: &[f64]) -> RunsTest {
     }
 }
 
+/// One standard normal draw by Box–Muller (Box & Muller 1958, Ann. Math. Statist. 29, 610–611)
+/// from two uniforms, the first on (0, 1] so that its logarithm is finite.
+pub fn standard_normal<R: rand::Rng>(rng: &mut R) -> f64 {
+    let u1: f64 = 1.0 - rng.gen::<f64>();
+    let u2: f64 = rng.gen::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
+}
+
 fn normal_sf(z: f64) -> f64 {
     Normal::new(0.0, 1.0).map_or(f64::NAN, |n| n.sf(z))
 }
@@ -127,7 +135,10 @@ pub fn correlation(x: &[f64], y: &[f64]) -> (f64, f64) {
         sxx += a * a;
         syy += b * b;
     }
-    if !(sxx > 0.0 && syy > 0.0) {
+    // a spread at the rounding level of the mean is a constant (453 equal distances leave
+    // sxx ≈ 4e-32 from rounding alone): no correlation to report
+    let flat = |s: f64, m: f64| !(s > n as f64 * (1e-12 * m.abs()).powi(2));
+    if flat(sxx, mx) || flat(syy, my) {
         return (f64::NAN, f64::NAN);
     }
     let r = (sxy / (sxx * syy).sqrt()).clamp(-1.0, 1.0);
@@ -138,6 +149,27 @@ pub fn correlation(x: &[f64], y: &[f64]) -> (f64, f64) {
     let t = r * (df / (1.0 - r * r)).sqrt();
     let p = StudentsT::new(0.0, 1.0, df).map_or(f64::NAN, |d| 2.0 * d.sf(t.abs()));
     (r, p)
+}
+
+/// Holm's step-down adjustment of `p` (Holm 1979, Scand. J. Statist. 6, 65–70), in the given
+/// order: with the m p-values sorted, p₍ᵢ₎ becomes max over j ≤ i of min(1, (m − j + 1)·p₍ⱼ₎).
+/// Rejecting where the adjusted value is below α keeps the family-wise error rate at α for any
+/// dependence between the tests. A p-value that is not a number counts as 1.
+pub fn holm(p: &[f64]) -> Vec<f64> {
+    let m = p.len();
+    let clean: Vec<f64> = p
+        .iter()
+        .map(|&x| if x.is_nan() { 1.0 } else { x.clamp(0.0, 1.0) })
+        .collect();
+    let mut order: Vec<usize> = (0..m).collect();
+    order.sort_by(|&a, &b| clean[a].total_cmp(&clean[b]));
+    let mut out = vec![1.0; m];
+    let mut running: f64 = 0.0;
+    for (j, &i) in order.iter().enumerate() {
+        running = running.max(((m - j) as f64 * clean[i]).min(1.0));
+        out[i] = running;
+    }
+    out
 }
 
 /// Mean of `v` with its one-sample t-test against 0: (mean, standard error, two-sided p).
@@ -247,6 +279,33 @@ pub fn polynomial_ssr(x: &[f64], y: &[f64], degree: usize) -> Option<f64> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn holm_adjusts_as_worked_by_hand() {
+        // m = 4, sorted 0.005, 0.01, 0.03, 0.04: 4·0.005 = 0.02, 3·0.01 = 0.03, 2·0.03 = 0.06,
+        // 1·0.04 = 0.04 raised to the running maximum 0.06 (Holm 1979's step-down rule)
+        let a = holm(&[0.01, 0.04, 0.03, 0.005]);
+        for (x, y) in a.iter().zip([0.03, 0.06, 0.06, 0.02]) {
+            assert!((x - y).abs() < 1e-15, "{a:?}");
+        }
+        // capped at 1; a NaN counts as 1; one test is not adjusted
+        assert_eq!(holm(&[0.5, 0.6, f64::NAN]), vec![1.0, 1.0, 1.0]);
+        assert_eq!(holm(&[0.003]), vec![0.003]);
+    }
+
+    #[test]
+    fn a_constant_covariate_has_no_correlation() {
+        // 453 equal values whose mean is not exactly representable leave a rounding-level
+        // spread; the correlation is undefined, not r = 0, p = 1
+        let x = vec![1.6e-3; 453];
+        let y: Vec<f64> = (0..453).map(|i| (i as f64 * 0.7).sin()).collect();
+        let (r, p) = correlation(&x, &y);
+        assert!(r.is_nan() && p.is_nan(), "{r} {p}");
+        // a real spread still correlates: y = 2x exactly gives r = 1
+        let x: Vec<f64> = (0..10).map(|i| 1.0 + i as f64 * 1e-6).collect();
+        let y: Vec<f64> = x.iter().map(|v| 2.0 * v).collect();
+        assert!((correlation(&x, &y).0 - 1.0).abs() < 1e-9);
+    }
 
     #[test]
     fn f_test_against_tables() {

@@ -7,7 +7,7 @@ use super::data::Experiments;
 use super::model::{set_shared, Model};
 use crate::discover;
 use crate::error::{Error, InputError};
-use rand::{Rng, SeedableRng};
+use rand::SeedableRng;
 
 /// An effect to switch on: a candidate name (`perfusion`, `surface-area-law`,
 /// `sealed-faces:top`, …) or a phantom path, with its parameter values.
@@ -138,12 +138,7 @@ pub fn synthesize(
     let model = model_with(experiments, effects)?;
     let runs = model.run(experiments, &[])?;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
-    let mut normal = move || {
-        // Box–Muller: two uniforms on (0, 1] → one standard normal
-        let u1: f64 = 1.0 - rng.gen::<f64>();
-        let u2: f64 = rng.gen::<f64>();
-        (-2.0 * u1.ln()).sqrt() * (2.0 * std::f64::consts::PI * u2).cos()
-    };
+    let mut normal = move || super::stats::standard_normal(&mut rng);
     let mut out = String::from("experiment,bubble,time_s,radius_m,sd_m\n");
     for (e, run) in experiments.list.iter().zip(&runs) {
         let end = run.summary.end_time;
