@@ -129,10 +129,17 @@ pub struct OatIndex {
 }
 
 /// One-at-a-time indices: `levels` are (parameter value, metric) pairs from lowest to highest.
+/// `min` and `max` are over the levels with a finite metric (NaN when none has one).
 pub fn oat_index(levels: &[(f64, f64)], x_base: f64, m_base: f64) -> OatIndex {
-    let ms = levels.iter().map(|l| l.1);
-    let min = ms.clone().fold(f64::INFINITY, f64::min);
-    let max = ms.fold(f64::NEG_INFINITY, f64::max);
+    let ms = levels.iter().map(|l| l.1).filter(|m| m.is_finite());
+    let (min, max) = if ms.clone().next().is_some() {
+        (
+            ms.clone().fold(f64::INFINITY, f64::min),
+            ms.fold(f64::NEG_INFINITY, f64::max),
+        )
+    } else {
+        (f64::NAN, f64::NAN)
+    };
     let normalised = match (levels.first(), levels.last()) {
         (Some(lo), Some(hi)) if hi.0 != lo.0 && m_base != 0.0 => {
             (hi.1 - lo.1) / (hi.0 - lo.0) * x_base / m_base
@@ -147,7 +154,10 @@ pub fn oat_index(levels: &[(f64, f64)], x_base: f64, m_base: f64) -> OatIndex {
 }
 
 /// Morris μ* (mean |EE|), μ (mean EE) and σ (standard deviation of EE, n − 1) of each
-/// parameter, EE in metric units per unit of the unit-cube coordinate.
+/// parameter, EE in metric units per unit of the unit-cube coordinate. An elementary effect
+/// that is not finite (either of its two runs failed or has the metric undefined) is left out
+/// and counted in `n_dropped`; the three statistics are those of the `n_used` finite ones
+/// (NaN when none is, σ NaN when fewer than two are).
 #[derive(Debug, Clone, PartialEq)]
 pub struct MorrisIndex {
     /// Mean of the absolute elementary effects.
@@ -156,24 +166,36 @@ pub struct MorrisIndex {
     pub mu: f64,
     /// Sample standard deviation of the elementary effects.
     pub sigma: f64,
+    /// Finite elementary effects the statistics are computed from.
+    pub n_used: usize,
+    /// Elementary effects left out (not finite).
+    pub n_dropped: usize,
 }
 
 /// Morris indices from the design's points and outputs (trajectories of k + 1 runs).
 pub fn morris_indices(points: &[Vec<f64>], y: &[f64], k: usize) -> Vec<MorrisIndex> {
     let mut ee: Vec<Vec<f64>> = vec![Vec::new(); k];
+    let mut dropped = vec![0usize; k];
     for (t, chunk) in points.chunks(k + 1).enumerate() {
-        for s in 0..k {
+        for s in 0..k.min(chunk.len().saturating_sub(1)) {
             let (a, b) = (&chunk[s], &chunk[s + 1]);
             let Some(i) = (0..k).find(|&i| a[i] != b[i]) else {
                 continue;
             };
             let (ya, yb) = (y[t * (k + 1) + s], y[t * (k + 1) + s + 1]);
-            ee[i].push((yb - ya) / (b[i] - a[i]));
+            let e = (yb - ya) / (b[i] - a[i]);
+            if e.is_finite() {
+                ee[i].push(e);
+            } else {
+                dropped[i] += 1;
+            }
         }
     }
     ee.iter()
-        .map(|e| {
+        .zip(dropped)
+        .map(|(e, n_dropped)| {
             let n = e.len() as f64;
+            // 0/0 = NaN when no effect is finite
             let mu = e.iter().sum::<f64>() / n;
             let mu_star = e.iter().map(|v| v.abs()).sum::<f64>() / n;
             let sigma = if e.len() > 1 {
@@ -181,12 +203,31 @@ pub fn morris_indices(points: &[Vec<f64>], y: &[f64], k: usize) -> Vec<MorrisInd
             } else {
                 f64::NAN
             };
-            MorrisIndex { mu_star, mu, sigma }
+            MorrisIndex {
+                mu_star,
+                mu,
+                sigma,
+                n_used: e.len(),
+                n_dropped,
+            }
         })
         .collect()
 }
 
+/// Fewest usable base rows a Sobol' index is estimated from (in the point estimate and in
+/// every bootstrap resample); with fewer the index is NaN.
+pub const SOBOL_MIN_ROWS: usize = 2;
+
 /// Sobol' first-order and total indices of one parameter with bootstrap 95 % intervals.
+///
+/// Failed runs: the index of parameter i uses only the base rows j whose f(A)_j, f(B)_j and
+/// f(A_B^i)_j are all finite (`n_used` of them; the variance too is taken over those rows'
+/// f(A) and f(B)), so it equals the estimate of the design with the other rows removed. Each
+/// bootstrap resample draws N base rows with replacement from all N and applies the same rule
+/// (the interval is of the estimator as reported, including the chance of drawing a failed
+/// row). The interval is given only when every resample defines the index: with
+/// `undefined_resamples` > 0 (a resample with fewer than [`SOBOL_MIN_ROWS`] usable rows or a
+/// metric constant over them) it is NaN, never taken from the resamples that happened to work.
 #[derive(Debug, Clone, PartialEq)]
 pub struct SobolIndex {
     /// First-order index S_i.
@@ -197,57 +238,96 @@ pub struct SobolIndex {
     pub st: f64,
     /// Percentile bootstrap 95 % interval of S_Ti.
     pub st_ci: [f64; 2],
+    /// Base rows used (f(A), f(B) and f(A_B^i) all finite).
+    pub n_used: usize,
+    /// Base rows left out (N − `n_used`).
+    pub n_dropped: usize,
+    /// Bootstrap resamples in which the index was undefined (then no interval is given).
+    pub undefined_resamples: usize,
 }
 
-fn sobol_point(rows: &[usize], y: &[f64], k: usize) -> Vec<(f64, f64)> {
+/// Whether base row j can be used for parameter i: f(A)_j, f(B)_j and f(A_B^i)_j finite.
+fn sobol_usable(y: &[f64], k: usize, j: usize, i: usize) -> bool {
+    let f = |c: usize| y[j * (k + 2) + c];
+    f(0).is_finite() && f(1).is_finite() && f(2 + i).is_finite()
+}
+
+/// (S_i, S_Ti) of parameter i from the base rows `rows` (a resample may repeat a row), the rows
+/// not usable for i left out; `None` when fewer than [`SOBOL_MIN_ROWS`] remain, the metric
+/// is constant over them or an index is not finite.
+fn sobol_one(rows: &[usize], y: &[f64], k: usize, i: usize) -> Option<(f64, f64)> {
     let f = |j: usize, c: usize| y[j * (k + 2) + c];
-    let n = rows.len() as f64;
+    let used: Vec<usize> = rows
+        .iter()
+        .copied()
+        .filter(|&j| sobol_usable(y, k, j, i))
+        .collect();
+    if used.len() < SOBOL_MIN_ROWS {
+        return None;
+    }
+    let n = used.len() as f64;
     // total variance from f(A) and f(B) together
-    let all: Vec<f64> = rows.iter().flat_map(|&j| [f(j, 0), f(j, 1)]).collect();
+    let all: Vec<f64> = used.iter().flat_map(|&j| [f(j, 0), f(j, 1)]).collect();
     let mean = all.iter().sum::<f64>() / all.len() as f64;
     let var = all.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / all.len() as f64;
-    (0..k)
-        .map(|i| {
-            let (mut v1, mut vt) = (0.0, 0.0);
-            for &j in rows {
-                let (a, b, ab) = (f(j, 0), f(j, 1), f(j, 2 + i));
-                // f(B) centred on the sample mean: the same expectation, far less variance
-                // when the output's mean is large against its spread
-                v1 += (b - mean) * (ab - a);
-                vt += (a - ab).powi(2);
-            }
-            (v1 / n / var, vt / (2.0 * n) / var)
-        })
-        .collect()
+    if !(var > 0.0 && var.is_finite()) {
+        return None;
+    }
+    let (mut v1, mut vt) = (0.0, 0.0);
+    for &j in &used {
+        let (a, b, ab) = (f(j, 0), f(j, 1), f(j, 2 + i));
+        // f(B) centred on the sample mean: the same expectation, far less variance
+        // when the output's mean is large against its spread
+        v1 += (b - mean) * (ab - a);
+        vt += (a - ab).powi(2);
+    }
+    let (s1, st) = (v1 / n / var, vt / (2.0 * n) / var);
+    (s1.is_finite() && st.is_finite()).then_some((s1, st))
 }
 
 /// Sobol' indices from outputs in the design's order (rows of A, B, A_B^1 … A_B^k), with
-/// `BOOTSTRAP` percentile resamples of the rows drawn from `seed`.
+/// `BOOTSTRAP` percentile resamples of the rows drawn from `seed`; failed runs as described
+/// at [`SobolIndex`].
 pub fn sobol_indices(y: &[f64], k: usize, seed: u64) -> Vec<SobolIndex> {
     let n = y.len() / (k + 2);
     let rows: Vec<usize> = (0..n).collect();
-    let point = sobol_point(&rows, y, k);
+    let point: Vec<Option<(f64, f64)>> = (0..k).map(|i| sobol_one(&rows, y, k, i)).collect();
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5EED_B007);
-    let mut boot: Vec<Vec<(f64, f64)>> = Vec::with_capacity(BOOTSTRAP);
+    // boot[b][i]: resample b's indices of parameter i (the same rows for every parameter)
+    let mut boot: Vec<Vec<Option<(f64, f64)>>> = Vec::with_capacity(BOOTSTRAP);
     for _ in 0..BOOTSTRAP {
         let r: Vec<usize> = (0..n).map(|_| rng.gen_range(0..n)).collect();
-        boot.push(sobol_point(&r, y, k));
+        boot.push((0..k).map(|i| sobol_one(&r, y, k, i)).collect());
     }
     let pct = |mut v: Vec<f64>| -> [f64; 2] {
-        v.retain(|x| x.is_finite());
-        if v.is_empty() {
-            return [f64::NAN, f64::NAN];
-        }
         v.sort_by(f64::total_cmp);
         let q = |p: f64| v[((p * (v.len() - 1) as f64).round() as usize).min(v.len() - 1)];
         [q(0.025), q(0.975)]
     };
     (0..k)
-        .map(|i| SobolIndex {
-            s1: point[i].0,
-            s1_ci: pct(boot.iter().map(|b| b[i].0).collect()),
-            st: point[i].1,
-            st_ci: pct(boot.iter().map(|b| b[i].1).collect()),
+        .map(|i| {
+            let n_used = (0..n).filter(|&j| sobol_usable(y, k, j, i)).count();
+            let undefined_resamples = boot.iter().filter(|b| b[i].is_none()).count();
+            let nan = [f64::NAN; 2];
+            let (s1, st, s1_ci, st_ci) = match point[i] {
+                Some((s1, st)) if undefined_resamples == 0 => (
+                    s1,
+                    st,
+                    pct(boot.iter().filter_map(|b| b[i]).map(|x| x.0).collect()),
+                    pct(boot.iter().filter_map(|b| b[i]).map(|x| x.1).collect()),
+                ),
+                Some((s1, st)) => (s1, st, nan, nan),
+                None => (f64::NAN, f64::NAN, nan, nan),
+            };
+            SobolIndex {
+                s1,
+                s1_ci,
+                st,
+                st_ci,
+                n_used,
+                n_dropped: n - n_used,
+                undefined_resamples,
+            }
         })
         .collect()
 }
@@ -364,6 +444,147 @@ mod tests {
         assert!(m[2].sigma > 0.0);
     }
 
+    /// The outputs `y` of a Sobol' design (k parameters) with base row `j` removed: its
+    /// f(A), f(B) and f(A_B^1…k), k + 2 consecutive values.
+    fn without_row(y: &[f64], k: usize, j: usize) -> Vec<f64> {
+        let mut r = y.to_vec();
+        r.drain(j * (k + 2)..(j + 1) * (k + 2));
+        r
+    }
+
+    #[test]
+    fn sweep_sobol_leaves_out_a_failed_base_row_as_if_it_were_not_in_the_design() {
+        // Reference values: the estimator applied here to the design with that base row
+        // removed (computed independently by building the reduced design), and the analytic
+        // Ishigami indices (a = 7, b = 0.1; Saltelli et al. 2008, Global Sensitivity Analysis:
+        // The Primer, §4): S = (0.3139, 0.4424, 0), ST = (0.5576, 0.4424, 0.2437).
+        let k = 3;
+        let n = 4000;
+        let pts = design(Method::Sobol, k, n, 17, &[]);
+        let y: Vec<f64> = pts.iter().map(|p| ishigami(p)).collect();
+        let full = sobol_indices(&y, k, 17);
+        let want_s = [0.3139, 0.4424, 0.0];
+        let want_t = [0.5576, 0.4424, 0.2437];
+        let j = 123;
+        // (1) f(A)_j fails: row j is unusable for every parameter
+        let mut ya = y.clone();
+        ya[j * (k + 2)] = f64::NAN;
+        let got = sobol_indices(&ya, k, 17);
+        let reduced = sobol_indices(&without_row(&y, k, j), k, 17);
+        for i in 0..k {
+            let (g, r) = (&got[i], &reduced[i]);
+            eprintln!(
+                "x{}: S1 {:.4} [{:.4}, {:.4}] (reduced design {:.4}, all rows {:.4}), ST {:.4} [{:.4}, {:.4}] (reduced {:.4})",
+                i + 1, g.s1, g.s1_ci[0], g.s1_ci[1], r.s1, full[i].s1, g.st, g.st_ci[0], g.st_ci[1], r.st
+            );
+            // the same rows in the same order: the same arithmetic, bit for bit
+            assert_eq!((g.s1, g.st), (r.s1, r.st), "x{}", i + 1);
+            assert_eq!(
+                (g.n_used, g.n_dropped, g.undefined_resamples),
+                (n - 1, 1, 0)
+            );
+            assert_eq!((r.n_used, r.n_dropped), (n - 1, 0));
+            for (v, ci) in [(g.s1, g.s1_ci), (g.st, g.st_ci)] {
+                assert!(ci[0].is_finite() && ci[1].is_finite(), "x{}: {ci:?}", i + 1);
+                assert!(ci[0] <= v && v <= ci[1], "x{}: {v} not in {ci:?}", i + 1);
+            }
+            assert!((g.s1 - want_s[i]).abs() < 0.05 && (g.st - want_t[i]).abs() < 0.05);
+        }
+        // (2) only f(A_B^2)_j fails: parameter 2 loses row j, parameters 1 and 3 keep every row
+        let mut yab = y.clone();
+        yab[j * (k + 2) + 2 + 1] = f64::NAN;
+        let got = sobol_indices(&yab, k, 17);
+        assert_eq!((got[1].s1, got[1].st), (reduced[1].s1, reduced[1].st));
+        assert_eq!((got[1].n_used, got[1].n_dropped), (n - 1, 1));
+        let ci = got[1].s1_ci;
+        assert!(ci[0].is_finite() && ci[0] <= got[1].s1 && got[1].s1 <= ci[1]);
+        for i in [0, 2] {
+            // untouched: the whole design's estimate and interval
+            assert_eq!(got[i], full[i], "x{}", i + 1);
+            assert_eq!((got[i].n_used, got[i].n_dropped), (n, 0));
+        }
+    }
+
+    #[test]
+    fn sweep_sobol_gives_no_index_or_interval_from_too_few_usable_rows() {
+        // Ishigami again (its values are the inputs here, not a reference); rows fail by hand
+        let k = 3;
+        let pts = design(Method::Sobol, k, 4, 5, &[]);
+        let y: Vec<f64> = pts.iter().map(|p| ishigami(p)).collect();
+        // two of four base rows fail in f(B): two usable rows give an estimate, but a resample
+        // of four rows often draws fewer than two of them, so no interval is given
+        let mut y2 = y.clone();
+        for j in [0, 2] {
+            y2[j * (k + 2) + 1] = f64::NAN;
+        }
+        for ix in sobol_indices(&y2, k, 5) {
+            assert_eq!((ix.n_used, ix.n_dropped), (2, 2));
+            assert!(ix.s1.is_finite() && ix.st.is_finite());
+            assert!(ix.undefined_resamples > 0);
+            assert!(ix.s1_ci.iter().chain(&ix.st_ci).all(|v| v.is_nan()));
+        }
+        // three of four fail: one usable row, below SOBOL_MIN_ROWS: NaN, no interval
+        y2[3 * (k + 2)] = f64::NAN;
+        for ix in sobol_indices(&y2, k, 5) {
+            assert_eq!((ix.n_used, ix.n_dropped), (1, 3));
+            assert!(ix.s1.is_nan() && ix.st.is_nan());
+            assert!(ix.s1_ci.iter().chain(&ix.st_ci).all(|v| v.is_nan()));
+        }
+        // every value NaN (a metric undefined in every run)
+        for ix in sobol_indices(&vec![f64::NAN; y.len()], k, 5) {
+            assert_eq!((ix.n_used, ix.n_dropped), (0, 4));
+            assert!(ix.s1.is_nan() && ix.st.is_nan() && ix.s1_ci[0].is_nan());
+        }
+    }
+
+    #[test]
+    fn sweep_morris_leaves_out_the_elementary_effects_of_a_failed_run() {
+        // y = 3u0 − 2u1 + 0.5u2: every elementary effect of a linear function is its
+        // coefficient (Morris 1991, §2), so μ* = |c_i| and μ = c_i from any subset of them
+        let c = [3.0, -2.0, 0.5];
+        let f = |u: &[f64]| c.iter().zip(u).map(|(c, x)| c * x).sum::<f64>();
+        let (k, r) = (3, 10);
+        let pts = design(Method::Morris, k, r, 3, &[]);
+        let mut y: Vec<f64> = pts.iter().map(|p| f(p)).collect();
+        // the first run of trajectory 4 fails: only the effect of its first step is lost,
+        // which belongs to the parameter that step moves
+        let t = 4;
+        let first = t * (k + 1);
+        let moved = (0..k)
+            .find(|&i| pts[first][i] != pts[first + 1][i])
+            .unwrap();
+        y[first] = f64::NAN;
+        let m = morris_indices(&pts, &y, k);
+        for i in 0..k {
+            assert!(
+                (m[i].mu_star - c[i].abs()).abs() < 1e-12,
+                "x{i}: {}",
+                m[i].mu_star
+            );
+            assert!((m[i].mu - c[i]).abs() < 1e-12 && m[i].sigma.abs() < 1e-12);
+            let lost = usize::from(i == moved);
+            assert_eq!((m[i].n_used, m[i].n_dropped), (r - lost, lost), "x{i}");
+        }
+        // a run in the middle of a trajectory takes the effects of both its steps
+        y[first] = f(&pts[first]);
+        y[first + 1] = f64::NAN;
+        let m = morris_indices(&pts, &y, k);
+        let second = (0..k)
+            .find(|&i| pts[first + 1][i] != pts[first + 2][i])
+            .unwrap();
+        for i in 0..k {
+            let lost = usize::from(i == moved) + usize::from(i == second);
+            assert_eq!((m[i].n_used, m[i].n_dropped), (r - lost, lost), "x{i}");
+            assert!((m[i].mu_star - c[i].abs()).abs() < 1e-12);
+        }
+        // no finite value: NaN, none used
+        let m = morris_indices(&pts, &vec![f64::NAN; y.len()], k);
+        assert!(m
+            .iter()
+            .all(|x| x.mu_star.is_nan() && x.mu.is_nan() && x.sigma.is_nan()));
+        assert!(m.iter().all(|x| (x.n_used, x.n_dropped) == (0, r)));
+    }
+
     #[test]
     fn sweep_oat_normalised_sensitivity_of_a_power_law_is_its_exponent() {
         // m = x²: (Δm/Δx)·(x/m) between x = 1 and 3 about x = 2 is (9 − 1)/2 · 2/4 = 2
@@ -371,6 +592,11 @@ mod tests {
         let o = oat_index(&lv, 2.0, 4.0);
         assert_eq!((o.min, o.max), (1.0, 9.0));
         assert!((o.normalised - 2.0).abs() < 1e-12);
+        // a failed level is left out of the range; no finite level: NaN, not ±inf
+        let o = oat_index(&[(1.0, 1.0), (2.0, f64::NAN), (3.0, 9.0)], 2.0, 4.0);
+        assert_eq!((o.min, o.max), (1.0, 9.0));
+        let o = oat_index(&[(1.0, f64::NAN), (3.0, f64::NAN)], 2.0, 4.0);
+        assert!(o.min.is_nan() && o.max.is_nan() && o.normalised.is_nan());
         let pts = design(Method::Oat, 2, 5, 0, &[0.3, 0.6]);
         assert_eq!(pts.len(), 11);
         assert_eq!(pts[3], vec![0.5, 0.6]);

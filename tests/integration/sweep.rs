@@ -130,7 +130,8 @@ fn sweep_sharded_three_ways_and_merged_gives_byte_identical_indices() {
     }
     let idx = std::fs::read_to_string(whole.join("indices.csv")).unwrap();
     assert_eq!(idx.lines().count(), 1 + 2 * 2);
-    assert!(idx.starts_with("metric,parameter,s1,s1_lo95,s1_hi95,st,st_lo95,st_hi95\n"));
+    assert!(idx
+        .starts_with("metric,parameter,s1,s1_lo95,s1_hi95,st,st_lo95,st_hi95,n_used,n_dropped\n"));
     // 32 runs, each row index once
     let rows = std::fs::read_to_string(whole.join("sensitivity.csv")).unwrap();
     assert_eq!(rows.lines().count(), 1 + 32);
@@ -308,6 +309,81 @@ fn sweep_morris_on_the_phantom_ranks_solubility_with_a_positive_effect() {
         .collect();
     // every elementary effect of L_N2 on R_max is positive, so μ* = μ > 0
     assert!(ost[1] > 0.0 && (ost[0] - ost[1]).abs() < 1e-15 * ost[0].abs().max(1.0));
+}
+
+/// A profile that ends at the moment the pressure reaches the surface: no growth phase, so
+/// `plateau` (a fit of the growth after the last pressure change) is undefined in every run.
+const PROFILE_ENDS_AT_SURFACE: &str = r#"
+name = "decompression, no time at the surface"
+time_unit = "s"
+pressure_unit = "psi-gauge"
+gas = "air"
+points = [[0, 60], [10, 0]]
+"#;
+
+#[test]
+fn sweep_a_metric_undefined_in_every_run_keeps_the_other_metrics_results() {
+    // `--metric plateau` where no plateau exists: before, the study wrote nothing and exited 3
+    // ("no finite data to draw"); now it exits 0, r_max has its indices from every run, plateau
+    // is NaN with n_used 0, and the report says so instead of drawing it
+    let (ph, _, d) = lab("sweep-all-nan");
+    let pr = d.join("profile-ends.toml");
+    std::fs::write(&pr, PROFILE_ENDS_AT_SURFACE).unwrap();
+    let t = std::time::Instant::now();
+    for (method, samples, per_param) in [("sobol", "4", 4), ("morris", "3", 3)] {
+        let out = d.join(method);
+        ok(&sensitivity(
+            &ph,
+            &pr,
+            &[
+                "--param",
+                "gases.n2.ostwald=0.01..0.03",
+                "--param",
+                "gases.n2.diffusivity=1e-10..5e-9",
+                "--metric",
+                "r_max",
+                "--metric",
+                "plateau",
+                "--method",
+                method,
+                "--samples",
+                samples,
+                "--seed",
+                "3",
+                "--quiet",
+                "--out",
+                out.to_str().unwrap(),
+            ],
+        ));
+        let idx = std::fs::read_to_string(out.join("indices.csv")).unwrap();
+        assert_eq!(idx.lines().count(), 1 + 2 * 2, "{idx}");
+        assert!(idx.lines().next().unwrap().ends_with(",n_used,n_dropped"));
+        for l in idx.lines().skip(1) {
+            let v: Vec<&str> = l.split(',').collect();
+            let nums: Vec<f64> = v[2..].iter().map(|x| x.parse().unwrap()).collect();
+            let (used, dropped) = (nums[nums.len() - 2], nums[nums.len() - 1]);
+            if v[0] == "r_max" {
+                assert!(nums.iter().all(|x| x.is_finite()), "{method}: {l}");
+                assert_eq!((used, dropped), (per_param as f64, 0.0), "{method}: {l}");
+            } else {
+                assert_eq!(v[0], "plateau");
+                assert!(nums[..nums.len() - 2].iter().all(|x| x.is_nan()), "{l}");
+                assert_eq!((used, dropped), (0.0, per_param as f64), "{method}: {l}");
+            }
+        }
+        let md = std::fs::read_to_string(out.join("report.md")).unwrap();
+        assert!(
+            md.contains("**plateau** is undefined in every run"),
+            "{method}: {md}"
+        );
+        assert!(md.contains("No chart: no index of plateau is defined"));
+        assert!(out.join("bars-0.svg").exists() && !out.join("bars-1.svg").exists());
+        assert!(out.join("report.html").exists() && out.join("sensitivity.csv").exists());
+    }
+    eprintln!(
+        "sobol 16 runs + morris 9 runs: {:.2} s",
+        t.elapsed().as_secs_f64()
+    );
 }
 
 #[test]
