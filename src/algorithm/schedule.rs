@@ -743,7 +743,9 @@ impl Schedule {
 
     /// The pressure history the phantom takes: one breakpoint per leg end, the leg's gas on
     /// each segment, the schedule's water vapour subtracted at the open faces. Zero-length legs
-    /// (gas switches) are merged into the next leg.
+    /// (gas switches) are merged into the next leg. The phantom starts saturated with air at
+    /// the surface pressure ([`crate::profile::Saturation`]), as a diver's tissues and every
+    /// planner's do, whatever the first leg breathes.
     pub fn to_pressure_history(&self) -> Result<PressureHistory, String> {
         let mut t = vec![0.0];
         let mut p = vec![self.pressure_at(self.legs.first().map_or(0.0, |l| l.start_depth_m))];
@@ -764,6 +766,11 @@ impl Schedule {
                 self.label
             ));
         }
-        PressureHistory::new(self.label.clone(), t, p, g, self.water_vapour_pa)
+        let mut h = PressureHistory::new(self.label.clone(), t, p, g, self.water_vapour_pa)?;
+        h.saturation = crate::profile::Saturation {
+            gas: GasMix::AIR,
+            ambient_pa: self.surface_pressure_pa,
+        };
+        Ok(h)
     }
 }

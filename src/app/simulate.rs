@@ -87,7 +87,11 @@ pub fn run(
         resume.zip(resumed_from.as_deref()),
         req.trace_steps,
     )?;
-    run.notes = notes;
+    // the import's notes first, then the run's own (the bubbles' fixed gases)
+    run.notes = notes
+        .into_iter()
+        .chain(std::mem::take(&mut run.notes))
+        .collect();
     let mut set = OutputSet::new();
     add_run_files(&mut set, "", &run, &profile.label, &phantom.params.name)?;
     set.commit_with_inputs(&req.out, &inputs)?;

@@ -5,10 +5,13 @@
 //! fraction × (ambient − P_H2O), and every bubble holds the gases that are not simulated at
 //! fixed partial pressures, P_H2O + P_CO2 + P_vO2 (6.27 + 5.3 + 5.3 kPa by default; the same
 //! P_H2O on both sides, whatever water vapour the schedule's planner used); O2 is left out of
-//! the gel unless the protocol sets `oxygen_at_faces`. The phantom starts saturated at the surface
-//! with the first leg's gas; the schedule is followed by `protocol.observe_after_surfacing_min`
-//! at the surface on air. A repetitive dive (`repeat_after_min`) appends a surface interval
-//! on air and the same schedule again, so the gel and the bubbles carry over.
+//! the gel unless the protocol sets `oxygen_at_faces`. The phantom starts saturated with surface
+//! air under the same convention, f_g,air·(P_surf − P_H2O) with no He, whatever the first leg
+//! breathes (a diver's tissues before the dive, where ZH-L16 and VPM-B start theirs;
+//! [`crate::profile::Saturation`]); the schedule is followed by
+//! `protocol.observe_after_surfacing_min` at the surface on air. A repetitive dive
+//! (`repeat_after_min`) appends a surface interval on air and the same schedule again, so the
+//! gel and the bubbles carry over.
 
 use crate::algorithm::Schedule;
 use crate::error::{Error, InputError};

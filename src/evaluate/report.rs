@@ -100,7 +100,7 @@ pub fn add_report(
         proto.venous_o2_pa
     );
     let mut inputs = format!(
-        "- Dive: **{}**{}\n- Phantom: **{}** from {} — grid step {:.1} µm, {} cells inside; {}\n- Criteria: `{}`{}\n- Linking: ambient pressure of the schedule at the gel; open faces in equilibrium with the inspired {} partial pressures, fraction × (ambient − water vapour), water vapour {}; saturated at the surface at t = 0; watched {} min at the surface on air after the schedule ends.\n- Elasticity laws: {} (μ = {} Pa; M = {} Pa/µm³ and K = {} GPa where the phantom gives none: the paper's Fig. 2a values 5 × 10⁻² Pa/µm³ and 2.2 GPa).",
+        "- Dive: **{}**{}\n- Phantom: **{}** from {} — grid step {:.1} µm, {} cells inside; {}\n- Criteria: `{}`{}\n- Linking: ambient pressure of the schedule at the gel; open faces in equilibrium with the inspired {} partial pressures, fraction × (ambient − water vapour), water vapour {}; saturated with surface air at t = 0, whatever the first gas; watched {} min at the surface on air after the schedule ends.\n- Elasticity laws: {} (μ = {} Pa; M = {} Pa/µm³ and K = {} GPa where the phantom gives none: the paper's Fig. 2a values 5 × 10⁻² Pa/µm³ and 2.2 GPa).",
         ctx.dive,
         ctx.repeat_after_min
             .map(|s| format!(", repeated after a {s} min surface interval"))

@@ -173,13 +173,24 @@ fn phantom_text(params: &PhantomParams) -> String {
     format!("{p:#?}")
 }
 
-/// The pressure history: water vapour, inert-only flag, then one line per breakpoint (time,
-/// absolute pressure, gas of the segment that starts there); its label left out.
+/// The pressure history: water vapour, inert-only flag, the phantom's starting saturation
+/// when it is not the first segment's gas at the first pressure (the rule of every history
+/// before the saturation was stated, so their checkpoints still match), then one line per
+/// breakpoint (time, absolute pressure, gas of the segment that starts there); its label left
+/// out.
 fn profile_text(profile: &PressureHistory) -> String {
     let mut s = format!(
-        "vapour_pa: {:?}\ninert_only: {}\nbreakpoints: [\n",
+        "vapour_pa: {:?}\ninert_only: {}\n",
         profile.vapour_pa, profile.inert_only
     );
+    let sat = profile.saturation;
+    if sat.gas != profile.gas[0] || sat.ambient_pa != profile.ambient_pa[0] {
+        s.push_str(&format!(
+            "saturation: o2 {:?}, he {:?}, p {:?} Pa\n",
+            sat.gas.o2, sat.gas.he, sat.ambient_pa
+        ));
+    }
+    s.push_str("breakpoints: [\n");
     for (i, (t, p)) in profile.times_s.iter().zip(&profile.ambient_pa).enumerate() {
         s.push_str(&format!("    {i}: t {t:?} s, p {p:?} Pa"));
         if let Some(g) = profile.gas.get(i) {

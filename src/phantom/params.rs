@@ -5,7 +5,9 @@ use super::elasticity::{ElasticityLaw, NoElasticity};
 use super::grid::{Face, Shape};
 use super::nucleation::{fixed::Fixed, NucleationModel};
 use super::surface::{EqualToBulk, SurfacePermeability};
+use crate::error::InputError;
 use crate::gas::Gas;
+use crate::profile::PressureHistory;
 use std::sync::Arc;
 
 /// Default surface-layer thickness δ, m (see [`PhantomParams::surface_layer_thickness`]).
@@ -289,7 +291,9 @@ pub struct PhantomParams {
     /// not a simulated gas) inside every bubble, Pa (TOML `[material] bubble_fixed_gases_pa`).
     /// Default 0 (a lab gel under chamber gas). The simulated gases then fill the bubble at
     /// P_B − p_fixed: (P_amb + 2γ/R + Ω(R) − p_fixed)·V = n·R_u·T and Henry's law at the
-    /// interface is C_s,g = L_g·x_g·(P_B − p_fixed)/(R_u·T).
+    /// interface is C_s,g = L_g·x_g·(P_B − p_fixed)/(R_u·T). A command's run whose history
+    /// subtracts water vapour at the open faces holds at least that vapour in every bubble
+    /// ([`PhantomParams::bubble_fixed_gases_for`], [`crate::run::params_for`]).
     pub bubble_fixed_gases: f64,
     /// Time-loop settings.
     pub numerics: Numerics,
@@ -340,5 +344,33 @@ impl PhantomParams {
     /// Properties of one gas, if listed.
     pub fn gas(&self, g: Gas) -> Option<&GasProperties> {
         self.gases.iter().find(|p| p.gas == g)
+    }
+
+    /// The fixed partial pressure every bubble holds in a command's run of `profile`
+    /// ([`crate::run::params_for`]), Pa: one water-vapour convention on both sides of the
+    /// interface (issue 8). The open faces hold f_g·(P_amb − P_H2O) with
+    /// P_H2O = `profile.vapour_pa`, so every bubble holds that vapour too:
+    /// [`PhantomParams::bubble_fixed_gases`] when it is set, else (0) the history's vapour. A
+    /// value set below the vapour is refused (the interface would start P_H2O − p_fixed
+    /// unsaturated), naming both settings. `evaluate`/`check` set p_fixed from the criteria's
+    /// `[protocol]` (P_H2O + P_CO2 + P_vO2 ≥ the P_H2O of their faces).
+    pub fn bubble_fixed_gases_for(&self, profile: &PressureHistory) -> Result<f64, InputError> {
+        let (fixed, vapour) = (self.bubble_fixed_gases, profile.vapour_pa);
+        if !(vapour > 0.0) {
+            return Ok(fixed);
+        }
+        if fixed == 0.0 {
+            return Ok(vapour);
+        }
+        if fixed < vapour {
+            return Err(InputError::new(format!(
+                "the phantom's material.bubble_fixed_gases_pa = {} Pa is below the water vapour the profile subtracts at the open faces (water_vapour_pa = {} Pa): every bubble holds at least that vapour, or its interface starts unsaturated by the difference; set bubble_fixed_gases_pa ≥ {} Pa, or leave it out (0) to take the profile's vapour",
+                crate::error::num(fixed),
+                crate::error::num(vapour),
+                crate::error::num(vapour)
+            ))
+            .field("material.bubble_fixed_gases_pa"));
+        }
+        Ok(fixed)
     }
 }

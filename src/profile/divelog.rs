@@ -114,7 +114,9 @@ impl ImportedDive {
 
     /// The dive as a pressure history (breakpoints at every sample and gas switch);
     /// `vapour_pa` is the water-vapour pressure subtracted at the open faces (e.g. 6 270 Pa
-    /// alveolar for a breathed gas). Closed-circuit dives are refused.
+    /// alveolar for a breathed gas). The phantom starts saturated with air at the dive's
+    /// surface pressure ([`crate::profile::Saturation`]), whatever the first gas. Closed-circuit
+    /// dives are refused.
     pub fn history(&self, vapour_pa: f64) -> Result<PressureHistory, InputError> {
         if self.closed_circuit {
             let field = match self.format {
@@ -140,8 +142,15 @@ impl ImportedDive {
         let nseg = times.len().max(2) - 1;
         let gas: Vec<GasMix> = (0..nseg).map(|i| self.gas_at(times[i])).collect();
         let ambient = depths.iter().map(|&d| self.ambient_pa(d)).collect();
-        PressureHistory::new(self.label.clone(), times, ambient, gas, vapour_pa)
-            .map_err(|e| InputError::new(format!("dive '{}': {e}", self.label)).at_line(self.line))
+        let mut h = PressureHistory::new(self.label.clone(), times, ambient, gas, vapour_pa)
+            .map_err(|e| {
+                InputError::new(format!("dive '{}': {e}", self.label)).at_line(self.line)
+            })?;
+        h.saturation = crate::profile::Saturation {
+            gas: GasMix::AIR,
+            ambient_pa: self.surface_pa,
+        };
+        Ok(h)
     }
 }
 

@@ -280,6 +280,29 @@ pub struct PressureHistory {
     /// the phantom (for a breathed dive gas; living tissue metabolises oxygen). False (the
     /// default) for chamber gas, which reaches the gel as it is.
     pub inert_only: bool,
+    /// What the phantom is saturated with at t = 0 ([`Saturation`]): for a dive (a schedule,
+    /// a dive log) surface air, as every planner's tissues start; for a laboratory profile
+    /// the chamber gas at the starting pressure.
+    pub saturation: Saturation,
+}
+
+/// The state the phantom starts in: the gel and the t = 0 bubbles in equilibrium with `gas`
+/// at the ambient pressure `ambient_pa`, under the history's conventions (its water vapour
+/// subtracted, its O2 left out with [`PressureHistory::inert_only`]):
+/// C_g = L_g·f_g·(ambient − P_H2O)/(R_u·T) ([`PressureHistory::saturation_partial_pressure`]).
+///
+/// - Dives (schedules of `plan`, `evaluate`, `check`; CSV waypoints; dive logs): surface air
+///   at the surface pressure, whatever the first leg breathes — the state before the dive,
+///   the one ZH-L16 and VPM-B start their tissues in, f_N2,air·(P_surf − P_H2O), no He.
+/// - TOML profiles: the file's `gas` (the gas at time 0, before any switch; default air) at the
+///   starting pressure. Legacy two-column files: their one gas at the starting pressure.
+///   [`PressureHistory::new`] takes the first segment's gas at the first pressure.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Saturation {
+    /// The gas the phantom is saturated with.
+    pub gas: GasMix,
+    /// The absolute ambient pressure it is saturated at, Pa.
+    pub ambient_pa: f64,
 }
 
 impl PressureHistory {
@@ -354,6 +377,10 @@ impl PressureHistory {
                 "water-vapour pressure {vapour_pa} Pa is out of range 0..1e5"
             ));
         }
+        let saturation = Saturation {
+            gas: gas[0],
+            ambient_pa: ambient_pa[0],
+        };
         Ok(PressureHistory {
             times_s,
             ambient_pa,
@@ -361,6 +388,7 @@ impl PressureHistory {
             vapour_pa,
             label: label.into(),
             inert_only: false,
+            saturation,
         })
     }
 
@@ -428,6 +456,35 @@ impl PressureHistory {
         self.gas_at(t).fraction(gas) * (self.ambient(t) - self.vapour_pa).max(0.0)
     }
 
+    /// The segment a time step [t0, t1] lies in: the one holding its midpoint. The time loop
+    /// never steps across a breakpoint, so a step that ends on a gas switch belongs to the
+    /// segment before it, and one that starts there to the segment after it.
+    pub fn step_segment(&self, t0: f64, t1: f64) -> usize {
+        self.segment(0.5 * (t0 + t1))
+    }
+
+    /// [`Self::inspired_partial_pressure`] with the gas of segment `seg` and the ambient
+    /// pressure at `t`: the open faces' value at a time `t` of a step in segment `seg`
+    /// ([`Self::step_segment`]), so that the step ending on a gas switch keeps the gas it was
+    /// breathed with up to its end.
+    pub fn inspired_partial_pressure_on(&self, gas: Gas, seg: usize, t: f64) -> f64 {
+        if self.inert_only && gas == Gas::O2 {
+            return 0.0;
+        }
+        self.gas[seg.min(self.gas.len() - 1)].fraction(gas)
+            * (self.ambient(t) - self.vapour_pa).max(0.0)
+    }
+
+    /// Partial pressure of `gas` the phantom is saturated with at t = 0, Pa
+    /// ([`Saturation`]): fraction × (saturation pressure − water vapour); with
+    /// [`PressureHistory::inert_only`], O2 gives 0.
+    pub fn saturation_partial_pressure(&self, gas: Gas) -> f64 {
+        if self.inert_only && gas == Gas::O2 {
+            return 0.0;
+        }
+        self.saturation.gas.fraction(gas) * (self.saturation.ambient_pa - self.vapour_pa).max(0.0)
+    }
+
     /// First breakpoint strictly after `t` (or the end time).
     pub fn next_breakpoint(&self, t: f64) -> f64 {
         let k = self.times_s.partition_point(|&x| x <= t + 1e-12);
@@ -450,13 +507,16 @@ impl PressureHistory {
         self.times_s[i]
     }
 
-    /// Every gas that appears on any segment, in [`Gas::ALL`] order (without O2 when
-    /// [`PressureHistory::inert_only`]).
+    /// Every gas that appears on any segment or in the [`Saturation`], in [`Gas::ALL`] order
+    /// (without O2 when [`PressureHistory::inert_only`]).
     pub fn gases(&self) -> Vec<Gas> {
         Gas::ALL
             .into_iter()
             .filter(|g| !(self.inert_only && *g == Gas::O2))
-            .filter(|g| self.gas.iter().any(|m| m.fraction(*g) > 0.0))
+            .filter(|g| {
+                self.saturation.gas.fraction(*g) > 0.0
+                    || self.gas.iter().any(|m| m.fraction(*g) > 0.0)
+            })
             .collect()
     }
 
@@ -508,6 +568,26 @@ mod tests {
         )
         .unwrap();
         assert_eq!(h.final_arrival_s(), 30.0);
+    }
+
+    #[test]
+    fn a_step_ending_on_a_switch_keeps_its_segments_gas() {
+        // air to 100 s, oxygen after, at a constant 2 bar
+        let h = PressureHistory::new(
+            "t",
+            vec![0.0, 100.0, 200.0],
+            vec![2e5; 3],
+            vec![GasMix::AIR, GasMix::new(1.0, 0.0).unwrap()],
+            0.0,
+        )
+        .unwrap();
+        // the step [80, 100] is in the air segment, [100, 120] in the oxygen one
+        assert_eq!(h.step_segment(80.0, 100.0), 0);
+        assert_eq!(h.step_segment(100.0, 120.0), 1);
+        let seg = h.step_segment(80.0, 100.0);
+        assert!((h.inspired_partial_pressure_on(Gas::N2, seg, 100.0) - 0.79 * 2e5).abs() < 1e-6);
+        // what the faces took before the fix at the step's end: the next segment's gas
+        assert_eq!(h.inspired_partial_pressure(Gas::N2, 100.0), 0.0);
     }
 
     #[test]

@@ -546,8 +546,11 @@ pub fn validate(raw: RawProfile, text: &str, path: &Path) -> Result<TomlProfile,
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| "profile".into())
     });
-    let history = PressureHistory::new(name.clone(), times, pres, gases, vapour)
+    let mut history = PressureHistory::new(name.clone(), times, pres, gases, vapour)
         .map_err(|e| InputError::new(e).in_file(path).field(pts_field))?;
+    // the phantom starts saturated with the file's `gas` (the gas before any switch, also one
+    // at time 0 or a first leg's `gas`) at the starting pressure
+    history.saturation.gas = gas0;
     Ok(TomlProfile {
         name,
         description: raw.description.unwrap_or_default(),
@@ -558,6 +561,7 @@ pub fn validate(raw: RawProfile, text: &str, path: &Path) -> Result<TomlProfile,
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::gas::Gas;
     use crate::units::PSI_PA;
 
     fn p(text: &str) -> Result<TomlProfile, InputError> {
@@ -614,6 +618,24 @@ gas = "o2"
         assert!((h.ambient_pa[1] - 2e5).abs() < 1e-6);
         assert_eq!(h.gas_at(10.0), GasMix::AIR);
         assert!((h.gas_at(60.0).o2 - 0.32).abs() < 1e-12);
+    }
+
+    #[test]
+    fn the_phantom_starts_saturated_with_the_files_gas() {
+        // a switch at time 0 (a first leg's `gas` is one) is breathed from t = 0, but the
+        // phantom was in the file's `gas` before: it starts saturated with that, at `start`
+        let r = p("time_unit = \"s\"\npressure_unit = \"bar\"\ngas = \"air\"\nstart = 2\n[[leg]]\nduration = 60\ngas = \"18/45\"\n").unwrap();
+        let h = &r.history;
+        assert!((h.gas_at(0.0).he - 0.45).abs() < 1e-12);
+        assert_eq!(h.saturation.gas, GasMix::AIR);
+        assert_eq!(h.saturation.ambient_pa, 2e5);
+        assert!((h.saturation_partial_pressure(Gas::N2) - 0.79 * 2e5).abs() < 1e-6);
+        assert_eq!(h.saturation_partial_pressure(Gas::He), 0.0);
+        // He is one of the run's gases (breathed), N2 too (in the gel at the start)
+        assert_eq!(h.gases(), vec![Gas::N2, Gas::O2, Gas::He]);
+        // without a switch at time 0 the start is the first segment's gas, as before
+        let r = p("time_unit = \"s\"\npressure_unit = \"bar\"\ngas = \"ean32\"\npoints = [[0, 1], [10, 1]]\n").unwrap();
+        assert_eq!(r.history.saturation.gas, r.history.gas[0]);
     }
 
     #[test]

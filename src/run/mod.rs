@@ -172,6 +172,9 @@ pub fn simulate_checkpointed(
 ) -> Result<SimRun, Error> {
     let start = std::time::Instant::now();
     cost::check(params, profile)?;
+    // every bubble holds at least the water vapour the open faces subtract
+    let paired = params_for(params, profile)?;
+    let params: &PhantomParams = &paired;
     let mut obs = WithProgress {
         rec: Recorder::default(),
         steps: trace.then(Vec::new),
@@ -203,11 +206,18 @@ pub fn simulate_checkpointed(
     let frames = obs.rec.frames;
     let steps = obs.steps.unwrap_or_default();
     let (phases, gel_by_scheme) = (obs.phases, obs.gel_by_scheme);
+    let mut notes = Vec::new();
+    if let std::borrow::Cow::Owned(p) = &paired {
+        notes.push(format!(
+            "every bubble holds the {} Pa of water vapour the profile subtracts at the open faces (the phantom sets no material.bubble_fixed_gases_pa): one convention on both sides of the interface",
+            crate::error::num(p.bubble_fixed_gases)
+        ));
+    }
     Ok(SimRun {
         summary,
         frames,
         wall_seconds: start.elapsed().as_secs_f64(),
-        notes: Vec::new(),
+        notes,
         checkpoints: checkpointer.map(|c| c.stats.clone()),
         resumed_at,
         steps,
@@ -216,9 +226,32 @@ pub fn simulate_checkpointed(
     })
 }
 
+/// The phantom's parameters for a run of `profile`, as every command runs it: the bubbles'
+/// fixed gases paired with the water vapour the history subtracts at the open faces
+/// ([`PhantomParams::bubble_fixed_gases_for`]: the phantom's value when it holds that vapour,
+/// the vapour itself when the phantom sets none, refused when it sets less). Borrowed when
+/// nothing changes (no vapour, or the phantom's value kept); `evaluate` and `check` have set
+/// theirs from the criteria's `[protocol]` already, which holds the faces' vapour.
+/// [`Simulation::new`] itself takes its parameters as given (the analytic tests lower the
+/// gel's tension with a "vapour" against a bubble of pure gas).
+pub fn params_for<'p>(
+    params: &'p PhantomParams,
+    profile: &PressureHistory,
+) -> Result<std::borrow::Cow<'p, PhantomParams>, Error> {
+    let fixed = params.bubble_fixed_gases_for(profile)?;
+    if fixed == params.bubble_fixed_gases {
+        return Ok(std::borrow::Cow::Borrowed(params));
+    }
+    let mut p = params.clone();
+    p.bubble_fixed_gases = fixed;
+    Ok(std::borrow::Cow::Owned(p))
+}
+
 /// Load a pressure profile; a schedule TOML written by `plan --out` (it has `legs`) is accepted
 /// too and becomes its pressure history (ambient at the gel, breathed gas with the schedule's
-/// water vapour at the open faces).
+/// water vapour at the open faces, the phantom saturated with surface air at the start, and
+/// every bubble holding that vapour unless the phantom sets more:
+/// [`PhantomParams::bubble_fixed_gases_for`]).
 pub fn load_profile_or_schedule(
     path: &std::path::Path,
     opts: &LoadOptions,

@@ -78,3 +78,88 @@ fn fixed_gases_change_epstein_plesset_f() {
     assert!(t1 > t0);
     assert!(((t1 / t0) / (t_ep1 / t_ep0) - 1.0).abs() < 0.01);
 }
+
+/// Defect 2 of the physics review (27 Nov 2026): a run whose history subtracts water vapour at
+/// the open faces (a planned schedule in `simulate`, a TOML profile with `water_vapour_pa`)
+/// puts the same vapour in every bubble when the phantom sets no `bubble_fixed_gases_pa`
+/// (`run::params_for`; what `evaluate` does with the criteria's `[protocol]`: one convention
+/// on both sides). Case: a 100 µm bubble, γ = 0, no elasticity, held 300 s at the surface on
+/// air as a planned schedule (P_H2O 6 270 Pa). Reference (by hand): the gel holds N2 + O2 at
+/// f_g·(P − P_H2O), and with p_fixed = P_H2O the bubble's gases are at the same
+/// f_g·(P − P_H2O) (P_B = P with γ = Ω = 0): exact equilibrium, so the radius stays put.
+/// Before the fix (p_fixed = 0) the bubble's gases were at P, P_H2O above the gel, and the
+/// bubble dissolved (Epstein–Plesset with f = (P − P_H2O)/P = 0.938).
+#[test]
+fn a_history_with_water_vapour_puts_it_in_the_bubbles() {
+    use decophantom::algorithm::{Leg, LegKind, Schedule};
+    let (p, vapour, r0) = (101_325.0, 6_270.0, 1e-4);
+    let schedule = Schedule {
+        label: "surface".into(),
+        surface_pressure_pa: p,
+        pa_per_m: 10_000.0,
+        water_vapour_pa: vapour,
+        legs: vec![Leg {
+            kind: LegKind::Bottom,
+            start_depth_m: 0.0,
+            end_depth_m: 0.0,
+            duration_s: 300.0,
+            gas: GasMix::AIR,
+        }],
+        stops: vec![],
+    };
+    let profile = schedule.to_pressure_history().unwrap();
+    assert_eq!(profile.vapour_pa, vapour);
+    let mut params = PhantomParams::box_phantom([2e-3; 3], 1e-4);
+    params.surface_tension = 0.0;
+    params.min_radius = 0.0;
+    params.bubbles = BubblePlacement::Explicit(vec![([1e-3; 3], r0)]);
+    params.numerics.record_interval = 10.0;
+    assert_eq!(params.bubble_fixed_gases, 0.0);
+    let paired = decophantom::run::params_for(&params, &profile).unwrap();
+    assert_eq!(paired.bubble_fixed_gases, vapour);
+    let sim = Simulation::new(&paired, &profile).unwrap();
+    // the simulated gases fill P − p_fixed: n = (P − P_H2O)·V/(R_u·T)
+    let n_expected =
+        (p - vapour) * 4.0 / 3.0 * PI * r0.powi(3) / (GAS_CONSTANT * params.temperature);
+    assert!((sim.bubbles[0].total_moles() / n_expected - 1.0).abs() < 1e-12);
+    // as every command runs it (the phantom as loaded): the radius stays put, and the run
+    // says why
+    let run = decophantom::run::simulate(&params, &profile, &mut |_, _| {}).unwrap();
+    let worst = run
+        .frames
+        .iter()
+        .map(|f| (f.bubbles[0].radius / r0 - 1.0).abs())
+        .fold(0.0, f64::max);
+    eprintln!("largest relative radius change over 300 s: {worst:.2e}");
+    assert!(worst < 1e-6, "{worst}");
+    assert!(
+        run.notes
+            .iter()
+            .any(|n| n.contains("6270 Pa of water vapour")),
+        "{:?}",
+        run.notes
+    );
+    // a phantom's own value at or above the vapour is kept (it holds the vapour and more) …
+    params.bubble_fixed_gases = 16_870.0;
+    assert_eq!(params.bubble_fixed_gases_for(&profile).unwrap(), 16_870.0);
+    // … one below it is refused (exit 2), naming both settings
+    params.bubble_fixed_gases = 3_000.0;
+    let Err(decophantom::error::Error::Input(e)) =
+        decophantom::run::simulate(&params, &profile, &mut |_, _| {})
+    else {
+        panic!("a phantom holding less than the faces' vapour must be refused");
+    };
+    assert_eq!(e.field.as_deref(), Some("material.bubble_fixed_gases_pa"));
+    assert!(
+        e.message.contains("water_vapour_pa = 6270 Pa"),
+        "{}",
+        e.message
+    );
+    // a history without vapour (chamber gas) keeps the phantom's value, 0 included
+    let chamber =
+        PressureHistory::with_gas("c", vec![0.0, 300.0], vec![p, p], GasMix::AIR, 0.0).unwrap();
+    for fixed in [0.0, 3_000.0] {
+        params.bubble_fixed_gases = fixed;
+        assert_eq!(params.bubble_fixed_gases_for(&chamber).unwrap(), fixed);
+    }
+}

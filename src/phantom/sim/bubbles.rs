@@ -317,17 +317,24 @@ impl Simulation<'_> {
                     + fixed
             }
         };
-        let inspired = |t: f64| -> f64 {
+        // the open faces' value at `t` with the gas of segment `seg`
+        let inspired = |seg: usize, t: f64| -> f64 {
             self.gases
                 .iter()
-                .map(|g| profile.inspired_partial_pressure(*g, t))
+                .map(|g| profile.inspired_partial_pressure_on(*g, seg, t))
                 .sum::<f64>()
                 + fixed
         };
-        b = b.max(inspired(t0)).max(inspired(t1));
+        // the step's segment at both ends (the faces of a step that ends on a gas switch keep
+        // the old gas to its end), and at a breakpoint inside it the gases on both sides
+        let seg = profile.step_segment(t0, t1);
+        b = b.max(inspired(seg, t0)).max(inspired(seg, t1));
         let first = profile.times_s.partition_point(|&x| x <= t0);
         for &tb in profile.times_s[first..].iter().take_while(|&&x| x < t1) {
-            b = b.max(inspired(tb));
+            let after = profile.segment(tb);
+            b = b
+                .max(inspired(after, tb))
+                .max(inspired(after.saturating_sub(1), tb));
         }
         let ng = self.gases.len();
         for bubble in self.bubbles.iter().filter(|x| x.active()) {
@@ -389,7 +396,7 @@ impl Simulation<'_> {
         // no nucleus can activate while even the bound of the gel tension stays below the
         // lowest threshold (bare nuclei only: with skins every step records the crushing)
         if !pool.has_skins() {
-            let bound = self.tension_bound(profile, t0, p1);
+            let bound = self.tension_bound(profile, t0, self.time);
             if bound - p1 < 0.9 * pool.lowest_threshold() {
                 self.nuclei = pool;
                 return Ok(());

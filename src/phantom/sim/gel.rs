@@ -85,6 +85,9 @@ impl Simulation<'_> {
         extrapolate: bool,
     ) -> (bool, f64) {
         let implicit = self.explicit_limit.iter().any(|lim| dt > *lim);
+        // the open faces hold the gas of the segment the step lies in (a step ending on a gas
+        // switch keeps the old gas to its end) at the ambient pressure of their time
+        let seg = profile.step_segment(t, t + dt);
         self.gel_fresh = false;
         let h3 = self.grid.cell_volume();
         let estimate = tol_pa.is_finite();
@@ -109,7 +112,8 @@ impl Simulation<'_> {
             let tb = t + dt;
             let mut dc = [(0.0, 0.0); Gas::ALL.len()];
             for (g, dc) in dc[..ng].iter_mut().enumerate() {
-                let cb = self.ostwald[g] * profile.inspired_partial_pressure(self.gases[g], tb)
+                let cb = self.ostwald[g]
+                    * profile.inspired_partial_pressure_on(self.gases[g], seg, tb)
                     / self.rt;
                 *dc = (self.diffusivity[g], cb);
             }
@@ -172,7 +176,8 @@ impl Simulation<'_> {
                 self.extrapolated_step(profile, g, t, dt)
             } else {
                 // the open faces at their end value (both schemes take their term implicitly)
-                let cb = self.ostwald[g] * profile.inspired_partial_pressure(gas, t + dt) / self.rt;
+                let cb = self.ostwald[g] * profile.inspired_partial_pressure_on(gas, seg, t + dt)
+                    / self.rt;
                 if implicit {
                     self.implicit
                         .step(&self.grid, &mut self.fields[g], d, dt, cb)
@@ -281,7 +286,9 @@ impl Simulation<'_> {
         dt: f64,
     ) -> f64 {
         let (gas, d) = (self.gases[g], self.diffusivity[g]);
-        let cb = |s: f64| self.ostwald[g] * profile.inspired_partial_pressure(gas, s) / self.rt;
+        let seg = profile.step_segment(t, t + dt);
+        let cb =
+            |s: f64| self.ostwald[g] * profile.inspired_partial_pressure_on(gas, seg, s) / self.rt;
         let (cb_half, cb_end) = (cb(t + 0.5 * dt), cb(t + dt));
         use rayon::prelude::*;
         // the grid-wide passes in parallel chunks (element by element: the same bits)
@@ -369,10 +376,13 @@ impl Simulation<'_> {
         let w = diffusion::PerfusionWeights::new(k, dt);
         self.gel_fresh = false;
         let h3 = self.grid.cell_volume();
+        // the blood value of the segment the step lies in, at both ends (as the open faces)
+        let seg = profile.step_segment(t, t + dt);
         for g in 0..self.gases.len() {
             let gas = self.gases[g];
-            let cb0 = self.ostwald[g] * profile.inspired_partial_pressure(gas, t) / self.rt;
-            let cb1 = self.ostwald[g] * profile.inspired_partial_pressure(gas, t + dt) / self.rt;
+            let cb0 = self.ostwald[g] * profile.inspired_partial_pressure_on(gas, seg, t) / self.rt;
+            let cb1 =
+                self.ostwald[g] * profile.inspired_partial_pressure_on(gas, seg, t + dt) / self.rt;
             let added = diffusion::perfusion_step(&self.grid, &mut self.fields[g], w, cb0, cb1);
             self.inflow += added * h3;
         }

@@ -266,8 +266,11 @@ pub struct Simulation<'a> {
 }
 
 impl<'a> Simulation<'a> {
-    /// Set up: grid, fields saturated with the profile's gas at t = 0, bubbles placed and
-    /// filled at Laplace equilibrium with the composition of the gel around them.
+    /// Set up: grid, fields saturated with the profile's [`Saturation`](crate::profile::Saturation)
+    /// (surface air for a dive, the chamber gas for a laboratory profile), bubbles placed and
+    /// filled at Laplace equilibrium with the composition of the gel around them. The
+    /// parameters are taken as given (`bubble_fixed_gases` too); the commands pair the bubbles'
+    /// fixed gases with the history's water vapour first ([`crate::run::params_for`]).
     pub fn new(params: &'a PhantomParams, profile: &PressureHistory) -> Result<Self, Error> {
         let input = |m: String| Error::Input(crate::error::InputError::new(m));
         let grid = Grid::new(params.shape, params.grid_step, &params.open_faces).map_err(input)?;
@@ -305,7 +308,7 @@ impl<'a> Simulation<'a> {
             .iter()
             .zip(&ostwald)
             .map(|(g, l)| {
-                let c = l * profile.inspired_partial_pressure(*g, 0.0) / rt;
+                let c = l * profile.saturation_partial_pressure(*g) / rt;
                 (0..grid.len())
                     .map(|i| if grid.inside(i) { c } else { 0.0 })
                     .collect()
@@ -316,12 +319,12 @@ impl<'a> Simulation<'a> {
         let placements = place_bubbles(params, &grid)?;
         let partial: Vec<f64> = gases
             .iter()
-            .map(|g| profile.inspired_partial_pressure(*g, 0.0))
+            .map(|g| profile.saturation_partial_pressure(*g))
             .collect();
         let psum: f64 = partial.iter().sum();
         if !(psum > 0.0) {
             return Err(input(
-                "the inspired inert-gas pressure at t = 0 is zero (water vapour ≥ ambient?)".into(),
+                "the gel's starting saturation holds no simulated gas (water vapour ≥ the starting pressure?)".into(),
             ));
         }
         let mut bubbles = Vec::new();
