@@ -117,8 +117,23 @@ pub fn run_merge(dirs: &[PathBuf], out: &std::path::Path, command: &str) -> Resu
     merge(dirs, out, command)
 }
 
-/// A short text summary: the indices.
+/// A short text summary: the runs and the indices; for a shard (whose rows alone give no
+/// indices) the runs it holds and how to get the indices. Counts (`n_used`, `n_dropped`) are
+/// printed as whole numbers.
 pub fn summary_text(r: &Results) -> String {
+    if !r.is_whole() {
+        let n = r.spec.runs().unwrap_or(0);
+        let range = r.shard.range(n);
+        return format!(
+            "shard {}/{}: {} runs of the design's {n} (runs {}…{}; {} resumed from the journal)\nno indices from a shard: merge every shard's folder (decophantom merge DIR… --out DIR)\n",
+            r.shard.index,
+            r.shard.count,
+            r.rows.len(),
+            range.start,
+            range.end.saturating_sub(1),
+            r.resumed
+        );
+    }
     let mut s = format!(
         "{} runs ({} resumed from the journal)\n",
         r.rows.len(),
@@ -129,9 +144,73 @@ pub fn summary_text(r: &Results) -> String {
         let vals: Vec<String> = h
             .iter()
             .zip(&v)
-            .map(|(n, x)| format!("{n} {}", crate::fit::report::sig(*x, 3)))
+            .map(|(n, x)| {
+                if n.starts_with("n_") && x.is_finite() {
+                    format!("{n} {x:.0}")
+                } else {
+                    format!("{n} {}", crate::fit::report::sig(*x, 3))
+                }
+            })
             .collect();
         s.push_str(&format!("{m} / {p}: {}\n", vals.join(", ")));
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::sweep::run::Row;
+
+    #[test]
+    fn sweep_summary_of_a_shard_has_no_indices_and_counts_print_as_integers() {
+        // a Morris design of 1 parameter and 4 trajectories (8 runs), y = u: every elementary
+        // effect is Δ/Δ = 1, so μ* = μ = 1, σ = 0 from 4 effects, none dropped
+        let spec = StudySpec {
+            method: Method::Morris,
+            samples: 4,
+            seed: 1,
+            params: vec![Param {
+                path: "a.x".into(),
+                lo: 0.0,
+                hi: 1.0,
+                log: false,
+                base: 0.5,
+            }],
+            metrics: vec![Metric::parse("r_max").unwrap()],
+        };
+        let rows: Vec<Row> = spec
+            .values()
+            .into_iter()
+            .enumerate()
+            .map(|(index, v)| Row {
+                index,
+                metrics: vec![v[0]],
+                values: v,
+            })
+            .collect();
+        let whole = Results {
+            spec,
+            shard: Shard::WHOLE,
+            rows,
+            courses: Vec::new(),
+            resumed: 0,
+        };
+        let s = summary_text(&whole);
+        assert!(
+            s.contains("r_max / a.x: mu_star 1.00, mu 1.00, sigma 0, n_used 4, n_dropped 0\n"),
+            "{s}"
+        );
+        // the 2nd of 3 shards: runs ⌊8/3⌋ = 2 … ⌊16/3⌋ − 1 = 4
+        let shard = Shard { index: 1, count: 3 };
+        let mut part = whole.clone();
+        part.shard = shard;
+        part.rows.retain(|r| (2..5).contains(&r.index));
+        let s = summary_text(&part);
+        assert!(
+            s.starts_with("shard 1/3: 3 runs of the design's 8 (runs 2…4;"),
+            "{s}"
+        );
+        assert!(s.contains("no indices") && !s.contains("mu_star"), "{s}");
+    }
 }

@@ -112,7 +112,48 @@ pub struct StudySpec {
     pub metrics: Vec<Metric>,
 }
 
+/// Most runs a study may have (the whole design, every shard together): 10⁶. The design is
+/// computed whole by every shard (a run's parameters depend on its place in it), so its size is
+/// bounded before it is built; 10⁶ runs of the smallest useful phantom (a few hundred cells,
+/// a few thousand steps: ~0.05 s each by [`crate::run::cost::SECONDS_PER_CELL_STEP`]) are
+/// already ~14 core-hours, and the largest documented designs (Sobol' with N = 10⁴ and ten
+/// parameters: 1.2·10⁵ runs) stay well below it.
+pub const MAX_RUNS: usize = 1_000_000;
+
 impl StudySpec {
+    /// Runs of the whole design: 1 + k·samples (oat), samples·(k + 1) (morris),
+    /// samples·(k + 2) (sobol); `None` when that overflows.
+    pub fn runs(&self) -> Option<usize> {
+        let k = self.params.len();
+        match self.method {
+            Method::Oat => k.checked_mul(self.samples)?.checked_add(1),
+            Method::Morris => self.samples.checked_mul(k.checked_add(1)?),
+            Method::Sobol => self.samples.checked_mul(k.checked_add(2)?),
+        }
+    }
+
+    /// The number of runs, checked before the design is built or any run starts: at most
+    /// [`MAX_RUNS`], else bad input naming `--samples`.
+    pub fn check_size(&self) -> Result<usize, InputError> {
+        let k = self.params.len();
+        let formula = match self.method {
+            Method::Oat => "1 + parameters × samples",
+            Method::Morris => "samples × (parameters + 1)",
+            Method::Sobol => "samples × (parameters + 2)",
+        };
+        match self.runs() {
+            Some(n) if n <= MAX_RUNS => Ok(n),
+            runs => Err(InputError::new(format!(
+                "--samples {} with {k} parameter(s) gives {} runs ({}: {formula}); a study is limited to {MAX_RUNS} runs: use fewer samples",
+                self.samples,
+                runs.map_or(format!("more than {}", usize::MAX), |n| n.to_string()),
+                self.method.name(),
+            ))
+            .in_file("<command line>")
+            .field("--samples")),
+        }
+    }
+
     /// Unit-cube points of every run, in run order.
     pub fn points(&self) -> Vec<Vec<f64>> {
         let base: Vec<f64> = self.params.iter().map(|p| p.unit(p.base)).collect();
@@ -241,5 +282,60 @@ pub fn num(v: f64) -> String {
         format!("{v}")
     } else {
         format!("{v:e}")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn spec(method: Method, k: usize, samples: usize) -> StudySpec {
+        StudySpec {
+            method,
+            samples,
+            seed: 1,
+            params: (0..k)
+                .map(|i| Param {
+                    path: format!("a.x{i}"),
+                    lo: 0.0,
+                    hi: 1.0,
+                    log: false,
+                    base: 0.5,
+                })
+                .collect(),
+            metrics: vec![Metric::parse("r_max").unwrap()],
+        }
+    }
+
+    #[test]
+    fn sweep_run_count_is_the_designs_and_is_capped_at_a_million_naming_samples() {
+        // the count against the design actually built (small cases)
+        for (m, k, s) in [
+            (Method::Oat, 2, 3),
+            (Method::Morris, 3, 2),
+            (Method::Sobol, 2, 4),
+        ] {
+            let sp = spec(m, k, s);
+            assert_eq!(sp.runs(), Some(sp.points().len()), "{m:?}");
+        }
+        // at the limit: oat 1 + 1·999 999 = 10⁶, morris 500 000·(1 + 1), sobol 250 000·(2 + 2)
+        for (m, k, at) in [
+            (Method::Oat, 1, 999_999),
+            (Method::Morris, 1, 500_000),
+            (Method::Sobol, 2, 250_000),
+        ] {
+            assert_eq!(spec(m, k, at).check_size().unwrap(), MAX_RUNS, "{m:?}");
+            let e = spec(m, k, at + 1).check_size().unwrap_err();
+            assert_eq!(e.field.as_deref(), Some("--samples"), "{m:?}");
+            assert!(
+                e.message.contains("limited to 1000000 runs"),
+                "{}",
+                e.message
+            );
+        }
+        // an overflowing count is refused, not wrapped
+        let e = spec(Method::Sobol, 3, usize::MAX).check_size().unwrap_err();
+        assert_eq!(e.field.as_deref(), Some("--samples"));
+        assert_eq!(spec(Method::Oat, 2, usize::MAX).runs(), None);
     }
 }

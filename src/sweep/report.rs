@@ -26,6 +26,9 @@ pub fn indices(res: &Results) -> (Vec<&'static str>, Vec<IndexRow>) {
 
 /// [`indices`] with the notes the report prints about them: which numbers rest on fewer
 /// runs than the design's, and which are undefined and why.
+///
+/// The indices need every run of the design ([`Results::is_whole`]); for a shard's rows
+/// (or any other part of the design) there are none: no rows, and a note saying so.
 pub fn indices_and_notes(res: &Results) -> (Vec<&'static str>, Vec<IndexRow>, Vec<String>) {
     let spec = &res.spec;
     let k = spec.params.len();
@@ -54,6 +57,14 @@ pub fn indices_and_notes(res: &Results) -> (Vec<&'static str>, Vec<IndexRow>, Ve
             "n_dropped",
         ],
     };
+    if !res.is_whole() {
+        notes.push(format!(
+            "no indices: they need every run of the design ({} runs), these are {} of them; merge the shards' folders (decophantom merge)",
+            spec.runs().map_or("?".to_string(), |n| n.to_string()),
+            res.rows.len()
+        ));
+        return (header, rows, notes);
+    }
     for (mi, m) in spec.metrics.iter().enumerate() {
         let ys = y(mi);
         let name = m.name();
@@ -225,6 +236,12 @@ pub fn add_indices_and_report(
     command: &str,
 ) -> Result<(), Error> {
     let spec = &res.spec;
+    if !res.is_whole() {
+        return Err(Error::Solver(format!(
+            "report: the indices need every run of the design; {} of them given (a shard is merged first)",
+            res.rows.len()
+        )));
+    }
     let (h, rows, notes) = indices_and_notes(res);
     set.add("indices.csv", csv_text(&h, &rows));
     let mut page = Page::new(format!("Sensitivity ({})", spec.method.name()));
@@ -413,7 +430,7 @@ pub fn add_indices_and_report(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::sweep::run::Row;
+    use crate::sweep::run::{Row, Shard};
     use crate::sweep::{Metric, Param, StudySpec};
 
     /// A Sobol' study of y = 2u0 + u1 (metric `r_max`) and a metric undefined everywhere
@@ -452,9 +469,47 @@ mod tests {
             .collect();
         Results {
             spec,
+            shard: Shard::WHOLE,
             rows,
             courses: Vec::new(),
             resumed: 0,
+        }
+    }
+
+    #[test]
+    fn sweep_a_shards_rows_give_no_indices_for_any_method_and_no_panic() {
+        // each method's design of 2 parameters, cut to a shard's rows (the 1st of 2, the 2nd
+        // of 3): the indices need every run, so there are none, a note says why, and the
+        // report refuses; the whole design gives one row per parameter
+        for method in [Method::Oat, Method::Morris, Method::Sobol] {
+            let mut res = study(None);
+            res.spec.method = method;
+            res.spec.samples = 3;
+            res.spec.metrics.truncate(1);
+            res.rows = res
+                .spec
+                .values()
+                .into_iter()
+                .enumerate()
+                .map(|(index, v)| Row {
+                    index,
+                    metrics: vec![2.0 * v[0] + v[1]],
+                    values: v,
+                })
+                .collect();
+            let n = res.rows.len();
+            assert!(res.is_whole());
+            assert_eq!(indices(&res).1.len(), 2, "{method:?}");
+            for shard in [Shard { index: 0, count: 2 }, Shard { index: 1, count: 3 }] {
+                let mut part = res.clone();
+                part.shard = shard;
+                part.rows.retain(|r| shard.range(n).contains(&r.index));
+                assert!(!part.is_whole());
+                let (h, rows, notes) = indices_and_notes(&part);
+                assert!(!h.is_empty() && rows.is_empty(), "{method:?} {shard:?}");
+                assert!(notes[0].starts_with("no indices"), "{notes:?}");
+                assert!(add_indices_and_report(&mut OutputSet::new(), &part, "t").is_err());
+            }
         }
     }
 

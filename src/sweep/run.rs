@@ -68,6 +68,20 @@ impl Shard {
     pub fn range(&self, n: usize) -> std::ops::Range<usize> {
         (self.index * n / self.count)..((self.index + 1) * n / self.count)
     }
+
+    /// Check the slice against a design of `n` runs: more slices than runs would leave some
+    /// empty, so that is bad input naming `--shard` (with N ≤ n every slice has a run).
+    pub fn check(&self, n: usize) -> Result<(), InputError> {
+        if self.count > n {
+            return Err(InputError::new(format!(
+                "'{}/{}': the design has {n} runs, so it can be split into at most {n} shards",
+                self.index, self.count
+            ))
+            .in_file("<command line>")
+            .field("--shard"));
+        }
+        Ok(())
+    }
 }
 
 /// A radius time course: (time s, radius m).
@@ -89,12 +103,28 @@ pub struct Row {
 pub struct Results {
     /// The design.
     pub spec: StudySpec,
+    /// The slice of the design these are the runs of ([`Shard::WHOLE`] for a whole or merged
+    /// study).
+    pub shard: Shard,
     /// Finished runs, by index.
     pub rows: Vec<Row>,
     /// Radius time course (the largest bubble) of each run, by index.
     pub courses: Vec<(usize, Vec<(f64, f64)>)>,
     /// Runs skipped because the journal already held them.
     pub resumed: usize,
+}
+
+impl Results {
+    /// Whether the rows are every run of the design, in order (row i is run i): only then can
+    /// the indices be computed ([`report::indices`]); a shard's rows are not.
+    pub fn is_whole(&self) -> bool {
+        self.spec.runs() == Some(self.rows.len())
+            && self.rows.iter().enumerate().all(|(i, r)| {
+                r.index == i
+                    && r.values.len() == self.spec.params.len()
+                    && r.metrics.len() == self.spec.metrics.len()
+            })
+    }
 }
 
 fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
@@ -261,6 +291,8 @@ fn one(study: &Study, index: usize, values: &[f64]) -> (Row, Vec<(f64, f64)>) {
 /// Run the study's shard: skip the runs the journal holds, run the rest in parallel (each
 /// appended to the journal as it finishes), write `out` whole (sensitivity.csv, courses.csv,
 /// design.toml; for the whole design also indices.csv and the report) and remove the journal.
+/// Before any run: the design's size ([`StudySpec::check_size`]), the shard against it
+/// ([`Shard::check`]) and the parameters and metrics ([`validate`]).
 pub fn run_study(
     study: &Study,
     shard: Shard,
@@ -268,8 +300,10 @@ pub fn run_study(
     command: &str,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Results, Error> {
-    validate(study)?;
     let spec = &study.spec;
+    let n = spec.check_size()?;
+    shard.check(n)?;
+    validate(study)?;
     let values = spec.values();
     let range = shard.range(values.len());
     let fp = format!(
@@ -327,6 +361,7 @@ pub fn run_study(
     courses.sort_by_key(|c| c.0);
     let results = Results {
         spec: spec.clone(),
+        shard,
         rows: done,
         courses,
         resumed,
@@ -340,6 +375,7 @@ pub fn run_study(
 /// Run every run of a study in memory (no journal, no output folder), in parallel; for callers
 /// that put the study's files into a larger output set (`reproduce fig3`).
 pub fn run_all(study: &Study, progress: &(dyn Fn(usize, usize) + Sync)) -> Result<Results, Error> {
+    study.spec.check_size()?;
     validate(study)?;
     let values = study.spec.values();
     let total = values.len();
@@ -360,6 +396,7 @@ pub fn run_all(study: &Study, progress: &(dyn Fn(usize, usize) + Sync)) -> Resul
         .unzip();
     Ok(Results {
         spec: study.spec.clone(),
+        shard: Shard::WHOLE,
         rows,
         courses,
         resumed: 0,
@@ -395,8 +432,32 @@ pub fn outputs(res: &Results, shard: Shard, command: &str) -> Result<OutputSet, 
     Ok(set)
 }
 
+/// Refuse an output folder inside one of the input folders (`merge DIR --out DIR/sub`), which
+/// would change an input; [`crate::report::output::check_target`] covers the output being an
+/// input or holding one. The nearest existing ancestor of `out` is resolved (symlinks, `..`).
+fn check_out_not_inside(out: &Path, inputs: &[PathBuf]) -> Result<(), Error> {
+    let abs = std::path::absolute(out).map_err(io(out))?;
+    let Some(anc) = abs.ancestors().find_map(|a| std::fs::canonicalize(a).ok()) else {
+        return Ok(());
+    };
+    for d in inputs {
+        if std::fs::canonicalize(d).is_ok_and(|d| anc.starts_with(d)) {
+            return Err(InputError::new(format!(
+                "the output folder lies inside an input of this run ({}); outputs never change inputs: choose a folder outside it",
+                d.display()
+            ))
+            .in_file(out)
+            .field("--out")
+            .into());
+        }
+    }
+    Ok(())
+}
+
 /// Merge shard folders (each with design.toml, sensitivity.csv, courses.csv) of one design
-/// into a whole study, and write it with its indices and report to `out`.
+/// into a whole study, and write it with its indices and report to `out`. `out` is checked
+/// before anything is read: it may not be, hold, or lie inside one of `dirs` (exit 2 naming
+/// `--out`, nothing written).
 pub fn merge(dirs: &[PathBuf], out: &Path, command: &str) -> Result<Results, Error> {
     let bad = |d: &Path, m: String| -> Error {
         InputError::new(m).in_file(d).field("design.toml").into()
@@ -410,6 +471,9 @@ pub fn merge(dirs: &[PathBuf], out: &Path, command: &str) -> Result<Results, Err
             .field("DIR")
             .into());
     }
+    let inputs: Vec<&Path> = dirs.iter().map(PathBuf::as_path).collect();
+    crate::report::output::check_target(out, &inputs)?;
+    check_out_not_inside(out, dirs)?;
     for d in dirs {
         let dt = d.join("design.toml");
         let text = std::fs::read_to_string(&dt)
@@ -424,6 +488,8 @@ pub fn merge(dirs: &[PathBuf], out: &Path, command: &str) -> Result<Results, Err
             .to_string();
         let s = StudySpec::from_fingerprint(&fp)
             .ok_or_else(|| bad(&dt, format!("cannot read the design '{fp}'")))?;
+        // the design is built below: its size is checked first, as `sensitivity` does
+        s.check_size().map_err(|e| bad(&dt, e.message))?;
         if let Some((f0, _)) = &spec {
             if *f0 != fp {
                 return Err(bad(
@@ -476,10 +542,11 @@ pub fn merge(dirs: &[PathBuf], out: &Path, command: &str) -> Result<Results, Err
     }
     let res = Results {
         spec,
+        shard: Shard::WHOLE,
         rows,
         courses,
         resumed: 0,
     };
-    outputs(&res, Shard::WHOLE, command)?.commit(out)?;
+    outputs(&res, Shard::WHOLE, command)?.commit_with_inputs(out, &inputs)?;
     Ok(res)
 }

@@ -450,3 +450,235 @@ fn sweep_refuses_bad_input_with_exit_2_naming_the_field() {
         assert!(!out.exists());
     }
 }
+
+fn merge(dirs: &[PathBuf], out: &Path) -> std::process::Output {
+    Command::new(bin())
+        .arg("merge")
+        .args(dirs)
+        .arg("--out")
+        .arg(out)
+        .output()
+        .unwrap()
+}
+
+/// Every file under `d` with its bytes (a folder's whole state, to show it was not touched).
+fn snapshot(d: &Path) -> Vec<(PathBuf, Vec<u8>)> {
+    let mut out = Vec::new();
+    let mut stack = vec![d.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).unwrap() {
+            let p = e.unwrap().path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                out.push((p.clone(), std::fs::read(&p).unwrap()));
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+#[test]
+fn sweep_oat_and_morris_shards_run_and_merge_to_the_whole_studys_indices() {
+    // before: a shard of oat or morris panicked (its summary computed indices from the whole
+    // design's positions with only the shard's rows). A shard writes its rows and no indices,
+    // exits 0, and the merge of all shards equals the unsharded study byte for byte.
+    let (ph, pr, d) = lab("sweep-shards-oat-morris");
+    // oat: 1 + 1 × 3 = 4 runs; morris: 2 trajectories × (2 + 1) = 6 runs
+    let oat: &[&str] = &[
+        "--param",
+        "gases.n2.ostwald=0.01..0.03",
+        "--metric",
+        "r_max",
+        "--method",
+        "oat",
+        "--samples",
+        "3",
+    ];
+    let morris: &[&str] = &[
+        "--param",
+        "gases.n2.ostwald=0.01..0.03",
+        "--param",
+        "material.surface_tension=0.03..0.1",
+        "--metric",
+        "r_max",
+        "--method",
+        "morris",
+        "--samples",
+        "2",
+        "--seed",
+        "5",
+    ];
+    let t = std::time::Instant::now();
+    for (method, args, runs) in [("oat", oat, 4usize), ("morris", morris, 6)] {
+        let whole = d.join(format!("{method}-whole"));
+        let mut a = args.to_vec();
+        a.extend(["--out", whole.to_str().unwrap()]);
+        let whole_out = ok(&sensitivity(&ph, &pr, &a));
+        let mut shards = Vec::new();
+        let mut shard_rows = 0;
+        for i in 0..3 {
+            let s = d.join(format!("{method}-shard{i}"));
+            let spec = format!("{i}/3");
+            let mut a = args.to_vec();
+            a.extend(["--shard", &spec, "--out", s.to_str().unwrap()]);
+            let out = ok(&sensitivity(&ph, &pr, &a));
+            assert!(out.contains("no indices from a shard"), "{method}: {out}");
+            assert!(!s.join("indices.csv").exists() && !s.join("report.md").exists());
+            // shard i holds runs ⌊i·n/3⌋ … ⌊(i+1)·n/3⌋ − 1
+            let rows = std::fs::read_to_string(s.join("sensitivity.csv")).unwrap();
+            let idx: Vec<usize> = rows
+                .lines()
+                .skip(1)
+                .map(|l| l.split(',').next().unwrap().parse().unwrap())
+                .collect();
+            let want: Vec<usize> = (i * runs / 3..(i + 1) * runs / 3).collect();
+            assert_eq!(idx, want, "{method} shard {i}");
+            shard_rows += idx.len();
+            shards.push(s);
+        }
+        assert_eq!(shard_rows, runs);
+        let merged = d.join(format!("{method}-merged"));
+        let merged_out = ok(&merge(&shards, &merged));
+        for f in ["indices.csv", "sensitivity.csv", "courses.csv"] {
+            assert!(
+                std::fs::read(whole.join(f)).unwrap() == std::fs::read(merged.join(f)).unwrap(),
+                "{method}: {f} differs between the whole and the merged study"
+            );
+        }
+        // the printed indices too, the counts as whole numbers: morris has one elementary
+        // effect per trajectory and parameter, 2 here, none dropped
+        let indices = |s: &str| -> Vec<String> {
+            s.lines()
+                .filter(|l| l.starts_with("r_max / "))
+                .map(String::from)
+                .collect()
+        };
+        // one line per parameter (one metric)
+        let k = args.iter().filter(|a| **a == "--param").count();
+        assert_eq!(indices(&whole_out).len(), k, "{whole_out}");
+        assert_eq!(indices(&whole_out), indices(&merged_out));
+        if method == "morris" {
+            assert_eq!(
+                merged_out.matches("n_used 2, n_dropped 0").count(),
+                2,
+                "{merged_out}"
+            );
+        }
+    }
+    eprintln!(
+        "oat 4 + morris 6 runs, each twice: {:.2} s",
+        t.elapsed().as_secs_f64()
+    );
+}
+
+#[test]
+fn sweep_refuses_more_shards_than_runs_and_a_design_over_the_run_limit() {
+    let (ph, pr, d) = lab("sweep-limits");
+    let out = d.join("o");
+    let o = out.to_str().unwrap();
+    // oat with one parameter and 2 levels: 1 + 1 × 2 = 3 runs, so 4 shards are too many (one
+    // would be empty); 10⁹ samples: 10⁹ + 1 runs, sobol 5·10⁵ × (2 + 2) = 2·10⁶, both over
+    // the 10⁶-run limit; refused at once, before any run, nothing written
+    let base = [
+        "--param",
+        "gases.n2.ostwald=0.01..0.03",
+        "--metric",
+        "r_max",
+    ];
+    let cases: [(&[&str], &str); 4] = [
+        (&["--samples", "2", "--shard", "0/4"], "--shard"),
+        (&["--samples", "2", "--shard", "0/1000000"], "--shard"),
+        (&["--samples", "1000000000"], "--samples"),
+        (
+            &[
+                "--param",
+                "gases.n2.diffusivity=1e-10..5e-9",
+                "--method",
+                "sobol",
+                "--samples",
+                "500000",
+            ],
+            "--samples",
+        ),
+    ];
+    for (extra, field) in cases {
+        let mut a = base.to_vec();
+        a.extend(extra);
+        a.extend(["--out", o]);
+        let t = std::time::Instant::now();
+        let r = sensitivity(&ph, &pr, &a);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(
+            err.contains(&format!("field '{field}'")),
+            "{extra:?}: {err}"
+        );
+        assert!(!err.contains("panicked"), "{err}");
+        assert!(
+            t.elapsed().as_secs_f64() < 5.0,
+            "{extra:?}: not refused at once"
+        );
+        assert!(!out.exists() && !d.join("o.partial").exists());
+    }
+    // as many shards as runs: every shard has one run
+    for i in 0..3 {
+        let s = d.join(format!("s{i}"));
+        let spec = format!("{i}/3");
+        let mut a = base.to_vec();
+        a.extend([
+            "--samples",
+            "2",
+            "--shard",
+            &spec,
+            "--out",
+            s.to_str().unwrap(),
+        ]);
+        ok(&sensitivity(&ph, &pr, &a));
+        let rows = std::fs::read_to_string(s.join("sensitivity.csv")).unwrap();
+        assert_eq!(rows.lines().count(), 2, "{rows}");
+    }
+}
+
+#[test]
+fn sweep_merge_refuses_an_output_that_is_holds_or_lies_in_an_input() {
+    // before: `merge ss0 ss1 --out ss0` exited 0 and replaced the input ss0 with the merge
+    let (ph, pr, d) = lab("sweep-merge-out");
+    let base = [
+        "--param",
+        "gases.n2.ostwald=0.01..0.03",
+        "--metric",
+        "r_max",
+        "--samples",
+        "2",
+    ];
+    let par = d.join("par");
+    let shards = [par.join("ss0"), d.join("ss1")];
+    for (i, s) in shards.iter().enumerate() {
+        let spec = format!("{i}/2");
+        let mut a = base.to_vec();
+        a.extend(["--shard", &spec, "--out", s.to_str().unwrap()]);
+        ok(&sensitivity(&ph, &pr, &a));
+    }
+    let before: Vec<_> = shards.iter().map(|s| snapshot(s)).collect();
+    let outs = [
+        shards[0].clone(),                        // an input
+        par.join("../par/ss0"),                   // the same, spelled otherwise
+        par.clone(),                              // holds an input
+        shards[1].join("merged"),                 // inside an input
+        shards[0].join("x").join("..").join("m"), // inside an input, through `..`
+    ];
+    for out in &outs {
+        let r = merge(&shards, out);
+        let err = String::from_utf8_lossy(&r.stderr);
+        assert_eq!(r.status.code(), Some(2), "{}: {err}", out.display());
+        assert!(err.contains("field '--out'"), "{err}");
+        let after: Vec<_> = shards.iter().map(|s| snapshot(s)).collect();
+        assert!(before == after, "{}: an input was changed", out.display());
+        assert!(!shards[1].join("merged").exists() && !shards[0].join("m").exists());
+    }
+    // a folder beside them is fine
+    ok(&merge(&shards, &d.join("merged")));
+    assert!(d.join("merged/indices.csv").exists());
+}
