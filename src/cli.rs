@@ -248,20 +248,32 @@ pub struct DiveArgs {
 #[derive(clap::Args, Debug)]
 pub struct EvaluateArgs {
     /// Maximum depth, m (to plan with --algorithm).
-    #[arg(long, allow_hyphen_values = true, required_unless_present = "schedule")]
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        required_unless_present = "schedule",
+        requires = "algorithm"
+    )]
     pub depth: Option<f64>,
     /// Bottom time, min (to plan with --algorithm).
-    #[arg(long, allow_hyphen_values = true, required_unless_present = "schedule")]
+    #[arg(
+        long,
+        allow_hyphen_values = true,
+        required_unless_present = "schedule",
+        requires = "algorithm"
+    )]
     pub time: Option<f64>,
-    /// Bottom gas: air, 32 (nitrox), 18/45 (trimix O2/He).
-    #[arg(long)]
+    /// Bottom gas: air, 32 (nitrox), 18/45 (trimix O2/He) (to plan with --algorithm; a
+    /// --schedule keeps its own gases).
+    #[arg(long, requires = "algorithm")]
     pub gas: Option<String>,
-    /// Deco gas, MIX@SWITCH_DEPTH_M or MIX (switch at its MOD at 1.6 bar); repeatable.
-    #[arg(long = "deco-gas")]
+    /// Deco gas, MIX@SWITCH_DEPTH_M or MIX (switch at its MOD at 1.6 bar); repeatable (to plan
+    /// with --algorithm).
+    #[arg(long = "deco-gas", requires = "algorithm")]
     pub deco_gas: Vec<String>,
     /// Travel gas MIX@FROM..TO (m), e.g. 21/35@0..60, for planned hypoxic bottom mixes;
-    /// repeatable.
-    #[arg(long = "travel-gas")]
+    /// repeatable (to plan with --algorithm).
+    #[arg(long = "travel-gas", requires = "algorithm")]
     pub travel_gas: Vec<String>,
     /// Algorithm TOML; repeat for each algorithm to compare.
     #[arg(long, required_unless_present = "schedule")]
@@ -395,7 +407,8 @@ pub struct PlanArgs {
     /// by its extension: .csv the waypoints `check` reads, .md the table, else the schedule TOML).
     #[arg(long, value_parser = ["md", "csv", "toml"])]
     pub format: Option<String>,
-    /// Write the schedule here (readable by check, simulate, evaluate --schedule).
+    /// Write the schedule here (readable by check, simulate, evaluate --schedule); an existing
+    /// file is replaced only if plan wrote it and it is unchanged since.
     #[arg(long)]
     pub out: Option<std::path::PathBuf>,
     /// Print the plan as JSON (schema decophantom.plan/1, docs/json.md) instead of the table.
@@ -404,7 +417,8 @@ pub struct PlanArgs {
     #[command(flatten)]
     pub settings: PlannerSettingsArgs,
     /// Write the dive-profile figure here (SVG): depth, the ZH-L16C ceiling and a tissue
-    /// heat map, as DecoTengu's dt-plot and Subsurface's planner show them.
+    /// heat map, as DecoTengu's dt-plot and Subsurface's planner show them; an existing file is
+    /// replaced only if plan wrote it and it is unchanged since.
     #[arg(long)]
     pub plot: Option<std::path::PathBuf>,
 }
@@ -497,6 +511,14 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             Ok(0)
         }
         Command::Plan(a) => {
+            if a.json && a.format.is_some() && a.out.is_none() {
+                return Err(decophantom::error::InputError::new(
+                    "--json prints JSON, so --format has nothing to format (it sets the printed table and the --out file's format); drop one, or give --out",
+                )
+                .in_file("<command line>")
+                .field("--format")
+                .into());
+            }
             let (overrides, altitude_m) = a.settings.overrides()?;
             let req = decophantom::app::plan::PlanRequest {
                 algorithm: a.algorithm,
@@ -563,7 +585,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 checkpoint_every: a
                     .checkpoint_every
                     .as_deref()
-                    .map(decophantom::phantom::checkpoint::parse_interval)
+                    .map(checkpoint_interval)
                     .transpose()?,
                 checkpoint_at_step: a.checkpoint_at_step,
                 resume: a.resume,
@@ -797,6 +819,22 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             Ok(0)
         }
     }
+}
+
+/// `--checkpoint-every`: a wall-clock interval with its unit (`60s`, `5min`, `1h`). A bare
+/// number is refused, as the message says: `5` could mean seconds or minutes.
+fn checkpoint_interval(text: &str) -> Result<std::time::Duration, decophantom::error::InputError> {
+    if text
+        .trim()
+        .ends_with(|c: char| c.is_ascii_digit() || c == '.')
+    {
+        return Err(decophantom::error::InputError::new(format!(
+            "'{text}' has no unit: give a positive number with a unit, e.g. 60s, 5min or 1h"
+        ))
+        .in_file("<command line>")
+        .field("--checkpoint-every"));
+    }
+    decophantom::phantom::checkpoint::parse_interval(text)
 }
 
 /// Refuse runs estimated above 6 h unless `--force` (the library itself sets no limit).

@@ -106,6 +106,86 @@ pub fn toml_error(path: &Path, text: &str, err: &toml::de::Error) -> InputError 
     e
 }
 
+/// [`toml_error`] with the field named by its dotted path, for serde's type and length errors
+/// (`invalid type: string "200e-6", expected f64` becomes field `geometry.grid_step_m`), an
+/// unknown key in a table (`material.bogus_key`, not `bogus_key`) and a missing one
+/// ([`toml_field_at`]). [`toml_error`] itself is unchanged for the readers that do not use this.
+pub fn toml_error_with_path(path: &Path, text: &str, err: &toml::de::Error) -> InputError {
+    let e = toml_error(path, text, err);
+    match err
+        .span()
+        .and_then(|s| toml_field_at(text, s.start, err.message()))
+    {
+        Some(f) => e.field(f),
+        None => e,
+    }
+}
+
+/// The dotted path of the key a TOML deserialisation error at byte `offset` is about: the
+/// table of the last `[table]` / `[[table]]` header at or before it, then the key the message
+/// names (`unknown field `x``, `missing field `x``) or else the key of the nearest `key =`
+/// before the offset within that table (the value the error points at). `None` when no key
+/// can be told (e.g. an error before any key).
+pub fn toml_field_at(text: &str, offset: usize, message: &str) -> Option<String> {
+    let mut offset = offset.min(text.len());
+    while !text.is_char_boundary(offset) {
+        offset -= 1;
+    }
+    let line_end = text[offset..].find('\n').map_or(text.len(), |i| offset + i);
+    // the table: the last header line up to the error's own line
+    let mut table: Vec<String> = Vec::new();
+    let mut body_start = 0;
+    let mut pos = 0;
+    for line in text[..line_end].split_inclusive('\n') {
+        if let Some(t) = toml_header(line) {
+            table = t;
+            body_start = pos + line.len();
+        }
+        pos += line.len();
+    }
+    let named = ["unknown field `", "missing field `"]
+        .iter()
+        .find_map(|p| message.trim().strip_prefix(p))
+        .and_then(|r| r.split_once('`'))
+        .map(|(k, _)| vec![k.to_string()]);
+    let key = named.or_else(|| {
+        let body = &text[body_start.min(offset)..offset];
+        // the nearest `key =` before the value, skipping comments
+        body.lines().rev().find_map(|l| {
+            let l = l.split('#').next().unwrap_or("");
+            let (lhs, _) = l.rsplit_once('=')?;
+            let k = lhs.rsplit(['{', ',']).next()?.trim();
+            toml_key_path(k)
+        })
+    });
+    let path: Vec<String> = table.into_iter().chain(key.unwrap_or_default()).collect();
+    (!path.is_empty()).then(|| path.join("."))
+}
+
+/// The table path of a `[a.b]` or `[[a]]` header line, `None` for any other line.
+fn toml_header(line: &str) -> Option<Vec<String>> {
+    let t = line.split('#').next().unwrap_or("").trim();
+    let inner = t.strip_prefix('[')?.strip_suffix(']')?;
+    let inner = inner
+        .strip_prefix('[')
+        .and_then(|i| i.strip_suffix(']'))
+        .unwrap_or(inner);
+    toml_key_path(inner.trim())
+}
+
+/// The parts of a (possibly dotted, possibly quoted) TOML key, `None` if it is not one.
+fn toml_key_path(k: &str) -> Option<Vec<String>> {
+    let ok = |c: char| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | ' ' | '"' | '\'');
+    if k.is_empty() || !k.chars().all(ok) {
+        return None;
+    }
+    let parts: Vec<String> = k
+        .split('.')
+        .map(|p| p.trim().trim_matches(|c| c == '"' || c == '\'').to_string())
+        .collect();
+    (!parts.iter().any(|p| p.is_empty() || p.contains(' '))).then_some(parts)
+}
+
 /// 1-based line of the first occurrence of `key =` in TOML text, for errors found after parsing.
 pub fn line_of_key(text: &str, key: &str) -> Option<usize> {
     text.lines()
@@ -177,3 +257,32 @@ pub fn num(v: f64) -> String {
 
 /// Result alias.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn toml_field_paths() {
+        let text = "name = \"x\"\n[geometry]\nh = \"2e-4\"\n[[bubbles]]\nposition_m = [1, 2]\n";
+        let at = |needle: &str, msg: &str| toml_field_at(text, text.find(needle).unwrap(), msg);
+        assert_eq!(at("\"2e-4", "invalid type").as_deref(), Some("geometry.h"));
+        assert_eq!(
+            at("[1, 2]", "invalid length 2").as_deref(),
+            Some("bubbles.position_m")
+        );
+        assert_eq!(
+            at("h =", "unknown field `h`, expected `a`").as_deref(),
+            Some("geometry.h")
+        );
+        assert_eq!(
+            at("[geometry]", "missing field `shape`").as_deref(),
+            Some("geometry.shape")
+        );
+        assert_eq!(at("\"x\"", "invalid type").as_deref(), Some("name"));
+        // a multi-line array: the key whose value holds the row
+        let text = "[p]\npoints = [\n  [0, 0], # t = 0\n  [1, 2, 3],\n]\n";
+        let off = text.find("[1, 2, 3]").unwrap();
+        assert_eq!(toml_field_at(text, off, "x").as_deref(), Some("p.points"));
+    }
+}

@@ -196,8 +196,17 @@ impl Overrides {
             ("--ascent-rate", self.ascent_rate_m_min),
         ] {
             if let Some(v) = v {
-                if !(v.is_finite() && v > 0.0 && v <= 100.0) {
-                    return cmd(opt, format!("rate {v} m/min is outside (0, 100] m/min"));
+                // the floor: 1000 m in the 30 days a history may last
+                // ([`super::conventions::MIN_TRAVEL_RATE_M_MIN`])
+                let lo = super::conventions::MIN_TRAVEL_RATE_M_MIN;
+                if !(v.is_finite() && v >= lo && v <= 100.0) {
+                    return cmd(
+                        opt,
+                        format!(
+                            "rate {} m/min is outside {lo:.4}..100 m/min (at {lo:.4} m/min 1000 m take the whole 30 days a history may last)",
+                            crate::error::num(v)
+                        ),
+                    );
                 }
             }
         }

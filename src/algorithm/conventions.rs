@@ -63,6 +63,39 @@ pub fn default_surface_tissue_n2_fraction() -> f64 {
     0.79
 }
 
+/// Lowest and highest surface pressure accepted in conventions and schedule files, Pa: 500 to
+/// 1 100 hPa, from about 5 600 m of altitude (ICAO standard atmosphere) to above any sea-level
+/// record (the range of `plan --surface-pressure`). A value in kPa (101.325) or bar (1.01325)
+/// falls outside it and is refused, naming the field.
+pub const SURFACE_PRESSURE_RANGE_PA: (f64, f64) = (50_000.0, 110_000.0);
+
+/// Lowest and highest pressure per metre of depth accepted in conventions and schedule files,
+/// Pa/m: ρ·g for water densities of about 969 to 1 081 kg/m³, which covers fresh water
+/// (9 806.65 Pa/m at 1 000 kg/m³), DecoTengu's 9 985, the 10 000 of "1 msw = 0.1 bar",
+/// Subsurface's sea water (1 030 kg/m³: 10 100.85) and brackish or saline lakes; not the
+/// Dead Sea (about 1 240 kg/m³). A value in kPa/m (9.985) or bar/m (0.09985), or a
+/// pressure per foot (about 3 000 Pa/ft), falls outside it and is refused.
+pub const PA_PER_M_RANGE: (f64, f64) = (9_500.0, 10_600.0);
+
+/// Highest alveolar water-vapour pressure accepted in conventions and schedule files, Pa (the
+/// bound of the criteria protocol's `water_vapour_pa`): 47 mmHg = 6 270 Pa at 37 °C; saturated
+/// vapour reaches 20 kPa only at about 60 °C.
+pub const MAX_WATER_VAPOUR_PA: f64 = 20_000.0;
+
+/// Slowest descent or ascent rate accepted, m/min: the rate at which the deepest accepted plan
+/// ([`super::schedule::MAX_PLAN_DEPTH_M`], 1 000 m) reaches the surface in the longest history
+/// accepted (30 days, [`crate::profile::MAX_DURATION_S`]): 1 000 m / 43 200 min ≈ 0.023 m/min
+/// (1.4 m/h, the pace of saturation decompression, which these planners do not model). A plan's
+/// whole runtime is checked against the 30 days as well
+/// ([`crate::algorithm::request::plan_dive`]).
+pub const MIN_TRAVEL_RATE_M_MIN: f64 =
+    super::schedule::MAX_PLAN_DEPTH_M / (crate::profile::MAX_DURATION_S / 60.0);
+
+/// Whether `v` lies in the closed range `r` (a NaN never does).
+pub fn within(v: f64, r: (f64, f64)) -> bool {
+    v >= r.0 && v <= r.1
+}
+
 /// Named presets reproducing reference planners, as data: `(name, conventions, source)`.
 /// Every value is cited in the comment of the constant it comes from.
 pub const PRESETS: &[(&str, Conventions, &str)] = &[
@@ -225,15 +258,49 @@ impl Conventions {
         pos("ascent_rate_m_min", self.ascent_rate_m_min)?;
         pos("stop_spacing_m", self.stop_spacing_m)?;
         pos("last_stop_m", self.last_stop_m)?;
+        let (sp_lo, sp_hi) = SURFACE_PRESSURE_RANGE_PA;
+        if !within(self.surface_pressure_pa, SURFACE_PRESSURE_RANGE_PA) {
+            return Err((
+                "surface_pressure_pa".into(),
+                format!(
+                    "must be between {sp_lo} and {sp_hi} Pa (500–1100 hPa), got {}; give it in Pa",
+                    crate::error::num(self.surface_pressure_pa)
+                ),
+            ));
+        }
+        let (pm_lo, pm_hi) = PA_PER_M_RANGE;
+        if !within(self.pa_per_m, PA_PER_M_RANGE) {
+            return Err((
+                "pa_per_m".into(),
+                format!(
+                    "must be between {pm_lo} and {pm_hi} Pa/m (fresh to sea water), got {}; give it in Pa per metre",
+                    crate::error::num(self.pa_per_m)
+                ),
+            ));
+        }
+        for (name, v) in [
+            ("descent_rate_m_min", self.descent_rate_m_min),
+            ("ascent_rate_m_min", self.ascent_rate_m_min),
+        ] {
+            if v < MIN_TRAVEL_RATE_M_MIN {
+                return Err((
+                    name.into(),
+                    format!(
+                        "{} m/min is slower than {MIN_TRAVEL_RATE_M_MIN:.4} m/min, at which 1000 m take the whole 30 days a history may last",
+                        crate::error::num(v)
+                    ),
+                ));
+            }
+        }
         if !(self.water_vapour_pa.is_finite()
             && self.water_vapour_pa >= 0.0
-            && self.water_vapour_pa < self.surface_pressure_pa)
+            && self.water_vapour_pa <= MAX_WATER_VAPOUR_PA)
         {
             return Err((
                 "water_vapour_pa".into(),
                 format!(
-                    "must be in 0..surface pressure ({} Pa), got {}",
-                    self.surface_pressure_pa, self.water_vapour_pa
+                    "must be in 0..{MAX_WATER_VAPOUR_PA} Pa (47 mmHg = 6270 Pa at 37 °C), got {}",
+                    crate::error::num(self.water_vapour_pa)
                 ),
             ));
         }

@@ -75,9 +75,66 @@ pub fn plan_dive(
         }
     };
     plan.validate(&alg.conventions).map_err(locate)?;
+    // the runtime without stops (descent, bottom, ascent) must fit in the longest history
+    // accepted before anything is planned, and the planned runtime after
+    let c = &alg.conventions;
+    let descent_min = depth_m / c.descent_rate_m_min;
+    let ascent_min = depth_m / c.ascent_rate_m_min;
+    let at_bottom_min = if c.bottom_time_includes_descent {
+        time_min
+    } else {
+        time_min + descent_min
+    };
+    check_runtime(at_bottom_min + ascent_min, 0.0, descent_min, ascent_min, c)?;
     let schedule =
         alg.algorithm
             .plan(&plan)
             .map_err(|e| if e.file.is_none() { locate(e) } else { e })?;
+    check_runtime(
+        schedule.runtime_min(),
+        schedule.stop_time_min(),
+        descent_min,
+        ascent_min,
+        c,
+    )?;
     Ok((plan, schedule))
+}
+
+/// Refuse a plan whose runtime (min) exceeds the longest history accepted (30 days,
+/// [`crate::profile::MAX_DURATION_S`]: nothing could simulate or check it), naming the option
+/// that made it long: the ascent or descent rate when its travel time is the larger part,
+/// else the bottom time (which sets the stops too).
+fn check_runtime(
+    runtime_min: f64,
+    stops_min: f64,
+    descent_min: f64,
+    ascent_min: f64,
+    c: &super::Conventions,
+) -> Result<(), InputError> {
+    let max_min = crate::profile::MAX_DURATION_S / 60.0;
+    if runtime_min.is_finite() && runtime_min <= max_min {
+        return Ok(());
+    }
+    let field = if ascent_min >= descent_min && ascent_min >= runtime_min / 2.0 {
+        "--ascent-rate"
+    } else if descent_min >= runtime_min / 2.0 {
+        "--descent-rate"
+    } else {
+        "--time"
+    };
+    Err(InputError::new(format!(
+        "the dive would last {} min (descent {} min at {} m/min, ascent {} min at {} m/min{}), beyond the {max_min} min (30 days) a history may last; plan a shorter dive or faster travel",
+        crate::error::num(runtime_min),
+        crate::error::num(descent_min),
+        c.descent_rate_m_min,
+        crate::error::num(ascent_min),
+        c.ascent_rate_m_min,
+        if stops_min > 0.0 {
+            format!(", stops {} min", crate::error::num(stops_min))
+        } else {
+            String::new()
+        }
+    ))
+    .in_file("<command line>")
+    .field(field))
 }

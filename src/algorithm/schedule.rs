@@ -468,6 +468,25 @@ struct RawSchedule {
     stops: Vec<RawStop>,
 }
 
+/// 1-based line of `key =` in the table `[table]` (else the table's header line).
+fn line_in_table(text: &str, table: &str, key: &str) -> Option<usize> {
+    let header = format!("[{table}]");
+    let start = text
+        .lines()
+        .position(|l| l.split('#').next().unwrap_or("").trim() == header)?;
+    let found = text
+        .lines()
+        .enumerate()
+        .skip(start + 1)
+        .take_while(|(_, l)| !l.trim_start().starts_with('['))
+        .find(|(_, l)| {
+            let t = l.trim_start();
+            t.starts_with(key) && t[key.len()..].trim_start().starts_with('=')
+        })
+        .map(|(i, _)| i + 1);
+    Some(found.unwrap_or(start + 1))
+}
+
 /// 1-based line of the `n`-th (0-based) line equal to `header` (e.g. `[[legs]]`).
 fn line_of_nth(text: &str, header: &str, n: usize) -> Option<usize> {
     text.lines()
@@ -532,26 +551,71 @@ impl Schedule {
             }
             e
         };
-        if !(raw.surface_pressure_pa.is_finite() && raw.surface_pressure_pa > 0.0) {
+        // every pressure in Pa, within the ranges of an algorithm file's conventions: a value
+        // in kPa or bar (an "odd units" export) is refused at its own field, never run
+        use super::conventions::{
+            within, MAX_WATER_VAPOUR_PA, PA_PER_M_RANGE, SURFACE_PRESSURE_RANGE_PA,
+        };
+        if !within(raw.surface_pressure_pa, SURFACE_PRESSURE_RANGE_PA) {
             return Err(at_key(
                 "surface_pressure_pa",
-                "surface pressure must be positive (Pa)".into(),
+                format!(
+                    "surface pressure {} Pa is outside {}..{} Pa (500–1100 hPa, about 5600 m of altitude to sea level); give it in Pa (101325, not 101.325 kPa or 1.01325 bar)",
+                    crate::error::num(raw.surface_pressure_pa),
+                    SURFACE_PRESSURE_RANGE_PA.0,
+                    SURFACE_PRESSURE_RANGE_PA.1
+                ),
             ));
         }
-        if !(raw.pa_per_m.is_finite() && raw.pa_per_m > 0.0) {
+        if !within(raw.pa_per_m, PA_PER_M_RANGE) {
             return Err(at_key(
                 "pa_per_m",
-                "pressure per metre must be positive (Pa/m)".into(),
+                format!(
+                    "pressure per metre {} Pa/m is outside {}..{} Pa/m (fresh to sea water); give it in Pa per metre (9985, not 9.985 kPa/m)",
+                    crate::error::num(raw.pa_per_m),
+                    PA_PER_M_RANGE.0,
+                    PA_PER_M_RANGE.1
+                ),
             ));
         }
         if !(raw.water_vapour_pa.is_finite()
             && raw.water_vapour_pa >= 0.0
-            && raw.water_vapour_pa < raw.surface_pressure_pa)
+            && raw.water_vapour_pa <= MAX_WATER_VAPOUR_PA)
         {
             return Err(at_key(
                 "water_vapour_pa",
-                "water vapour must be in 0..surface pressure (Pa)".into(),
+                format!(
+                    "water vapour {} Pa is outside 0..{MAX_WATER_VAPOUR_PA} Pa (6270 Pa at 37 °C); give it in Pa",
+                    crate::error::num(raw.water_vapour_pa)
+                ),
             ));
+        }
+        if let Some(sum) = &raw.summary {
+            // informational, but read: every number must be a real one in its range
+            let max_min = crate::profile::MAX_DURATION_S / 60.0;
+            for (key, v, hi) in [
+                ("runtime_min", sum.runtime_min, max_min),
+                ("cns_percent", sum.cns_percent, f64::MAX),
+                ("otu", sum.otu, f64::MAX),
+            ] {
+                if let Some(v) = v {
+                    if !(v.is_finite() && v >= 0.0 && v <= hi) {
+                        let range = if hi < f64::MAX {
+                            format!("a number from 0 to {hi}")
+                        } else {
+                            "a finite number, zero or more".into()
+                        };
+                        let mut e =
+                            InputError::new(format!("{} must be {range}", crate::error::num(v)))
+                                .in_file(path)
+                                .field(format!("summary.{key}"));
+                        if let Some(l) = line_in_table(text, "summary", key) {
+                            e = e.at_line(l);
+                        }
+                        return Err(e);
+                    }
+                }
+            }
         }
         if raw.legs.is_empty() {
             return Err(
@@ -729,6 +793,12 @@ impl Schedule {
             now += l.duration_s;
         }
         out
+    }
+
+    /// Total time at the stops, min (0 without stops: a positive zero, never the −0.0 of an
+    /// empty `f64` sum).
+    pub fn stop_time_min(&self) -> f64 {
+        self.stops.iter().fold(0.0, |acc, s| acc + s.stop_min)
     }
 
     /// Total runtime, min.

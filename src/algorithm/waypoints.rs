@@ -117,14 +117,18 @@ pub fn read_legacy_schedule(
     default_gas: GasMix,
 ) -> Result<Schedule, InputError> {
     use crate::profile::legacy::{read, LegacyUnits};
-    use crate::units::{PressureUnit, TimeUnit, MSW_PA};
-    // read depths as msw over a 1 Pa "surface" so that depth 0 is a valid (positive) pressure
+    use crate::units::{PressureUnit, TimeUnit, ATM_PA, MSW_PA};
+    // read depths as msw over a reference surface of one atmosphere (any pressure the legacy
+    // reader accepts, at least 1 kPa; only the depths are kept); a negative depth stays
+    // negative, for the waypoint checks below to refuse at its line
     let mut units = LegacyUnits::new(TimeUnit::Min, PressureUnit::Msw);
-    units.surface_pa = 1.0;
+    units.surface_pa = ATM_PA;
     let h = read(path, &units)?;
     let mut csv = String::from("time_min,depth_m\n");
     for (t, p) in h.times_s.iter().zip(&h.ambient_pa) {
-        let depth = ((p - 1.0) / MSW_PA).max(0.0);
+        let depth = (p - ATM_PA) / MSW_PA;
+        // rounding at the surface (a depth of 0 is exact; keep −0 out)
+        let depth = if depth.abs() < 1e-9 { 0.0 } else { depth };
         csv.push_str(&format!("{},{}\n", t / 60.0, depth));
     }
     // the CSV's row k + 1 is the file's line k; its columns are the file's time and value
@@ -185,6 +189,23 @@ pub fn parse_waypoints_csv(
             .field(name)
         })
     };
+    // a column read by name must appear once: two `depth_m` columns would be read silently
+    // from the first
+    for name in ["time_min", "depth_m", "gas"] {
+        if headers
+            .iter()
+            .filter(|h| h.eq_ignore_ascii_case(name))
+            .count()
+            > 1
+        {
+            return Err(InputError::new(format!(
+                "column '{name}' appears twice in the header; keep one"
+            ))
+            .in_file(path)
+            .at_line(header_line)
+            .field(name));
+        }
+    }
     let (ti, di) = (need("time_min")?, need("depth_m")?);
     let gi = col("gas");
     let mut pts: Vec<(f64, f64, GasMix, usize)> = Vec::new();

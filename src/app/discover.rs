@@ -2,7 +2,9 @@
 //! those the data need. Wiring only: the work is in [`crate::discover`].
 
 use crate::discover::report::discover_outputs;
-use crate::discover::search::{discover_with, fingerprint, DiscoverOptions, Discovery};
+use crate::discover::search::{
+    check_search, discover_with, fingerprint, DiscoverOptions, Discovery,
+};
 use crate::error::{Error, InputError};
 use crate::fit::data::{
     check_against, read_experiments, read_measurements, Experiments, Measurements,
@@ -84,6 +86,8 @@ pub fn discover_journaled(
         only: req.only.clone(),
         ..DiscoverOptions::default()
     };
+    // --only and the number of observations, before the journal is opened
+    check_search(&experiments, &data, &opts)?;
     let fp = fingerprint(&experiments, &data, &opts);
     let evaluations = Arc::new(Evaluations::open(&req.out, &fp, "discovery")?);
     match discover_with(
@@ -116,11 +120,13 @@ pub fn summary_text(d: &Discovery) -> String {
             a.parameters
                 .iter()
                 .map(|e| format!(
-                    "{} = {} [{}, {}]",
+                    "{} = {} {}",
                     e.name,
                     sig(e.value, 4),
-                    sig(e.ci95[0], 4),
-                    sig(e.ci95[1], 4)
+                    match crate::fit::report::estimate_stats(e, d.final_fit.inference.singular).1 {
+                        Ok(c) => format!("[{}, {}]", sig(c[0], 4), sig(c[1], 4)),
+                        Err(m) => format!("(interval {m})"),
+                    }
                 ))
                 .collect::<Vec<_>>()
                 .join("; ")

@@ -67,6 +67,23 @@ pub fn run(
         );
     }
     let planned = if req.algorithms.is_empty() {
+        // the dive options only plan with an algorithm: a schedule keeps its own depths and
+        // gases, so they would be dropped silently
+        let unused = [
+            ("--depth", req.depth_m.is_some()),
+            ("--time", req.time_min.is_some()),
+            ("--gas", req.gas.is_some()),
+            ("--deco-gas", !req.deco_gases.is_empty()),
+            ("--travel-gas", !req.travel_gases.is_empty()),
+        ];
+        if let Some((flag, _)) = unused.iter().find(|(_, given)| *given) {
+            return Err(InputError::new(format!(
+                "{flag} plans a dive with --algorithm; without one it does nothing (a --schedule is scored as it is, on its own gases): drop it or add --algorithm FILE"
+            ))
+            .in_file("<command line>")
+            .field(*flag)
+            .into());
+        }
         None
     } else {
         let need = |v: Option<f64>, flag: &str| {

@@ -79,16 +79,14 @@ pub fn fit_journaled(req: &FitRequest) -> Result<(Fitted, Experiments, Measureme
                 .field("--param")
                 .into());
         }
-        // the value must be settable: try it on every phantom now, before any simulation
-        for (d, e) in model.docs.iter().zip(&experiments.list) {
-            let mut t = d.clone();
-            paths::apply(&mut t, &spec.path, spec.start).map_err(|m| {
-                InputError::new(m)
-                    .in_file(&e.phantom_path)
-                    .field(spec.path.clone())
-            })?;
-            crate::fit::data::build_params(&t, &e.phantom_path)?;
-        }
+        // the start and both bounds must be values the phantom reader accepts at this path:
+        // tried on the phantoms now, before any simulation
+        let files: Vec<&std::path::Path> = experiments
+            .list
+            .iter()
+            .map(|e| e.phantom_path.as_path())
+            .collect();
+        spec.check_settable(p.trim(), &model.docs, &files)?;
         model.free.push(spec);
     }
     if model.free.is_empty() {
@@ -99,6 +97,7 @@ pub fn fit_journaled(req: &FitRequest) -> Result<(Fitted, Experiments, Measureme
         .field("--param")
         .into());
     }
+    crate::fit::model::enough_observations(&data, model.free.len())?;
     let weights = data.weights();
     let opts = LsqOptions::default();
     let fingerprint = crate::fit::journal::fingerprint(
@@ -123,14 +122,26 @@ pub fn fit_journaled(req: &FitRequest) -> Result<(Fitted, Experiments, Measureme
 /// A short text summary of a fit.
 pub fn summary_text(f: &Fitted) -> String {
     use crate::fit::report::sig;
+    use crate::fit::report::{aicc_absent, estimate_stats};
     let mut s = String::new();
     for e in &f.inference.estimates {
+        let interval = match estimate_stats(e, f.inference.singular).1 {
+            Ok(c) => format!(
+                "95 % interval {} … {}{}",
+                sig(c[0], 4),
+                sig(c[1], 4),
+                if e.clipped {
+                    ", clipped to the bounds"
+                } else {
+                    ""
+                }
+            ),
+            Err(m) => format!("95 % interval {m}"),
+        };
         s.push_str(&format!(
-            "{} = {} (95 % interval {} … {}){}\n",
+            "{} = {} ({interval}){}\n",
             e.name,
             sig(e.value, 4),
-            sig(e.ci95[0], 4),
-            sig(e.ci95[1], 4),
             if e.at_bound { " at a bound" } else { "" }
         ));
     }
@@ -139,7 +150,10 @@ pub fn summary_text(f: &Fitted) -> String {
         f.n,
         sig(f.ssr, 4),
         sig(f.rmse * 1e6, 4),
-        sig(f.aicc, 5),
+        match aicc_absent(f.aicc, f.ssr, f.n, f.p()) {
+            None => sig(f.aicc, 5),
+            Some(_) => "not given (see fit.toml, [absent])".into(),
+        },
         f.lsq.termination
     ));
     if let Some(ev) = &f.model.evaluations {

@@ -102,7 +102,7 @@ impl From<&Schedule> for ScheduleJson {
         ScheduleJson {
             label: s.label.clone(),
             runtime_min: s.runtime_min(),
-            stop_time_min: s.stops.iter().map(|x| x.stop_min).sum(),
+            stop_time_min: s.stop_time_min(),
             max_depth_m: s.legs.iter().map(|l| l.end_depth_m).fold(0.0, f64::max),
             surface_pressure_pa: s.surface_pressure_pa,
             pa_per_m: s.pa_per_m,

@@ -7,6 +7,7 @@ use crate::algorithm::schedule::{gas_text, ScheduleSummary};
 use crate::algorithm::{DivePlan, LoadedAlgorithm, Schedule};
 use crate::error::InputError;
 use crate::gas::GasMix;
+use crate::report::output::{write_new_file, CommentStyle};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -62,7 +63,9 @@ pub struct PlanRequest {
     pub travel_gases: Vec<String>,
     /// Format of the printed table.
     pub format: PlanFormat,
-    /// Where to write the schedule, if anywhere (whole or not at all).
+    /// Where to write the schedule, if anywhere (whole or not at all). It ends with a comment
+    /// line holding a hash of the lines above ([`crate::report::output::marker_line`]); an
+    /// existing file is replaced only if `plan` wrote it and it is unchanged since.
     pub out: Option<PathBuf>,
     /// Format of `out` when given explicitly (`--format`); else from its extension
     /// (`.csv` waypoints, `.md` the table, anything else the schedule TOML).
@@ -128,7 +131,20 @@ pub struct PlanOutcome {
 
 /// Plan the dive; write `--out` if asked. Bad input → [`InputError`] (exit code 2).
 pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
-    // check the output before planning: its format, and that it is not an input
+    // check the outputs before planning: the format, that neither is an input nor the other
+    // output, that neither replaces an existing file other than one `plan` wrote and nobody
+    // changed since, and that the folders they go into exist and can be written to
+    let inputs = [req.algorithm.as_path()];
+    if let (Some(o), Some(p)) = (&req.out, &req.plot) {
+        if same_place(o, p) {
+            return Err(InputError::new(
+                "--plot names the same file as --out; the figure would replace the schedule: give each its own file",
+            )
+            .in_file(p)
+            .field("--plot")
+            .into());
+        }
+    }
     let out = match &req.out {
         Some(o) => {
             let f = out_format(o, req.out_format)?;
@@ -140,10 +156,14 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
                 .field("--out")
                 .into());
             }
+            crate::report::output::check_new_file(o, &inputs, "--out", "plan")?;
             Some((o, f))
         }
         None => None,
     };
+    if let Some(p) = &req.plot {
+        crate::report::output::check_new_file(p, &inputs, "--plot", "plan")?;
+    }
     let alg = load_algorithm_with(&req.algorithm, &req.overrides)?;
     let (plan, schedule) = plan_dive(
         &alg,
@@ -192,21 +212,17 @@ pub fn run(req: &PlanRequest) -> Result<PlanOutcome, crate::error::Error> {
             PlanFormat::Csv => waypoints_csv(&schedule),
             PlanFormat::Md => markdown(&schedule, &plan, &oxygen, &extras),
         };
-        crate::report::output::write_file_atomic_with_inputs(
-            path,
-            bytes.as_bytes(),
-            &[req.algorithm.as_path()],
-        )?;
+        let style = match f {
+            PlanFormat::Md => CommentStyle::Xml,
+            PlanFormat::Toml | PlanFormat::Csv => CommentStyle::Hash,
+        };
+        write_new_file(path, &bytes, style, &inputs, "--out", "plan")?;
     }
     if let Some(path) = &req.plot {
         let svg = profile_figure(&schedule, &alg.conventions)
             .to_svg()
             .map_err(|e| crate::error::Error::Solver(e.to_string()))?;
-        crate::report::output::write_file_atomic_with_inputs(
-            path,
-            svg.as_bytes(),
-            &[req.algorithm.as_path()],
-        )?;
+        write_new_file(path, &svg, CommentStyle::Xml, &inputs, "--plot", "plan")?;
     }
     let text = match req.format {
         PlanFormat::Toml => toml_text,
@@ -426,6 +442,22 @@ pub fn profile_figure(
     }
 }
 
+/// Whether two output paths name the same place, existing or not: the same file name in the
+/// same folder (the folders compared after resolving symlinks and `..`, where they exist).
+fn same_place(a: &std::path::Path, b: &std::path::Path) -> bool {
+    if same_file(a, b) || a == b {
+        return true;
+    }
+    let folder = |p: &std::path::Path| {
+        let d = match p.parent() {
+            Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+            _ => PathBuf::from("."),
+        };
+        d.canonicalize().unwrap_or(d)
+    };
+    a.file_name() == b.file_name() && folder(a) == folder(b)
+}
+
 /// Whether two paths name the same existing file.
 fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
     match (a.canonicalize(), b.canonicalize()) {
@@ -564,8 +596,7 @@ fn markdown(s: &Schedule, plan: &DivePlan, o: &OxygenExposure, x: &MdExtras) -> 
     }
     let _ = writeln!(out, "Total dive time: {} min", m(s.runtime_min()));
     if !s.stops.is_empty() {
-        let deco: f64 = s.stops.iter().map(|st| st.stop_min).sum();
-        let _ = writeln!(out, "Total stop time: {} min", m(deco));
+        let _ = writeln!(out, "Total stop time: {} min", m(s.stop_time_min()));
     }
     let _ = writeln!(out, "CNS: {:.1} %", o.cns_percent);
     let _ = writeln!(out, "OTU: {:.1}", o.otu);

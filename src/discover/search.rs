@@ -19,7 +19,7 @@
 
 use super::diagnose::{diagnose, Diagnostics};
 use super::{all_candidates, Prepared};
-use crate::error::Error;
+use crate::error::{Error, InputError};
 use crate::fit::data::{Experiments, Measurements};
 use crate::fit::lsq::{Estimate, LsqOptions};
 use crate::fit::model::{fit_with, observed, refine, Fitted, Model};
@@ -382,6 +382,82 @@ pub fn fingerprint(
     )
 }
 
+/// Check `--only` against the candidates for these phantoms, before any simulation: every
+/// entry must be non-empty and the start of at least one candidate's name (`elasticity`
+/// selects every `elasticity:<law>`). Refused (exit 2) naming `<command line>` and `--only`,
+/// with the candidates these phantoms have.
+pub fn check_only(experiments: &Experiments, only: &[String]) -> Result<(), InputError> {
+    let docs: Vec<toml::Table> = experiments.list.iter().map(|e| e.phantom.clone()).collect();
+    let names: Vec<String> = all_candidates(&docs).iter().map(|c| c.name()).collect();
+    let bad = |m: String| InputError::new(m).in_file("<command line>").field("--only");
+    for o in only {
+        if o.trim().is_empty() {
+            return Err(bad(format!(
+                "an empty name (in '{}'); give candidate names or their starts, comma-separated; known: {}",
+                only.join(","),
+                names.join(", ")
+            )));
+        }
+        if !names.iter().any(|n| n.starts_with(o.as_str())) {
+            return Err(bad(format!(
+                "'{o}' matches no candidate for these phantoms; known: {}",
+                names.join(", ")
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// The most parameters a candidate of the first round adds to the baseline (with `only`, of
+/// those selected): its model must leave two residual degrees of freedom.
+fn largest_candidate(experiments: &Experiments, only: &[String]) -> usize {
+    let docs: Vec<toml::Table> = experiments.list.iter().map(|e| e.phantom.clone()).collect();
+    all_candidates(&docs)
+        .iter()
+        .filter(|c| only.is_empty() || only.iter().any(|o| c.name().starts_with(o.as_str())))
+        .filter_map(|c| {
+            let mut d = docs.clone();
+            c.prepare(&mut d)
+                .ok()
+                .flatten()
+                .map(|p| p.params.len().max(p.dof))
+        })
+        .max()
+        .unwrap_or(0)
+}
+
+/// Check, before any simulation, that the data can carry the search: the baseline's `[fit]
+/// free` parameters and the largest candidate's must leave
+/// [`crate::fit::model::MIN_RESIDUAL_DOF`] residual degrees of freedom (the F-test and every
+/// interval need them), and `--only` must select candidates ([`check_only`]). Refused (exit 2)
+/// naming the measurements file (its last line, where more rows would go).
+pub fn check_search(
+    experiments: &Experiments,
+    data: &Measurements,
+    opts: &DiscoverOptions,
+) -> Result<(), Error> {
+    check_only(experiments, &opts.only)?;
+    let p0 = Model::baseline(experiments)?.free.len();
+    let q = largest_candidate(experiments, &opts.only);
+    let need = p0 + q + crate::fit::model::MIN_RESIDUAL_DOF;
+    let n = data.len();
+    if n >= need {
+        return Ok(());
+    }
+    let last = data
+        .series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|o| o.line))
+        .max()
+        .unwrap_or(1);
+    Err(InputError::new(format!(
+        "{n} observation(s): discover needs at least {need}, the baseline's {p0} free parameter(s) ([fit] free) plus the {q} of its largest candidate plus two residual degrees of freedom (for the F-test and the intervals); measure more radii, or choose smaller candidates with --only"
+    ))
+    .in_file(&data.file)
+    .at_line(last)
+    .into())
+}
+
 /// [`discover`] with every simulation of every fit kept in (and read back from) `evaluations`
 /// ([`crate::fit::journal`]): a search is deterministic, so a restart of the same search with
 /// the journal of an unfinished one replays it and runs only the simulations not yet there.
@@ -392,6 +468,7 @@ pub fn discover_with(
     progress: &(dyn Fn(usize, usize) + Sync),
     evaluations: Option<std::sync::Arc<crate::fit::journal::Evaluations>>,
 ) -> Result<Discovery, Error> {
+    check_search(experiments, data, opts)?;
     let base = Model::baseline(experiments)?.with_evaluations(evaluations);
     let n = data.len();
     let sd_given = data.has_sd();

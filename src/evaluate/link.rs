@@ -247,7 +247,9 @@ pub fn dive_history(
 /// gases that are not simulated at p_fixed = P_H2O + P_CO2 + P_vO2
 /// ([`Protocol::bubble_fixed_gases_pa`]), the counterpart of the faces of [`dive_history`].
 /// A phantom file that sets its own `material.bubble_fixed_gases_pa` is refused: for a
-/// breathed gas the criteria protocol sets it.
+/// breathed gas the criteria protocol sets it. So is a record interval longer than half the
+/// protocol's watch at the surface (the after-surfacing window would hold fewer than two
+/// frames).
 pub fn breathed_gas_params(
     params: &PhantomParams,
     protocol: &Protocol,
@@ -259,6 +261,20 @@ pub fn breathed_gas_params(
             protocol.bubble_fixed_gases_pa()
         ))
         .field("material.bubble_fixed_gases_pa"));
+    }
+    // the surface phase the protocol watches must hold recorded frames: the criteria with
+    // `window = "after-surfacing"` and the report's plots of it look only there, and with
+    // fewer than two frames they scored 0 (a silent pass) or the plot failed (exit 3)
+    let window = protocol.observe_after_surfacing_s;
+    let every = params.numerics.record_interval;
+    if window > 0.0 && every > window / 2.0 {
+        return Err(InputError::new(format!(
+            "the phantom records a frame every {} s, but the criteria protocol watches the surface phase for {} s: fewer than two frames would fall in it; set record_interval_s to at most {} s (default 1 s) or watch longer (observe_after_surfacing_min)",
+            crate::error::num(every),
+            crate::error::num(window),
+            crate::error::num(window / 2.0)
+        ))
+        .field("numerics.record_interval_s"));
     }
     let mut p = params.clone();
     p.bubble_fixed_gases = protocol.bubble_fixed_gases_pa();

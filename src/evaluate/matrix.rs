@@ -54,8 +54,14 @@ pub fn run_matrix_journaled(
         .flat_map(|c| laws.iter().map(move |l| (c, *l)))
         .collect();
     let total = jobs.len() as f64;
-    breathed_gas_params(&phantom.params, &criteria.protocol)
-        .map_err(|e| Error::Input(e.in_file(&phantom.source)))?;
+    breathed_gas_params(&phantom.params, &criteria.protocol).map_err(|e| {
+        // the phantom file, with the line of the field when the source is a readable file
+        let e = e.in_file(&phantom.source);
+        Error::Input(match std::fs::read_to_string(&phantom.source) {
+            Ok(text) => crate::error::ensure_line(e, &text),
+            Err(_) => e,
+        })
+    })?;
     let params: Vec<PhantomParams> = jobs
         .iter()
         .map(|&(_, law)| {

@@ -54,7 +54,7 @@ pub fn schedule_table(ev: &Evaluation) -> Result<Table, Error> {
             Cell::text(&c.source),
             Cell::text(stops),
             Cell::text(gases.join(", ")),
-            Cell::fixed(s.stops.iter().map(|st| st.stop_min).sum::<f64>(), 1),
+            Cell::fixed(s.stop_time_min(), 1),
             Cell::fixed(s.runtime_min(), 1),
         ])
         .map_err(Error::Solver)?;

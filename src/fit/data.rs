@@ -87,10 +87,32 @@ impl Measurements {
     }
 }
 
-/// Read `measurements.csv`. Refused (exit 2, file/row/field named): a missing column, a value
-/// that is not a finite number, a negative radius, a non-positive sd, an `sd_m` column filled on
-/// some rows and empty on others, a bubble index that is not a non-negative integer, and a time
-/// that does not increase within a bubble.
+/// Largest radius a measurement may give, m: 1 cm, the phantom reader's upper limit on a
+/// bubble's initial radius R0 (`profiles/phantoms/README.md`). A larger number is a radius in
+/// other units (mm, µm) or a diameter of a bubble the model cannot hold, never a measurement of
+/// one of its bubbles.
+pub const MAX_RADIUS_M: f64 = 1e-2;
+
+/// Smallest measurement standard deviation, m: 1 nm. Bubble radii are measured by imaging,
+/// whose resolution is ~0.1–1 µm (sub-pixel edge fits reach ~10 nm); an sd below 1 nm is not
+/// an uncertainty of such a measurement, and its weight 1/sd² (above 1e18 m⁻²) would let one
+/// row outweigh every other by many orders of magnitude (a 1e-20 sd made the intervals run to
+/// infinity, 1e-300 made the fit fail).
+pub const MIN_SD_M: f64 = 1e-9;
+
+/// Largest measurement standard deviation, m: [`MAX_RADIUS_M`]. An uncertainty larger than any
+/// radius a measurement may give says nothing about the radius.
+pub const MAX_SD_M: f64 = MAX_RADIUS_M;
+
+/// The columns `measurements.csv` reads; each may appear once.
+pub const COLUMNS: [&str; 5] = ["experiment", "bubble", "time_s", "radius_m", "sd_m"];
+
+/// Read `measurements.csv`. Refused (exit 2, file/row/field named): a missing column, a column
+/// of [`COLUMNS`] named twice in the header (line 1), a value that is not a finite number, a
+/// radius outside 0 ..= [`MAX_RADIUS_M`] (1 cm), an sd outside [`MIN_SD_M`] ..= [`MAX_SD_M`]
+/// (1 nm ..= 1 cm), an `sd_m` column filled on some rows and empty on others, a bubble index
+/// that is not a non-negative integer, and a time that does not increase within a bubble. A
+/// radius larger than the experiment's phantom can hold is refused by [`check_against`].
 pub fn read_measurements(path: &Path) -> Result<Measurements, InputError> {
     let text = crate::error::read_text(path, "the measurements")?;
     parse_measurements(&text, path)
@@ -111,6 +133,18 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
         })?
         .clone();
     let col = |name: &str| headers.iter().position(|h| h == name);
+    // a column named twice would be read from its first occurrence, silently
+    for name in COLUMNS {
+        if headers.iter().filter(|h| *h == name).count() > 1 {
+            return Err(InputError::new(format!(
+                "column '{name}' appears twice in the header ({}); name each column once",
+                headers.iter().collect::<Vec<_>>().join(",")
+            ))
+            .in_file(path)
+            .at_line(1)
+            .field(name));
+        }
+    }
     let mut cols = [0usize; 4];
     for (k, name) in ["experiment", "bubble", "time_s", "radius_m"]
         .iter()
@@ -185,10 +219,14 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
                 format!("a radius cannot be negative (got {radius} m)"),
             ));
         }
-        if radius > 1.0 {
+        if radius > MAX_RADIUS_M {
             return Err(err(
                 "radius_m",
-                format!("{radius} m is not a bubble radius; radii are in metres (e.g. 2.0e-4 for 0.2 mm)"),
+                format!(
+                    "{} m is not a bubble radius the model can hold (at most {} m, 1 cm); radii are in metres (e.g. 2.0e-4 for 0.2 mm)",
+                    crate::error::num(radius),
+                    MAX_RADIUS_M
+                ),
             ));
         }
         let sd = match sd_col {
@@ -198,6 +236,17 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
                     return Err(err(
                         "sd_m",
                         format!("a standard deviation must be positive (got {v} m)"),
+                    ));
+                }
+                if !(MIN_SD_M..=MAX_SD_M).contains(&v) {
+                    return Err(err(
+                        "sd_m",
+                        format!(
+                            "a measurement standard deviation of {} m is outside {} ..= {} m (1 nm to 1 cm); sd is in metres, like the radius (e.g. 2.0e-6 for 2 µm)",
+                            crate::error::num(v),
+                            crate::error::num(MIN_SD_M),
+                            crate::error::num(MAX_SD_M)
+                        ),
                     ));
                 }
                 Some(v)
@@ -306,6 +355,10 @@ pub struct Experiment {
     pub phantom: toml::Table,
     /// Number of bubbles the phantom defines.
     pub bubbles: usize,
+    /// Radius of the largest sphere the phantom holds, m: half its smallest extent (a box's
+    /// shortest edge; a cylinder's diameter or depth). No bubble of it can be larger: a bubble
+    /// that reaches a face ends the run.
+    pub largest_radius_m: f64,
 }
 
 /// The experiments file.
@@ -337,6 +390,15 @@ pub fn build_params(doc: &toml::Table, path: &Path) -> Result<PhantomParams, Inp
         InputError::new(format!("cannot write the phantom back to TOML: {e}")).in_file(path)
     })?;
     Ok(parse_phantom(&text, path)?.params)
+}
+
+/// Radius of the largest sphere inside a phantom, m (half its smallest extent).
+pub fn largest_radius(p: &PhantomParams) -> f64 {
+    use crate::phantom::grid::Shape;
+    match p.shape {
+        Shape::Box { size } => 0.5 * size[0].min(size[1]).min(size[2]),
+        Shape::Cylinder { diameter, depth } => 0.5 * diameter.min(depth),
+    }
 }
 
 /// Number of bubbles a phantom defines.
@@ -402,6 +464,29 @@ pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
         if e.name.trim().is_empty() {
             return Err(err("name", "an experiment needs a non-empty name".into()).into());
         }
+        // the measurements' cells are trimmed and read as text: a name must be written the
+        // same way there (synth quotes a comma, quote or '#'); control characters and path
+        // separators have no place in a name that also names the report's overlay files
+        if e.name.trim() != e.name || e.name.chars().any(|c| c.is_control()) {
+            return Err(err(
+                "name",
+                format!(
+                    "experiment name {:?} has leading or trailing spaces or a control character (a line break, a tab); a measurements file cannot name it: write it without them",
+                    e.name
+                ),
+            )
+            .into());
+        }
+        if e.name.contains(['/', '\\']) {
+            return Err(err(
+                "name",
+                format!(
+                    "experiment name {:?} holds a path separator (/ or \\); the name also names the report's overlay files (overlay-NAME-bN.svg): write it without one",
+                    e.name
+                ),
+            )
+            .into());
+        }
         if list.iter().any(|x| x.name == e.name) {
             return Err(err("name", format!("experiment '{}' is defined twice", e.name)).into());
         }
@@ -445,6 +530,7 @@ pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
             phantom_path,
             phantom,
             bubbles: bubble_count(&params),
+            largest_radius_m: largest_radius(&params),
         });
     }
     for f in &raw.fit.free {
@@ -466,8 +552,9 @@ pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
     })
 }
 
-/// Check that every measured series names an experiment and a bubble that exist, and that
-/// every experiment has a measurement.
+/// Check that every measured series names an experiment and a bubble that exist, that no
+/// radius is larger than its experiment's phantom can hold ([`Experiment::largest_radius_m`])
+/// and that no time is after the end of its experiment's profile.
 pub fn check_against(m: &Measurements, e: &Experiments) -> Result<(), InputError> {
     for s in &m.series {
         let line = s.points[0].line;
@@ -499,6 +586,18 @@ pub fn check_against(m: &Measurements, e: &Experiments) -> Result<(), InputError
             .at_line(line)
             .field("bubble"));
         }
+        if let Some(p) = s.points.iter().find(|p| p.radius > x.largest_radius_m) {
+            return Err(InputError::new(format!(
+                "a radius of {} m is larger than the phantom of experiment '{}' can hold ({} m, half its smallest extent, in {}); radii are in metres (e.g. 2.0e-4 for 0.2 mm)",
+                crate::error::num(p.radius),
+                x.name,
+                crate::error::num(x.largest_radius_m),
+                x.phantom_path.display()
+            ))
+            .in_file(&m.file)
+            .at_line(p.line)
+            .field("radius_m"));
+        }
         if let Some(p) = s
             .points
             .iter()
@@ -521,6 +620,45 @@ pub fn check_against(m: &Measurements, e: &Experiments) -> Result<(), InputError
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The plausibility limits of `radius_m` and `sd_m`, by their documented values: a radius in
+    /// 0 ..= 1 cm and an sd in 1 nm ..= 1 cm are read, the first value past either end is
+    /// refused naming its line and field; a column of the reader named twice is refused at
+    /// line 1 naming the column, while a repeated column the reader does not use is ignored.
+    #[test]
+    fn radius_and_sd_ranges_and_duplicate_columns() {
+        let path = Path::new("m.csv");
+        let row = |r: &str, sd: &str| {
+            format!("experiment,bubble,time_s,radius_m,sd_m\na,0,0,1e-4,2e-6\na,0,10,{r},{sd}\n")
+        };
+        for (r, sd) in [
+            ("0", "2e-6"),
+            ("1e-2", "2e-6"),
+            ("1e-4", "1e-9"),
+            ("1e-4", "1e-2"),
+        ] {
+            parse_measurements(&row(r, sd), path).unwrap_or_else(|e| panic!("{r}, {sd}: {e}"));
+        }
+        for (r, sd, field) in [
+            ("1.0000001e-2", "2e-6", "radius_m"),
+            ("0.0617", "2e-6", "radius_m"), // 61.7 µm written in mm
+            ("1e-4", "9.99e-10", "sd_m"),
+            ("1e-4", "1e-20", "sd_m"),
+            ("1e-4", "1e-300", "sd_m"),
+            ("1e-4", "1.1e-2", "sd_m"),
+        ] {
+            let e = parse_measurements(&row(r, sd), path).unwrap_err();
+            assert_eq!((e.line, e.field.as_deref()), (Some(3), Some(field)), "{e}");
+        }
+        for col in COLUMNS {
+            let text = format!("experiment,bubble,time_s,radius_m,sd_m,{col}\na,0,0,1e-4,2e-6,x\n");
+            let e = parse_measurements(&text, path).unwrap_err();
+            assert_eq!((e.line, e.field.as_deref()), (Some(1), Some(col)), "{e}");
+            assert!(e.message.contains("appears twice"), "{e}");
+        }
+        let extra = "experiment,bubble,time_s,radius_m,note,note\na,0,0,1e-4,x,y\n";
+        parse_measurements(extra, path).unwrap();
+    }
 
     /// An `sd_m` column filled on some rows only is refused at the first row without one
     /// (weights 1/sd² ≈ 1e11 against 1 would drop those rows from a fit); a column that is empty

@@ -199,6 +199,10 @@ pub struct Estimate {
     pub log: bool,
     /// At (within 0.1 % of) a bound: the interval is not trustworthy.
     pub at_bound: bool,
+    /// The interval reached past a bound `NAME=LO..HI` and was clipped to it (a bounded
+    /// parameter cannot lie outside its bounds; the Student-t interval in the fitting
+    /// coordinates does not know them).
+    pub clipped: bool,
 }
 
 /// Asymptotic inference at an optimum.
@@ -286,12 +290,26 @@ pub fn infer_with(fit: &LsqResult, specs: &[ParamSpec], robust: bool) -> Inferen
         .map(|(j, s)| {
             let v = s.v_of(fit.u[j]);
             let x = s.from_internal(fit.u[j]);
-            let se_v = cov[(j, j)].max(0.0).sqrt();
-            let (se, ci) = if s.log {
+            // a variance that is not a finite number ≥ 0 (no residual degree of freedom, a
+            // singular or overflowing JᵀJ) gives no standard error: NaN, never a silent 0
+            let var = cov[(j, j)];
+            let se_v = if var >= 0.0 { var.sqrt() } else { f64::NAN };
+            let (se, mut ci) = if s.log {
                 (x * se_v, [(v - t * se_v).exp(), (v + t * se_v).exp()])
             } else {
                 (se_v, [v - t * se_v, v + t * se_v])
             };
+            let mut clipped = false;
+            if let (Some(lo), Some(hi)) = (s.lower, s.upper) {
+                if ci[0] < lo {
+                    ci[0] = lo;
+                    clipped = true;
+                }
+                if ci[1] > hi {
+                    ci[1] = hi;
+                    clipped = true;
+                }
+            }
             Estimate {
                 name: s.path.clone(),
                 value: x,
@@ -299,6 +317,7 @@ pub fn infer_with(fit: &LsqResult, specs: &[ParamSpec], robust: bool) -> Inferen
                 ci95: ci,
                 log: s.log,
                 at_bound: s.at_bound(x),
+                clipped,
             }
         })
         .collect();
@@ -328,6 +347,70 @@ pub fn infer_with(fit: &LsqResult, specs: &[ParamSpec], robust: bool) -> Inferen
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The mean of four numbers as a one-parameter fit: the interval is mean ± t₀.₉₇₅,₃·s/√n
+    /// (computed here by hand). With bounds 0..1 that interval reaches past both, so it is
+    /// clipped to exactly [0, 1] and says so; with bounds −10..10 it is not clipped. With one
+    /// observation (n = p) there is no residual variance: the standard error and interval are
+    /// not finite (NaN), never a zero-width interval.
+    #[test]
+    fn intervals_are_clipped_to_the_bounds_and_never_zero_without_a_variance() {
+        let ys = [0.1, -0.5, 0.9, 0.3];
+        let model = |u: &[f64], spec: &ParamSpec| -> Vec<f64> {
+            let a = spec.from_internal(u[0]);
+            ys.iter().map(|y| y - a).collect()
+        };
+        let n = ys.len() as f64;
+        let mean = ys.iter().sum::<f64>() / n;
+        let s2 = ys.iter().map(|y| (y - mean).powi(2)).sum::<f64>() / (n - 1.0);
+        let half = t975(3) * (s2 / n).sqrt();
+        assert!(
+            mean - half < 0.0 && mean + half > 1.0,
+            "the case must reach past both bounds"
+        );
+        for (lo, hi, clipped) in [(0.0, 1.0, true), (-10.0, 10.0, false)] {
+            let spec = ParamSpec {
+                path: "a".into(),
+                lower: Some(lo),
+                upper: Some(hi),
+                log: false,
+                start: 0.5,
+            };
+            let sp = spec.clone();
+            let m = move |u: &[f64]| -> Result<Vec<f64>, Error> { Ok(model(u, &sp)) };
+            let opts = LsqOptions {
+                fd_step: 1e-7,
+                ftol: 1e-14,
+                xtol: 1e-12,
+                patience: 200,
+            };
+            let fit = minimize(&m, &[spec.to_internal(0.5)], &opts).unwrap();
+            let e = &infer(&fit, std::slice::from_ref(&spec)).estimates[0];
+            assert!((e.value - mean).abs() < 1e-6, "{e:?}");
+            assert_eq!(e.clipped, clipped, "{e:?}");
+            if clipped {
+                assert_eq!(e.ci95, [0.0, 1.0], "{e:?}");
+            } else {
+                assert!((e.ci95[0] - (mean - half)).abs() < 1e-4, "{e:?}");
+                assert!((e.ci95[1] - (mean + half)).abs() < 1e-4, "{e:?}");
+            }
+        }
+        let one = |u: &[f64]| -> Result<Vec<f64>, Error> { Ok(vec![0.3 - u[0]]) };
+        let spec = ParamSpec {
+            path: "a".into(),
+            lower: None,
+            upper: None,
+            log: false,
+            start: 0.0,
+        };
+        let fit = minimize(&one, &[0.0], &LsqOptions::default()).unwrap();
+        let inf = infer(&fit, &[spec]);
+        assert!(
+            inf.s2.is_nan() && inf.estimates[0].std_error.is_nan(),
+            "{inf:?}"
+        );
+        assert!(inf.estimates[0].ci95.iter().all(|x| x.is_nan()), "{inf:?}");
+    }
 
     /// Linear regression y = a + b·x: the LM optimum and its intervals must equal the closed
     /// form (normal equations; standard errors s²(XᵀX)⁻¹), computed here independently.

@@ -327,6 +327,34 @@ impl Fitted {
     }
 }
 
+/// Fewest residual degrees of freedom n − p a fit is run with: 2. With n − p = 0 there is no
+/// residual variance s² = SSR/(n − p), so no standard error or interval; with n − p = 1 the
+/// variance rests on a single residual (its Student-t factor is 12.7). Refused before any
+/// simulation. The AICc (K = p + 1) needs n − p ≥ 3: at n − p = 2 the fit is written without
+/// it, with the reason (`fit::report`).
+pub const MIN_RESIDUAL_DOF: usize = 2;
+
+/// Refuse (exit 2) a fit of `p` parameters to fewer than p + [`MIN_RESIDUAL_DOF`] observations,
+/// naming the measurements file (its last line, where more rows would go) and `--param`.
+pub fn enough_observations(data: &Measurements, p: usize) -> Result<(), crate::error::InputError> {
+    let n = data.len();
+    if n >= p + MIN_RESIDUAL_DOF {
+        return Ok(());
+    }
+    let last = data
+        .series
+        .iter()
+        .flat_map(|s| s.points.iter().map(|o| o.line))
+        .max()
+        .unwrap_or(1);
+    Err(crate::error::InputError::new(format!(
+        "{n} observation(s) for {p} free parameter(s): a fit needs at least p + {MIN_RESIDUAL_DOF} = {} (two residual degrees of freedom for the residual variance, the standard errors and the intervals); measure more radii or free fewer parameters (--param, [fit] free)",
+        p + MIN_RESIDUAL_DOF
+    ))
+    .in_file(&data.file)
+    .at_line(last))
+}
+
 /// Fit `model` to `data` with observation weights `weights` (1/σ², measurement order); classical
 /// intervals.
 pub fn fit(

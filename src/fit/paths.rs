@@ -290,6 +290,60 @@ impl ParamSpec {
         })
     }
 
+    /// Check, before any simulation, that this parameter can be written into the phantom
+    /// documents `docs` (read from `files`; those a fit writes it in) at its start value and at both bounds: each value
+    /// is set at the path and the document read again by the phantom reader, so the field's
+    /// own accepted range applies (a negative diffusivity, a surface tension above 1 N/m), as
+    /// `sensitivity` checks its levels. A range is an interval, so a value between accepted
+    /// bounds is accepted too. Refused (exit 2) naming `<command line>` and `--param`, the value
+    /// and the phantom's reason. `given` is the parameter as written, for the message.
+    pub fn check_settable(
+        &self,
+        given: &str,
+        docs: &[toml::Table],
+        files: &[&std::path::Path],
+    ) -> Result<(), InputError> {
+        let mut values = vec![("its start value", self.start)];
+        if let Some(lo) = self.lower {
+            values.push(("the lower bound", lo));
+        }
+        if let Some(hi) = self.upper {
+            values.push(("the upper bound", hi));
+        }
+        // written where a fit writes it (`fit::model::set_shared`): in every phantom that holds
+        // the path, or in all when none does
+        let any = docs.iter().any(|d| holds(d, &self.path));
+        for (what, v) in values {
+            for (doc, file) in docs.iter().zip(files) {
+                if any && !holds(doc, &self.path) {
+                    continue;
+                }
+                let mut t = doc.clone();
+                let reason = match apply(&mut t, &self.path, v) {
+                    Err(m) => Some(m),
+                    Ok(()) => {
+                        crate::fit::data::build_params(&t, file)
+                            .err()
+                            .map(|e| match e.field {
+                                Some(f) => format!("field '{f}': {}", e.message),
+                                None => e.message,
+                            })
+                    }
+                };
+                if let Some(reason) = reason {
+                    return Err(InputError::new(format!(
+                        "'{given}': {what}, {}, is not accepted in {}: {reason}",
+                        crate::error::num(v),
+                        file.display()
+                    ))
+                    .in_file("<command line>")
+                    .field("--param"));
+                }
+            }
+        }
+        Ok(())
+    }
+
     /// A positive parameter without bounds fitted in log space.
     pub fn positive(path: impl Into<String>, start: f64) -> ParamSpec {
         ParamSpec {
@@ -398,6 +452,56 @@ mod tests {
         assert_eq!(get(&d, "gases.n2.diffusivity"), Some(2e-9));
         assert_eq!(get(&d, "gases.o2.diffusivity"), Some(4e-9));
         assert!(apply(&mut d, "scale:gases.*.nothing", 2.0).is_err());
+    }
+
+    /// Bounds are checked by the phantom reader's own ranges (D 1e-14 ..= 1e-6 m²/s, γ 0 ..= 1
+    /// N/m), at both ends, and refused naming `<command line>` and `--param`.
+    #[test]
+    fn bounds_outside_the_fields_range_are_refused_on_the_command_line() {
+        let doc: toml::Table = "[geometry]\nshape = \"box\"\nsize_m = [2e-3, 2e-3, 2e-3]\ngrid_step_m = 2e-4\n[material]\nsurface_tension = 0.07\n[gases.n2]\ndiffusivity = 2.5e-9\nostwald = 0.014\n[gases.o2]\ndiffusivity = 2.5e-9\nostwald = 0.027\n[[bubbles]]\nposition_m = [1e-3, 1e-3, 1e-3]\ninitial_radius_m = 6e-5\n"
+            .parse()
+            .unwrap();
+        let file = std::path::Path::new("p.toml");
+        let check = |given: &str| {
+            let path = given.split_once('=').map_or(given, |x| x.0);
+            let base = if path.starts_with(SCALE_PREFIX) {
+                Some(1.0)
+            } else {
+                get(&doc, path)
+            };
+            ParamSpec::parse(given, base)?.check_settable(
+                given,
+                std::slice::from_ref(&doc),
+                &[file],
+            )
+        };
+        for ok in [
+            "gases.n2.diffusivity=1e-14..1e-6",
+            "material.surface_tension=0..1",
+            "scale:gases.*.diffusivity=0.1..10",
+            "gases.n2.diffusivity",
+        ] {
+            check(ok).unwrap_or_else(|e| panic!("{ok}: {e}"));
+        }
+        for (bad, which) in [
+            ("gases.n2.diffusivity=-1..1", "lower"),
+            ("gases.n2.diffusivity=1e-9..1e-5", "upper"),
+            ("material.surface_tension=0..2", "upper"),
+            ("material.surface_tension=-0.1..0.5", "lower"),
+            ("scale:gases.*.diffusivity=0..2", "lower"),
+        ] {
+            let e = check(bad).unwrap_err();
+            assert_eq!(
+                e.file.as_deref(),
+                Some(std::path::Path::new("<command line>")),
+                "{e}"
+            );
+            assert_eq!(e.field.as_deref(), Some("--param"), "{e}");
+            assert!(
+                e.message.contains(&format!("the {which} bound")),
+                "{bad}: {e}"
+            );
+        }
     }
 
     #[test]

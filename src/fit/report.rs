@@ -12,6 +12,7 @@ use crate::report::overlay::Overlay;
 use crate::report::table::{Cell, Column, Table};
 use crate::run::SimRun;
 use serde::Serialize;
+use std::collections::BTreeMap;
 
 /// A number with `sig` significant figures in plain or scientific notation as fits its size.
 pub fn sig(v: f64, sig: usize) -> String {
@@ -34,8 +35,64 @@ fn cell(v: f64) -> Cell {
     Cell::text(sig(v, 4))
 }
 
-/// Table of estimates with standard errors and 95 % intervals.
-pub fn estimates_table(title: &str, est: &[Estimate]) -> Result<Table, Error> {
+/// Reason given for every standard error and interval of a fit whose Jacobian is singular.
+pub const SINGULAR: &str = "not given: the Jacobian is singular at the optimum (these data do not determine this parameter, or a combination of it with others)";
+
+/// The standard error and the 95 % interval of an estimate as written, or why each is not: a
+/// singular Jacobian (`singular`), or a value that is not a finite number (no residual degree
+/// of freedom, an overflowing covariance, an interval running to 0 or infinity). A statistic
+/// that is not a finite number is never written (`fit.toml`, `discover.toml`, the reports).
+pub fn estimate_stats(
+    e: &Estimate,
+    singular: bool,
+) -> (Result<f64, String>, Result<[f64; 2], String>) {
+    if singular {
+        return (Err(SINGULAR.into()), Err(SINGULAR.into()));
+    }
+    let se = if e.std_error.is_finite() {
+        Ok(e.std_error)
+    } else {
+        Err("not given: the covariance of the estimates is not a finite number here".to_string())
+    };
+    let ci = if e.ci95.iter().all(|x| x.is_finite()) && se.is_ok() {
+        Ok(e.ci95)
+    } else if se.is_err() {
+        Err("not given: no finite standard error".to_string())
+    } else {
+        Err(format!(
+            "not given: the 95 % interval is not finite ([{}, {}]): these data hardly constrain the parameter",
+            e.ci95[0], e.ci95[1]
+        ))
+    };
+    (se, ci)
+}
+
+/// Why AICc is not given for a fit of `p` parameters to `n` observations with weighted SSR
+/// `ssr`, or `None` when it is a finite number.
+pub fn aicc_absent(aicc: f64, ssr: f64, n: usize, p: usize) -> Option<String> {
+    if aicc.is_finite() {
+        return None;
+    }
+    Some(if n <= p + 2 {
+        format!("not given: AICc = n·ln(SSR/n) + 2K + 2K(K + 1)/(n − K − 1) with K = p + 1 needs n > p + 2 (here n = {n}, p = {p})")
+    } else if !(ssr > 0.0) {
+        "not given: the weighted SSR is 0 (a perfect fit), so ln(SSR/n) is not finite".into()
+    } else {
+        "not given: not a finite number".into()
+    })
+}
+
+/// A statistic for a table: the number, or its reason.
+fn stat_cell(v: &Result<f64, String>) -> Cell {
+    match v {
+        Ok(x) => cell(*x),
+        Err(m) => Cell::text(m),
+    }
+}
+
+/// Table of estimates with standard errors and 95 % intervals (`singular`: the fit's Jacobian
+/// was singular, so neither is given).
+pub fn estimates_table(title: &str, est: &[Estimate], singular: bool) -> Result<Table, Error> {
     let mut t = Table::new(
         title,
         vec![
@@ -48,21 +105,52 @@ pub fn estimates_table(title: &str, est: &[Estimate]) -> Result<Table, Error> {
         ],
     );
     for e in est {
+        finite_estimate(e)?;
+        let (se, ci) = estimate_stats(e, singular);
+        let mut notes = Vec::new();
+        if e.at_bound {
+            notes.push("at a bound: interval not reliable");
+        }
+        if e.clipped && ci.is_ok() {
+            notes.push("interval clipped to the bounds given");
+        }
         t.push(vec![
             Cell::text(&e.name),
             cell(e.value),
-            cell(e.std_error),
-            Cell::text(format!("[{}, {}]", sig(e.ci95[0], 4), sig(e.ci95[1], 4))),
+            stat_cell(&se),
+            match &ci {
+                Ok(c) => Cell::text(format!("[{}, {}]", sig(c[0], 4), sig(c[1], 4))),
+                Err(m) => Cell::text(m),
+            },
             Cell::text(if e.log { "log space" } else { "linear" }),
-            Cell::text(if e.at_bound {
-                "at a bound: interval not reliable"
-            } else {
-                ""
-            }),
+            Cell::text(notes.join("; ")),
         ])
         .map_err(Error::Solver)?;
     }
     Ok(t)
+}
+
+/// An estimate that is not a finite number is a failure of the fit (exit 3), never written.
+pub fn finite_estimate(e: &Estimate) -> Result<(), Error> {
+    if e.value.is_finite() {
+        Ok(())
+    } else {
+        Err(Error::Solver(format!(
+            "the estimate of {} is not a finite number ({}); nothing was written",
+            e.name, e.value
+        )))
+    }
+}
+
+/// A result of a fit that must be a finite number to be written (an SSR, an RMSE): else exit 3.
+pub fn finite_result(what: &str, v: f64) -> Result<f64, Error> {
+    if v.is_finite() {
+        Ok(v)
+    } else {
+        Err(Error::Solver(format!(
+            "{what} is not a finite number ({v}); nothing was written"
+        )))
+    }
 }
 
 /// Dense simulated radius of one bubble from a run, µm against s.
@@ -205,21 +293,64 @@ pub fn growth_rows(
             .as_ref()
             .and_then(|f| compare_to_curve(&m, w.as_deref(), f).ok())
             .map(|t| t.p_value);
-        let note = match (&fm, &fs) {
+        let mut note = match (&fm, &fs) {
             (Some(_), Some(_)) => String::new(),
             _ => "the exponential growth curve does not describe this series (no converged fit)"
                 .into(),
         };
+        // a metric that is not a finite number (an interval running to infinity, a rate of 0)
+        // is left out, and the note says so
+        let mut dropped = Vec::new();
+        let mut one = |name: &str, v: Option<f64>| {
+            v.filter(|x| {
+                let ok = x.is_finite();
+                if !ok {
+                    dropped.push(name.to_string());
+                }
+                ok
+            })
+        };
+        let measured_plateau_m = one("measured plateau", fm.as_ref().map(|g| g.plateau));
+        let measured_half_life_s = one("measured half-life", fm.as_ref().map(|g| g.half_life));
+        let simulated_plateau_m = one("simulated plateau", fs.as_ref().map(|g| g.plateau));
+        let simulated_half_life_s = one("simulated half-life", fs.as_ref().map(|g| g.half_life));
+        let same_curve_p_value = one("F-test p", p);
+        let mut pair = |name: &str, v: Option<[f64; 2]>| {
+            v.filter(|c| {
+                let ok = c.iter().all(|x| x.is_finite());
+                if !ok {
+                    dropped.push(name.to_string());
+                }
+                ok
+            })
+        };
+        let measured_plateau_ci95_m = pair(
+            "measured plateau interval",
+            fm.as_ref().map(|g| g.plateau_ci),
+        );
+        let measured_half_life_ci95_s = pair(
+            "measured half-life interval",
+            fm.as_ref().map(|g| g.half_life_ci),
+        );
+        if !dropped.is_empty() {
+            if !note.is_empty() {
+                note.push_str("; ");
+            }
+            note.push_str(&format!(
+                "not given, not a finite number: {}",
+                dropped.join(", ")
+            ));
+        }
         rows.push(GrowthRow {
             experiment: s.experiment.clone(),
             bubble: s.bubble,
-            measured_plateau_m: fm.as_ref().map(|g| g.plateau),
-            measured_plateau_ci95_m: fm.as_ref().map(|g| g.plateau_ci),
-            measured_half_life_s: fm.as_ref().map(|g| g.half_life),
-            measured_half_life_ci95_s: fm.as_ref().map(|g| g.half_life_ci),
-            simulated_plateau_m: fs.as_ref().map(|g| g.plateau),
-            simulated_half_life_s: fs.as_ref().map(|g| g.half_life),
-            same_curve_p_value: p,
+            measured_plateau_m,
+            measured_plateau_ci95_m,
+            measured_half_life_s,
+            measured_half_life_ci95_s,
+            simulated_plateau_m,
+            simulated_half_life_s,
+            same_curve_p_value,
             note,
         });
     }
@@ -262,6 +393,8 @@ pub fn growth_table(rows: &[GrowthRow]) -> Result<Table, Error> {
     Ok(t)
 }
 
+/// `fit.toml`. A statistic that is not a finite number is left out and its reason written in
+/// the `absent` table beside it (`[absent]` for the fit, `[parameter.absent]` for an estimate).
 #[derive(Serialize)]
 struct FitFile<'a> {
     measurements: String,
@@ -272,14 +405,19 @@ struct FitFile<'a> {
     weighted: bool,
     ssr: f64,
     rmse_m: f64,
-    aicc: f64,
-    residual_variance: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    aicc: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    residual_variance: Option<f64>,
     converged: bool,
     termination: &'a str,
     model_evaluations: usize,
     singular: bool,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    correlation: Option<Vec<Vec<f64>>>,
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    absent: BTreeMap<&'static str, String>,
     parameter: Vec<ParamOut>,
-    correlation: Vec<Vec<f64>>,
     growth: &'a [GrowthRow],
 }
 
@@ -287,10 +425,71 @@ struct FitFile<'a> {
 struct ParamOut {
     name: String,
     value: f64,
-    std_error: f64,
-    ci95: [f64; 2],
+    #[serde(skip_serializing_if = "Option::is_none")]
+    std_error: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    ci95: Option<[f64; 2]>,
+    /// The bounds `NAME=LO..HI` given, if any.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    bounds: Option<[f64; 2]>,
+    /// The interval reached past a bound and was clipped to it.
+    ci95_clipped_to_bounds: bool,
     log_space: bool,
     at_bound: bool,
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    absent: BTreeMap<&'static str, String>,
+}
+
+/// The statistics of a whole fit as written: AICc, residual variance and the correlation
+/// matrix, each the number or the reason it is not given.
+pub struct FitStats {
+    /// AICc.
+    pub aicc: Result<f64, String>,
+    /// s² = SSR/(n − p).
+    pub residual_variance: Result<f64, String>,
+    /// Correlation of the estimates.
+    pub correlation: Result<Vec<Vec<f64>>, String>,
+}
+
+/// [`FitStats`] of `f`; an SSR, RMSE or estimate that is not a finite number is exit 3.
+pub fn fit_stats(f: &Fitted) -> Result<FitStats, Error> {
+    finite_result("the weighted SSR", f.ssr)?;
+    finite_result("the RMSE", f.rmse)?;
+    for e in &f.inference.estimates {
+        finite_estimate(e)?;
+    }
+    let aicc = match aicc_absent(f.aicc, f.ssr, f.n, f.p()) {
+        None => Ok(f.aicc),
+        Some(m) => Err(m),
+    };
+    let residual_variance = if f.inference.s2.is_finite() {
+        Ok(f.inference.s2)
+    } else if f.dof() == 0 {
+        Err(format!(
+            "not given: no residual degree of freedom (n = {} = p)",
+            f.n
+        ))
+    } else {
+        Err("not given: not a finite number".into())
+    };
+    let correlation = if f.inference.singular {
+        Err(SINGULAR.replace("this parameter", "every parameter"))
+    } else if f
+        .inference
+        .correlation
+        .iter()
+        .flatten()
+        .all(|c| c.is_finite())
+    {
+        Ok(f.inference.correlation.clone())
+    } else {
+        Err("not given: the covariance of the estimates is not a finite number here".into())
+    };
+    Ok(FitStats {
+        aicc,
+        residual_variance,
+        correlation,
+    })
 }
 
 /// `fit.toml` text.
@@ -300,6 +499,51 @@ pub fn fit_toml(
     data: &Measurements,
     growth: &[GrowthRow],
 ) -> Result<String, Error> {
+    let st = fit_stats(f)?;
+    let mut absent = BTreeMap::new();
+    let mut keep = |key: &'static str, v: &Result<f64, String>| match v {
+        Ok(x) => Some(*x),
+        Err(m) => {
+            absent.insert(key, m.clone());
+            None
+        }
+    };
+    let aicc = keep("aicc", &st.aicc);
+    let residual_variance = keep("residual_variance", &st.residual_variance);
+    let correlation = match st.correlation {
+        Ok(c) => Some(c),
+        Err(m) => {
+            absent.insert("correlation", m);
+            None
+        }
+    };
+    let parameter = f
+        .inference
+        .estimates
+        .iter()
+        .zip(&f.model.free)
+        .map(|(e, spec)| {
+            let (se, ci) = estimate_stats(e, f.inference.singular);
+            let mut absent = BTreeMap::new();
+            if let Err(m) = &se {
+                absent.insert("std_error", m.clone());
+            }
+            if let Err(m) = &ci {
+                absent.insert("ci95", m.clone());
+            }
+            ParamOut {
+                name: e.name.clone(),
+                value: e.value,
+                std_error: se.ok(),
+                ci95: ci.as_ref().ok().copied(),
+                bounds: spec.lower.zip(spec.upper).map(|(a, b)| [a, b]),
+                ci95_clipped_to_bounds: e.clipped && ci.is_ok(),
+                log_space: e.log,
+                at_bound: e.at_bound,
+                absent,
+            }
+        })
+        .collect();
     let file = FitFile {
         measurements: data.file.display().to_string(),
         experiments: experiments.file.display().to_string(),
@@ -309,26 +553,15 @@ pub fn fit_toml(
         weighted: data.has_sd(),
         ssr: f.ssr,
         rmse_m: f.rmse,
-        aicc: f.aicc,
-        residual_variance: f.inference.s2,
+        aicc,
+        residual_variance,
         converged: f.lsq.converged,
         termination: &f.lsq.termination,
         model_evaluations: f.lsq.evaluations,
         singular: f.inference.singular,
-        parameter: f
-            .inference
-            .estimates
-            .iter()
-            .map(|e| ParamOut {
-                name: e.name.clone(),
-                value: e.value,
-                std_error: e.std_error,
-                ci95: e.ci95,
-                log_space: e.log,
-                at_bound: e.at_bound,
-            })
-            .collect(),
-        correlation: f.inference.correlation.clone(),
+        correlation,
+        absent,
+        parameter,
         growth,
     };
     toml::to_string(&file).map_err(|e| Error::Solver(format!("fit.toml: {e}")))
@@ -357,21 +590,54 @@ pub fn fit_outputs(
         f.dof()
     ));
     page.pre(command.to_string());
+    let st = fit_stats(f)?;
     page.section("Estimates");
-    page.table(&estimates_table("Estimates", &f.inference.estimates)?);
+    page.table(&estimates_table(
+        "Estimates",
+        &f.inference.estimates,
+        f.inference.singular,
+    )?);
     if f.inference.singular {
-        page.text("**The Jacobian is singular**: some parameter (or combination) is not determined by these data; its interval is not meaningful.");
+        page.text("**The Jacobian is singular**: some parameter (or combination) is not determined by these data; no standard error, interval or correlation is given.");
+    }
+    let clipped: Vec<String> = f
+        .inference
+        .estimates
+        .iter()
+        .zip(&f.model.free)
+        .filter(|(e, _)| e.clipped && !f.inference.singular)
+        .filter_map(|(e, s)| {
+            Some(format!(
+                "{} to {}..{}",
+                e.name,
+                crate::error::num(s.lower?),
+                crate::error::num(s.upper?)
+            ))
+        })
+        .collect();
+    if !clipped.is_empty() {
+        page.text(format!(
+            "Intervals clipped to the bounds given (the Student-t interval in the fitting coordinates reached past them; a bounded parameter cannot): {}.",
+            clipped.join("; ")
+        ));
     }
     if f.p() > 1 {
-        let mut cols = vec![Column::plain("")];
-        cols.extend(f.inference.estimates.iter().map(|e| Column::plain(&e.name)));
-        let mut t = Table::new("Correlation of the estimates", cols);
-        for (i, row) in f.inference.correlation.iter().enumerate() {
-            let mut r = vec![Cell::text(&f.inference.estimates[i].name)];
-            r.extend(row.iter().map(|c| Cell::fixed(*c, 3)));
-            t.push(r).map_err(Error::Solver)?;
+        match &st.correlation {
+            Ok(corr) => {
+                let mut cols = vec![Column::plain("")];
+                cols.extend(f.inference.estimates.iter().map(|e| Column::plain(&e.name)));
+                let mut t = Table::new("Correlation of the estimates", cols);
+                for (i, row) in corr.iter().enumerate() {
+                    let mut r = vec![Cell::text(&f.inference.estimates[i].name)];
+                    r.extend(row.iter().map(|c| Cell::fixed(*c, 3)));
+                    t.push(r).map_err(Error::Solver)?;
+                }
+                page.table(&t);
+            }
+            Err(m) => {
+                page.text(format!("Correlation of the estimates: {m}."));
+            }
         }
-        page.table(&t);
     }
     page.section("Goodness of fit");
     let mut t = Table::new(
@@ -382,9 +648,17 @@ pub fn fit_outputs(
         ("observations n", f.n.to_string()),
         ("free parameters p", f.p().to_string()),
         ("SSR (weighted)", sig(f.ssr, 5)),
-        ("residual variance s² = SSR/(n − p)", sig(f.inference.s2, 5)),
+        (
+            "residual variance s² = SSR/(n − p)",
+            st.residual_variance
+                .as_ref()
+                .map_or_else(|m| m.clone(), |v| sig(*v, 5)),
+        ),
         ("RMSE (unweighted)", format!("{} µm", sig(f.rmse * 1e6, 4))),
-        ("AICc", sig(f.aicc, 6)),
+        (
+            "AICc",
+            st.aicc.as_ref().map_or_else(|m| m.clone(), |v| sig(*v, 6)),
+        ),
         (
             "converged",
             format!("{} ({})", f.lsq.converged, f.lsq.termination),
@@ -413,4 +687,46 @@ pub fn fit_outputs(
     set.add("report.md", page.to_markdown().map_err(Error::Solver)?);
     set.add("report.html", page.to_html().map_err(Error::Solver)?);
     Ok(set)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn est(se: f64, ci: [f64; 2]) -> Estimate {
+        Estimate {
+            name: "a".into(),
+            value: 1.0,
+            std_error: se,
+            ci95: ci,
+            log: false,
+            at_bound: false,
+            clipped: false,
+        }
+    }
+
+    /// A statistic is written only when it is a finite number: a singular Jacobian, a NaN
+    /// standard error or an interval running to infinity each give a reason instead; AICc is
+    /// not given for n ≤ p + 2 (its denominator n − K − 1 with K = p + 1 is ≤ 0).
+    #[test]
+    fn statistics_that_are_not_finite_are_given_as_reasons() {
+        let good = est(0.1, [0.8, 1.2]);
+        assert_eq!(estimate_stats(&good, false), (Ok(0.1), Ok([0.8, 1.2])));
+        let (se, ci) = estimate_stats(&good, true);
+        assert!(se.unwrap_err().contains("singular") && ci.unwrap_err().contains("singular"));
+        let (se, ci) = estimate_stats(&est(f64::NAN, [f64::NAN; 2]), false);
+        assert!(se.is_err() && ci.is_err());
+        let (se, ci) = estimate_stats(&est(0.1, [0.0, f64::INFINITY]), false);
+        assert_eq!(se, Ok(0.1));
+        assert!(ci.unwrap_err().contains("not finite"));
+        // n = 3, p = 1: K + 1 = 3 = n, so AICc is infinite and not given; n = 4 gives a number
+        let a3 = crate::fit::stats::aicc(1.0, 3, 1);
+        assert!(aicc_absent(a3, 1.0, 3, 1).unwrap().contains("n > p + 2"));
+        let a4 = crate::fit::stats::aicc(1.0, 4, 1);
+        assert!(a4.is_finite() && aicc_absent(a4, 1.0, 4, 1).is_none());
+        assert!(finite_estimate(&est(0.1, [0.0, 1.0])).is_ok());
+        let mut bad = est(0.1, [0.0, 1.0]);
+        bad.value = f64::NAN;
+        assert!(matches!(finite_estimate(&bad), Err(Error::Solver(_))));
+    }
 }

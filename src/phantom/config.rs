@@ -7,7 +7,7 @@ use super::elasticity;
 use super::grid::{Face, Shape};
 use super::params::{BubblePlacement, GasProperties, Numerics, PhantomParams};
 use super::surface;
-use crate::error::{line_of_key, num, toml_error, InputError};
+use crate::error::{line_of_key, num, toml_error_with_path, InputError};
 use crate::gas::Gas;
 use crate::profile::MAX_DURATION_S;
 use serde::Deserialize;
@@ -48,7 +48,8 @@ struct RawPerfusion {
 #[serde(deny_unknown_fields)]
 struct RawGeometry {
     shape: String,
-    size_m: Option<[f64; 3]>,
+    /// Three numbers; read as a list so that a fourth is refused, not ignored.
+    size_m: Option<Vec<f64>>,
     diameter_m: Option<f64>,
     depth_m: Option<f64>,
     grid_step_m: f64,
@@ -81,7 +82,8 @@ struct RawNuclei {
 #[derive(Debug, Deserialize)]
 #[serde(deny_unknown_fields)]
 struct RawBubble {
-    position_m: [f64; 3],
+    /// Three numbers; read as a list so that a fourth is refused, not ignored.
+    position_m: Vec<f64>,
     initial_radius_m: f64,
 }
 
@@ -173,19 +175,40 @@ fn check_law_ranges(t: &toml::Table, prefix: &str) -> Result<(), (String, String
 
 /// Refuse a phantom without bubbles (`bubbles` field) and without a nucleation model that can
 /// make some: the commands report bubble radii, volumes and areas, and a bare gel has none.
+/// The error names the line of `[population] count = 0`, else the file's last line (where
+/// `[[bubbles]]` would go), read again from `source`.
 pub fn require_bubbles(params: &PhantomParams, source: &Path) -> Result<(), InputError> {
-    let none = match &params.bubbles {
-        BubblePlacement::Explicit(list) => list.is_empty(),
-        BubblePlacement::Random { count, .. } => *count == 0,
+    let (none, field) = match &params.bubbles {
+        BubblePlacement::Explicit(list) => (list.is_empty(), "bubbles"),
+        BubblePlacement::Random { count, .. } => (*count == 0, "population.count"),
     };
     if none && params.nucleation.name() == "fixed" {
-        return Err(InputError::new(
+        let e = InputError::new(
             "the phantom has no bubbles; add [[bubbles]] tables, a [population] with count ≥ 1, or a [nucleation] model other than \"fixed\"",
         )
         .in_file(source)
-        .field("bubbles"));
+        .field(field);
+        return Err(match std::fs::read_to_string(source) {
+            Ok(text) if field == "bubbles" => e.at_line(crate::error::last_line(&text)),
+            Ok(text) => crate::error::ensure_line(e, &text),
+            Err(_) => e,
+        });
     }
     Ok(())
+}
+
+/// 1-based lines of the `[[name]]` table headers in `text`, in order.
+fn table_lines(text: &str, name: &str) -> Vec<usize> {
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| {
+            let t = l.split('#').next().unwrap_or("").trim();
+            t.strip_prefix("[[")
+                .and_then(|t| t.strip_suffix("]]"))
+                .is_some_and(|t| t.trim() == name)
+        })
+        .map(|(i, _)| i + 1)
+        .collect()
 }
 
 /// A loaded phantom: the parameters and the description from the file.
@@ -209,7 +232,7 @@ pub fn parse_phantom(text: &str, path: &Path) -> Result<LoadedPhantom, InputErro
 }
 
 fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, InputError> {
-    let raw: RawPhantom = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+    let raw: RawPhantom = toml::from_str(text).map_err(|e| toml_error_with_path(path, text, &e))?;
     let err = |key: &str, msg: String| {
         let leaf = key.rsplit('.').next().unwrap_or(key);
         let mut e = InputError::new(msg).in_file(path).field(key);
@@ -259,10 +282,16 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
     in_range("geometry.grid_step_m", h, 1e-7, 1.0, "m")?;
     let shape = match g.shape.as_str() {
         "box" => {
-            let s = g.size_m.ok_or_else(|| {
+            let s = g.size_m.as_deref().ok_or_else(|| {
                 err(
                     "geometry.size_m",
                     "a box needs size_m = [x, y, z] in metres".into(),
+                )
+            })?;
+            let s: [f64; 3] = s.try_into().map_err(|_| {
+                err(
+                    "geometry.size_m",
+                    format!("expected 3 numbers [x, y, z] in metres, found {}", s.len()),
                 )
             })?;
             for v in s {
@@ -494,6 +523,18 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
                     in_range(key, v, 0.0, 10.0, "m")?;
                 }
             }
+            // centres closer than two radii would place overlapping bubbles at t = 0
+            if let Some(s) = p.min_spacing_m.filter(|&s| s <= 2.0 * r0) {
+                return Err(err(
+                    "population.min_spacing_m",
+                    format!(
+                        "{} m lets bubbles of R0 = {} m overlap at t = 0; give more than 2·R0 = {} m (default 4·R0)",
+                        num(s),
+                        num(r0),
+                        num(2.0 * r0)
+                    ),
+                ));
+            }
             BubblePlacement::Random {
                 count: p.count,
                 initial_radius: r0,
@@ -513,8 +554,26 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
                     ),
                 ));
             }
+            // the line of each [[bubbles]] table, for messages about one bubble
+            let lines = table_lines(text, "bubbles");
+            let at = |i: usize, e: InputError| match lines.get(i) {
+                Some(&l) => e.at_line(l),
+                None => e,
+            };
             for (i, b) in raw.bubbles.iter().enumerate() {
-                if let Some(v) = b.position_m.iter().find(|v| !v.is_finite()) {
+                let Ok(position) = <[f64; 3]>::try_from(b.position_m.as_slice()) else {
+                    return Err(at(
+                        i,
+                        err(
+                            "bubbles.position_m",
+                            format!(
+                                "bubble {i}: expected 3 numbers [x, y, z] in metres, found {}",
+                                b.position_m.len()
+                            ),
+                        ),
+                    ));
+                };
+                if let Some(v) = position.iter().find(|v| !v.is_finite()) {
                     return Err(err(
                         "bubbles.position_m",
                         format!("bubble {i}: position {v} m is not a finite number"),
@@ -528,7 +587,35 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
                     1e-2,
                     "m",
                 )?;
-                list.push((b.position_m, r0));
+                list.push((position, r0));
+            }
+            // bubbles that touch or overlap at t = 0 would count the shared volume twice and
+            // coalesce on the first step (the simulation merges bubbles at a distance ≤ R1 + R2)
+            for j in 0..list.len() {
+                for i in 0..j {
+                    let ((p, ri), (q, rj)) = (list[i], list[j]);
+                    let d = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
+                    if d <= ri + rj {
+                        let line = |k: usize| {
+                            lines
+                                .get(k)
+                                .map_or(String::new(), |l| format!(" (line {l})"))
+                        };
+                        return Err(at(
+                            j,
+                            err(
+                                "bubbles",
+                                format!(
+                                    "bubble {j}{} overlaps bubble {i}{} at t = 0: their centres are {} m apart, not more than the sum of their radii {} m; move one or make them smaller",
+                                    line(j),
+                                    line(i),
+                                    num(d),
+                                    num(ri + rj)
+                                ),
+                            ),
+                        ));
+                    }
+                }
             }
             BubblePlacement::Explicit(list)
         }

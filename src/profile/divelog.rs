@@ -9,10 +9,16 @@
 //! Rules (FORMATS.md §0 and the quirks listed there):
 //! - Elements and attributes are matched by lower-cased local name (namespaces, prefixes and
 //!   upper-case `UDDF` roots are ignored), children by name, never by position; unknown
-//!   elements are skipped. Numbers may carry units (`'30.0 m'`), exponents or decimal commas.
-//! - Samples are sorted by time, duplicate times merged (the last wins), negative depths
-//!   clamped to 0; if the first sample is not at time 0, a surface point (0 s, 0 m) is
-//!   prepended (recorded in [`ImportedDive::notes`]).
+//!   elements are skipped. Numbers may carry exponents or decimal commas, and units: depths
+//!   `m` (or none) or `ft`; pressures `bar` (or none in Subsurface XML, Pa in UDDF), `mbar`,
+//!   `hPa`, `kPa`, `Pa`, `psi`, `atm`; densities `g/l`, `kg/m3`; UDDF times `s` (or none),
+//!   `min`, `h`. Any other unit, or a value that is there but not a finite
+//!   number (an empty UDDF `<depth>`), is refused naming its line and field.
+//! - Samples are sorted by time (samples out of time order are noted with the line of the
+//!   first), duplicate times merged (the last wins, noted), negative depths clamped to 0
+//!   (noted); a sample or waypoint without a time or a depth is skipped (noted with its line);
+//!   if the first sample is not at time 0, a surface point (0 s, 0 m) is prepended (recorded in
+//!   [`ImportedDive::notes`]).
 //! - Surface pressure and water density are taken from the file when present and plausible
 //!   (0.5–1.1 bar, 990–1040 kg/m³), else 101 325 Pa and 1030 kg/m³ (Subsurface's sea-water
 //!   default), noted. A UDDF altitude without a surface pressure gives the ISA pressure.
@@ -29,7 +35,7 @@ use quick_xml::events::Event;
 use super::PressureHistory;
 use crate::error::InputError;
 use crate::gas::GasMix;
-use crate::units::{ATM_PA, BAR_PA, STANDARD_GRAVITY};
+use crate::units::{ATM_PA, BAR_PA, PSI_PA, STANDARD_GRAVITY};
 
 /// Default water density, kg/m³ (Subsurface's sea-water default, `core/dive.cpp`, per FORMATS.md §2.6).
 pub const DEFAULT_DENSITY_KG_M3: f64 = 1030.0;
@@ -252,9 +258,11 @@ impl Node {
         }
     }
     fn text_of(&self, name: &str) -> Option<&str> {
-        self.child(name)
-            .map(|c| c.text.trim())
-            .filter(|t| !t.is_empty())
+        self.child_with_text(name).map(|c| c.text.trim())
+    }
+    /// The first child `name` if it holds some text.
+    fn child_with_text(&self, name: &str) -> Option<&Node> {
+        self.child(name).filter(|c| !c.text.trim().is_empty())
     }
 }
 
@@ -367,6 +375,72 @@ fn num(s: &str) -> Option<f64> {
     tok.parse::<f64>().ok().filter(|v| v.is_finite())
 }
 
+/// What a dive-log number with a unit measures ([`measure`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Quantity {
+    /// A depth, m: `m` (or no unit), `ft`.
+    Length,
+    /// A pressure, Pa: `Pa`, `hPa`, `mbar`, `kPa`, `bar`, `psi`, `atm`; a bare number is in
+    /// `bare_pa` Pa per unit (bar in Subsurface XML, Pa in UDDF).
+    Pressure { bare_pa: f64 },
+    /// A water density or Subsurface salinity, kg/m³: `g/l`, `kg/m3` (or no unit).
+    Density,
+    /// A UDDF time, s: `s` (or no unit), `min`, `h`.
+    Time,
+}
+
+/// The units [`measure`] converts, for messages.
+fn known_units(q: Quantity) -> &'static str {
+    match q {
+        Quantity::Length => "m or ft",
+        Quantity::Pressure { .. } => "Pa, hPa, mbar, kPa, bar, psi or atm",
+        Quantity::Density => "g/l or kg/m3",
+        Quantity::Time => "s, min or h",
+    }
+}
+
+/// A number with an optional unit (`'21.1 m'`, `'69 ft'`, `'1012 mbar'`, `'30.0m'`, `'1,5'`),
+/// converted to SI (m, Pa, kg/m³, s). A unit decophantom does not know (`'21.1 furlong'`) is
+/// refused rather than read as the default one; the message says what was found.
+fn measure(s: &str, q: Quantity) -> Result<f64, String> {
+    let t = s.trim();
+    // the number: up to the last digit, decimal point or comma before the unit
+    let end = t
+        .char_indices()
+        .take_while(|(_, c)| c.is_ascii_digit() || matches!(c, '.' | ',' | '+' | '-' | 'e' | 'E'))
+        .map(|(i, c)| i + c.len_utf8())
+        .last()
+        .unwrap_or(0);
+    // an exponent marker without digits after it belongs to the unit (none starts with e)
+    let end = t[..end].trim_end_matches(['e', 'E', '+', '-']).len();
+    let (number, unit) = (t[..end].replace(',', "."), t[end..].trim());
+    let Some(v) = number.parse::<f64>().ok().filter(|v| v.is_finite()) else {
+        return Err(format!("'{s}' is not a finite number"));
+    };
+    let factor = match (q, unit) {
+        (Quantity::Length, "" | "m") => 1.0,
+        (Quantity::Length, "ft") => 0.3048,
+        (Quantity::Pressure { bare_pa }, "") => bare_pa,
+        (Quantity::Pressure { .. }, "Pa" | "pa") => 1.0,
+        (Quantity::Pressure { .. }, "hPa" | "hpa" | "mbar") => 100.0,
+        (Quantity::Pressure { .. }, "kPa" | "kpa") => 1000.0,
+        (Quantity::Pressure { .. }, "bar") => BAR_PA,
+        (Quantity::Pressure { .. }, "psi") => PSI_PA,
+        (Quantity::Pressure { .. }, "atm") => ATM_PA,
+        (Quantity::Density, "" | "g/l" | "g/L" | "kg/m3" | "kg/m³") => 1.0,
+        (Quantity::Time, "" | "s") => 1.0,
+        (Quantity::Time, "min") => 60.0,
+        (Quantity::Time, "h") => 3600.0,
+        _ => {
+            return Err(format!(
+                "'{s}' has the unit '{unit}', which decophantom does not read here; write the value in {}",
+                known_units(q)
+            ))
+        }
+    };
+    Ok(v * factor)
+}
+
 /// A gas fraction: `31.0%` or `31` (> 1: percent) or `0.31`.
 fn fraction(s: &str) -> Option<f64> {
     let v = num(s)?;
@@ -470,7 +544,32 @@ fn check_sample(
     Ok(())
 }
 
-/// Sort, merge duplicate times (last wins), clamp negative depths, prepend the surface.
+/// Samples left out because they lack a time or a depth (Subsurface writes both on every
+/// sample; a UDDF waypoint carries both): counted, with the line of the first, for a note.
+#[derive(Debug, Default)]
+struct Skipped {
+    count: usize,
+    first_offset: Option<usize>,
+}
+
+impl Skipped {
+    fn add(&mut self, node: &Node) {
+        self.count += 1;
+        self.first_offset.get_or_insert(node.offset);
+    }
+    fn note(&self, cx: &Cx, what: &str, notes: &mut Vec<String>) {
+        if let Some(off) = self.first_offset {
+            notes.push(format!(
+                "{} {what} skipped (the first on line {})",
+                self.count,
+                line_at(cx.text, off)
+            ));
+        }
+    }
+}
+
+/// Sort (noting samples earlier than the one before them, with the line of the first),
+/// merge duplicate times (last wins), clamp negative depths, prepend the surface.
 fn normalise(
     mut samples: Vec<(f64, f64, usize)>,
     cx: &Cx,
@@ -484,6 +583,25 @@ fn normalise(
         .in_file(cx.path)
         .at_line(line_at(cx.text, off))
         .field("time"));
+    }
+    // a sample earlier than the latest one before it in the file: the log is out of order
+    let mut latest = f64::NEG_INFINITY;
+    let mut unsorted = 0;
+    let mut first_unsorted = None;
+    for &(t, _, off) in &samples {
+        if t < latest {
+            unsorted += 1;
+            first_unsorted.get_or_insert((t, latest, off));
+        }
+        latest = latest.max(t);
+    }
+    if let Some((t, before, off)) = first_unsorted {
+        notes.push(format!(
+            "{unsorted} sample(s) out of time order (the first on line {}: {} s after {} s); sorted by time",
+            line_at(cx.text, off),
+            crate::error::num(t),
+            crate::error::num(before)
+        ));
     }
     samples.sort_by(|a, b| a.0.total_cmp(&b.0));
     let mut out: Vec<(f64, f64)> = Vec::with_capacity(samples.len());
@@ -589,36 +707,39 @@ fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
         let closed_circuit = dc
             .and_then(|d| d.attr("dctype"))
             .is_some_and(|t| matches!(t.to_ascii_uppercase().as_str(), "CCR" | "PSCR"));
-        let surface = src
-            .child("surface")
-            .and_then(|s| s.attr("pressure"))
-            .or_else(|| dive.attr("airpressure"))
-            .and_then(num)
-            .map(|bar| bar * BAR_PA);
-        let density = src
-            .child("water")
-            .and_then(|w| w.attr("salinity"))
-            .or_else(|| dive.attr("watersalinity"))
-            .and_then(num);
+        // a value with a unit is converted (a bare number is in Subsurface's own unit: bar,
+        // g/l); an unknown unit or an unreadable number is refused naming its line
+        let read = |found: Option<(&Node, &str, &str)>, q: Quantity| {
+            found
+                .map(|(n, v, field)| measure(v, q).map_err(|m| cx.err(n, field, m)))
+                .transpose()
+        };
+        let surface = read(
+            attr_of(src.child("surface"), "pressure", "surface.pressure")
+                .or_else(|| attr_of(Some(dive), "airpressure", "dive.airpressure")),
+            Quantity::Pressure { bare_pa: BAR_PA },
+        )?;
+        let density = read(
+            attr_of(src.child("water"), "salinity", "water.salinity")
+                .or_else(|| attr_of(Some(dive), "watersalinity", "dive.watersalinity")),
+            Quantity::Density,
+        )?;
         let (surface_pa, density_kg_m3) = environment(surface, density, &mut notes);
 
         // a sample without a time or depth (temperature only) is skipped; one whose time or
         // depth is there but not a finite number is an error naming its line
         let mut raw: Vec<(f64, f64, usize)> = Vec::new();
+        let mut skipped = Skipped::default();
         for s in src.children_named("sample") {
             let (Some(t), Some(d)) = (s.attr("time"), s.attr("depth")) else {
+                skipped.add(s);
                 continue;
             };
             let Some(t) = time_s(t) else {
                 return Err(cx.err(s, "sample.time", format!("time '{t}' is not a finite time")));
             };
-            let Some(d) = num(d) else {
-                return Err(cx.err(
-                    s,
-                    "sample.depth",
-                    format!("depth '{d}' is not a finite number"),
-                ));
-            };
+            let d = measure(d, Quantity::Length)
+                .map_err(|m| cx.err(s, "sample.depth", format!("depth {m}")))?;
             check_sample(
                 cx,
                 s,
@@ -629,6 +750,7 @@ fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
             )?;
             raw.push((t, d, s.offset));
         }
+        skipped.note(cx, "sample(s) without a time or a depth", &mut notes);
         let first_sample = raw.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
         let samples = normalise(raw, cx, dive, &mut notes)?;
 
@@ -673,11 +795,11 @@ fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
         };
         let (initial_gas, switches) = settle_switches(events, first_sample, default_initial);
 
-        let stated_max_depth_m = src
-            .child("depth")
-            .and_then(|d| d.attr("max"))
-            .or_else(|| dive.child("depth").and_then(|d| d.attr("max")))
-            .and_then(num);
+        let stated_max_depth_m = read(
+            attr_of(src.child("depth"), "max", "depth.max")
+                .or_else(|| attr_of(dive.child("depth"), "max", "depth.max")),
+            Quantity::Length,
+        )?;
         let start = match (dive.attr("date"), dive.attr("time")) {
             (Some(d), Some(t)) => Some(format!("{d} {t}")),
             (Some(d), None) => Some(d.to_string()),
@@ -703,6 +825,15 @@ fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
         });
     }
     Ok(dives)
+}
+
+/// Attribute `key` of `node` with the node and the field name for messages.
+fn attr_of<'a>(
+    node: Option<&'a Node>,
+    key: &str,
+    field: &'a str,
+) -> Option<(&'a Node, &'a str, &'a str)> {
+    node.and_then(|n| n.attr(key).map(|v| (n, v, field)))
 }
 
 /// Index of the listed gas nearest to `target` (by O2 alone when He is unknown, as in
@@ -777,7 +908,9 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
         let mut ps = Vec::new();
         t.find_all("profile", &mut ps);
         for p in ps {
-            if let (Some(id), Some(d)) = (p.attr("id"), p.text_of("density").and_then(num)) {
+            if let (Some(id), Some(dn)) = (p.attr("id"), p.child_with_text("density")) {
+                let d = measure(&dn.text, Quantity::Density)
+                    .map_err(|m| cx.err(dn, "profile.density", format!("density {m}")))?;
                 profile_density.push((id.trim().to_string(), d));
             }
         }
@@ -802,9 +935,18 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
             ibd.and_then(|i| i.text_of(name))
                 .or_else(|| dive.text_of(name))
         };
-        let mut surface = before("surfacepressure").and_then(num);
+        // a number of the dive (UDDF: SI units; another known unit is converted, an unknown
+        // one or an unreadable number is refused naming its line)
+        let value_in = |parent: Option<&Node>, name: &str, q: Quantity| {
+            parent
+                .and_then(|i| i.child_with_text(name))
+                .or_else(|| dive.child_with_text(name))
+                .map(|n| measure(&n.text, q).map_err(|m| cx.err(n, name, format!("{name} {m}"))))
+                .transpose()
+        };
+        let mut surface = value_in(ibd, "surfacepressure", Quantity::Pressure { bare_pa: 1.0 })?;
         if surface.is_none() {
-            if let Some(alt) = before("altitude").and_then(num) {
+            if let Some(alt) = value_in(ibd, "altitude", Quantity::Length)? {
                 let p = isa_pressure_pa(alt);
                 notes.push(format!(
                     "surface pressure from the altitude {alt} m (ISA): {p:.0} Pa"
@@ -818,17 +960,31 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
                 profile_density.iter().find(|(id, _)| id == r).map(|p| p.1)
             })
         });
-        let density = before("density").and_then(num).or(linked_density);
+        let density = value_in(ibd, "density", Quantity::Density)?.or(linked_density);
         let (surface_pa, density_kg_m3) = environment(surface, density, &mut notes);
 
         let mut raw = Vec::new();
         let mut events = Vec::new();
         let mut closed_circuit = false;
         let mut first_switch_on_first_wp = false;
+        let mut skipped = Skipped::default();
         if let Some(samples) = dive.child("samples") {
             for (k, wp) in samples.children_named("waypoint").enumerate() {
-                let t = wp.text_of("divetime").and_then(num);
-                let d = wp.text_of("depth").and_then(num);
+                // an element that is there must hold a number: an empty or unreadable one is
+                // refused naming its line (a waypoint without it is skipped, with a note)
+                let value = |name: &str, q: Quantity, field: &str| match wp.child(name) {
+                    None => Ok(None),
+                    Some(n) if n.text.trim().is_empty() => Err(cx.err(
+                        n,
+                        field,
+                        format!("<{name}> is empty; give a number or delete the waypoint"),
+                    )),
+                    Some(n) => measure(&n.text, q)
+                        .map(Some)
+                        .map_err(|m| cx.err(n, field, format!("{name} {m}"))),
+                };
+                let t = value("divetime", Quantity::Time, "waypoint.divetime")?;
+                let d = value("depth", Quantity::Length, "waypoint.depth")?;
                 if let Some(sm) = wp.child("switchmix") {
                     let r = sm.attr("ref").unwrap_or("").trim();
                     let Some(idx) = ids.iter().position(|id| id == r) else {
@@ -860,9 +1016,12 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
                         density_kg_m3,
                     )?;
                     raw.push((t, d, wp.offset));
+                } else {
+                    skipped.add(wp);
                 }
             }
         }
+        skipped.note(cx, "waypoint(s) without a divetime or a depth", &mut notes);
         let first_sample = raw.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
         let samples = normalise(raw, cx, dive, &mut notes)?;
         if !first_switch_on_first_wp && !no_gasdefs && gases.len() > 1 {
@@ -874,10 +1033,6 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
         let (initial_gas, switches) = settle_switches(events, first_sample, 0);
 
         let iad = dive.child("informationafterdive");
-        let after = |name: &str| {
-            iad.and_then(|i| i.text_of(name))
-                .or_else(|| dive.text_of(name))
-        };
         let start = before("datetime").map(str::to_string).or_else(|| {
             let d = dive.child("date")?;
             let y = d.text_of("year")?;
@@ -901,8 +1056,8 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
             initial_gas,
             switches,
             samples,
-            stated_max_depth_m: after("greatestdepth").and_then(num),
-            stated_duration_s: after("diveduration").and_then(num),
+            stated_max_depth_m: value_in(iad, "greatestdepth", Quantity::Length)?,
+            stated_duration_s: value_in(iad, "diveduration", Quantity::Time)?,
             notes,
             line: line_at(cx.text, dive.offset),
         });
@@ -929,6 +1084,40 @@ mod tests {
         // ISA at 0 m is 1 atm; at 1000 m about 89 875 Pa (ICAO standard atmosphere table).
         assert!((isa_pressure_pa(0.0) - ATM_PA).abs() < 1e-9);
         assert!((isa_pressure_pa(1000.0) - 89_875.0).abs() < 5.0);
+    }
+
+    #[test]
+    fn units_are_converted_and_unknown_ones_refused() {
+        let bar = Quantity::Pressure { bare_pa: BAR_PA };
+        assert_eq!(measure("21.1 m", Quantity::Length), Ok(21.1));
+        assert_eq!(measure("30.0m", Quantity::Length), Ok(30.0));
+        assert_eq!(measure("21.1", Quantity::Length), Ok(21.1));
+        // 1 ft = 0.3048 m exactly (international foot)
+        assert!((measure("100 ft", Quantity::Length).unwrap() - 30.48).abs() < 1e-12);
+        assert_eq!(measure("1.012 bar", bar), Ok(101_200.0));
+        assert_eq!(measure("1.012", bar), Ok(101_200.0));
+        assert_eq!(measure("1012 mbar", bar), Ok(101_200.0));
+        assert_eq!(measure("101.2 kPa", bar), Ok(101_200.0));
+        assert_eq!(measure("101200 Pa", bar), Ok(101_200.0));
+        assert_eq!(
+            measure("101100", Quantity::Pressure { bare_pa: 1.0 }),
+            Ok(101_100.0)
+        );
+        assert_eq!(measure("1,5 bar", bar), Ok(150_000.0));
+        assert_eq!(measure("1025 g/l", Quantity::Density), Ok(1025.0));
+        assert_eq!(measure("10 min", Quantity::Time), Ok(600.0));
+        assert_eq!(measure("1e3", Quantity::Time), Ok(1000.0));
+        for (bad, q) in [
+            ("21.1 furlong", Quantity::Length),
+            ("21.1 bar", Quantity::Length),
+            ("1.012 torr", bar),
+            ("1 MPa", bar),
+            ("1025 lb/gal", Quantity::Density),
+            ("nan m", Quantity::Length),
+            ("", Quantity::Length),
+        ] {
+            assert!(measure(bad, q).is_err(), "{bad}");
+        }
     }
 
     #[test]

@@ -5,7 +5,7 @@
 //! a UTF-8 byte-order mark, no final newline, and empty lines at the very end.
 //! Refused, with file and line: an empty line between data lines, a line that is not exactly
 //! two numbers, a time that is negative or not strictly after the previous one, a first time
-//! other than 0, and a pressure that is not positive in absolute terms.
+//! other than 0, and an absolute pressure outside 1 kPa ..= 200 bar.
 //! The file carries no units: the caller gives them ([`LegacyUnits`]).
 
 use std::path::Path;
@@ -166,6 +166,18 @@ pub fn parse(text: &str, path: &Path, units: &LegacyUnits) -> Result<PressureHis
                 format!(
                     "{v} in {:?} is {p} Pa absolute (surface {} Pa); absolute pressure must be positive: check --units",
                     units.pressure, units.surface_pa
+                ),
+            ));
+        }
+        if p < super::MIN_AMBIENT_PA {
+            return Err(err(
+                n,
+                "value",
+                format!(
+                    "{} in {:?}: {}",
+                    crate::error::num(v),
+                    units.pressure,
+                    super::below_minimum_message(p)
                 ),
             ));
         }

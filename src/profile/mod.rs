@@ -40,6 +40,33 @@ pub const MAX_DURATION_S: f64 = 30.0 * 86400.0;
 /// Highest absolute ambient pressure accepted, Pa (200 bar, about 2 000 m of sea water).
 pub const MAX_AMBIENT_PA: f64 = 2e7;
 
+/// Lowest absolute ambient pressure accepted, Pa (1 kPa). Below it the water of a gel boils
+/// even at 7 °C (the vapour pressure of water is 1.0 kPa there, 6.3 kPa at 37 °C), so the
+/// model of gas bubbles in a liquid gel does not hold; it is far below any altitude or
+/// hypobaric chamber (19 kPa at 12 000 m, the Armstrong limit 6.3 kPa). A near-vacuum (1e-10 Pa)
+/// would otherwise make the time steps, limited to a fraction of the ambient pressure, endless.
+pub const MIN_AMBIENT_PA: f64 = 1e3;
+
+/// The message for an absolute pressure below [`MIN_AMBIENT_PA`].
+pub fn below_minimum_message(p: f64) -> String {
+    format!(
+        "{} Pa absolute is below the accepted {} Pa (1 kPa: below it the gel's water boils); check the unit or the sign",
+        crate::error::num(p),
+        crate::error::num(MIN_AMBIENT_PA)
+    )
+}
+
+/// The message for a water-vapour pressure at or above the lowest ambient pressure of a
+/// profile: the faces would hold no gas at all there.
+pub fn vapour_above_ambient_message(vapour_pa: f64, ambient_pa: f64, at_s: f64) -> String {
+    format!(
+        "water-vapour pressure {} Pa is not below the ambient pressure {} Pa at t = {} s; the gas at the faces is (ambient − vapour), so the vapour must stay below the lowest ambient pressure of the profile",
+        crate::error::num(vapour_pa),
+        crate::error::num(ambient_pa),
+        crate::error::num(at_s)
+    )
+}
+
 /// Most breakpoints a history may have (a repeated cycle is counted whole).
 pub const MAX_BREAKPOINTS: usize = 1_000_000;
 
@@ -171,6 +198,24 @@ pub fn load_with_notes(
 /// `opts.dive`, followed by [`DIVE_LOG_WATCH_S`] at the surface; anything else as a legacy two-column file with [`legacy::read`], which needs
 /// `opts.time_unit` and `opts.pressure_unit`.
 pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputError> {
+    // what is wrong with the path comes first: a folder given without --units is a folder,
+    // not a legacy file that lacks units
+    match std::fs::metadata(path) {
+        Err(e) => {
+            return Err(
+                InputError::new(format!("cannot read the profile: {e}; check the path"))
+                    .in_file(path),
+            )
+        }
+        Ok(m) if m.is_dir() => {
+            return Err(InputError::new(
+                "this is a folder, not a profile; give a TOML profile, a legacy two-column text file or a dive log (.xml, .ssrf, .uddf)",
+            )
+            .in_file(path))
+        }
+        Ok(_) => {}
+    }
+    let vapour = vapour_option(opts)?;
     let ext = path
         .extension()
         .map(|e| e.to_string_lossy().to_ascii_lowercase())
@@ -199,8 +244,12 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputErr
             .field(*what));
         }
         let dive = select_dive(path, divelog::read(path)?, opts.dive)?;
-        let (h, _) = dive_log_history(&dive, opts.vapour_pa.unwrap_or(0.0), DIVE_LOG_WATCH_S)
-            .map_err(|e| e.in_file(path))?;
+        let (mut h, _) =
+            dive_log_history(&dive, 0.0, DIVE_LOG_WATCH_S).map_err(|e| e.in_file(path))?;
+        if let Some(v) = vapour {
+            vapour_below_ambient(&h, v)?;
+            h.vapour_pa = v;
+        }
         return Ok(h);
     }
     if ext == "toml" {
@@ -243,10 +292,42 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputErr
     if let Some(g) = opts.gas {
         u.gas = g;
     }
-    if let Some(v) = opts.vapour_pa {
-        u.vapour_pa = v;
+    let mut h = legacy::read(path, &u)?;
+    if let Some(v) = vapour {
+        vapour_below_ambient(&h, v)?;
+        h.vapour_pa = v;
     }
-    legacy::read(path, &u)
+    Ok(h)
+}
+
+/// The water-vapour option (`--vapour-pa`), checked: 0 ≤ value < 100 000 Pa. It comes from
+/// the command line, so a bad value names the option, not the profile file.
+fn vapour_option(opts: &LoadOptions) -> Result<Option<f64>, InputError> {
+    match opts.vapour_pa {
+        None => Ok(None),
+        Some(v) if (0.0..1e5).contains(&v) => Ok(Some(v)),
+        Some(v) => Err(InputError::new(format!(
+            "water-vapour pressure {} Pa is out of range 0..100000 (0 for chamber gas, about 6270 for alveolar gas at 37 °C)",
+            crate::error::num(v)
+        ))
+        .in_file("<command line>")
+        .field("--vapour-pa")),
+    }
+}
+
+/// The water-vapour option against the history it is applied to: below its lowest ambient
+/// pressure ([`vapour_above_ambient_message`]), else an error naming the option.
+fn vapour_below_ambient(h: &PressureHistory, vapour_pa: f64) -> Result<(), InputError> {
+    match h.ambient_pa.iter().position(|&p| p <= vapour_pa) {
+        None => Ok(()),
+        Some(i) => Err(InputError::new(vapour_above_ambient_message(
+            vapour_pa,
+            h.ambient_pa[i],
+            h.times_s[i],
+        ))
+        .in_file("<command line>")
+        .field("--vapour-pa")),
+    }
 }
 
 /// The message for a history longer than [`MAX_DURATION_S`].
@@ -265,7 +346,7 @@ pub fn duration_message(end_s: f64) -> String {
 pub struct PressureHistory {
     /// Breakpoint times, s, strictly increasing, starting at 0.
     pub times_s: Vec<f64>,
-    /// Absolute ambient pressure at each breakpoint, Pa (> 0).
+    /// Absolute ambient pressure at each breakpoint, Pa ([`MIN_AMBIENT_PA`] ..= [`MAX_AMBIENT_PA`]).
     pub ambient_pa: Vec<f64>,
     /// Gas in force on segment i (from `times_s[i]` to `times_s[i+1]`); length = breakpoints − 1
     /// (a single-point history has one entry).
@@ -306,7 +387,9 @@ pub struct Saturation {
 }
 
 impl PressureHistory {
-    /// Build and check a history: times strictly increasing from 0, pressures positive and finite.
+    /// Build and check a history: times strictly increasing from 0, pressures in
+    /// [`MIN_AMBIENT_PA`] ..= [`MAX_AMBIENT_PA`], water vapour in 0..1e5 Pa and below every
+    /// ambient pressure.
     pub fn new(
         label: impl Into<String>,
         times_s: Vec<f64>,
@@ -361,6 +444,17 @@ impl PressureHistory {
         if let Some((i, p)) = ambient_pa
             .iter()
             .enumerate()
+            .find(|(_, p)| **p < MIN_AMBIENT_PA)
+        {
+            return Err(format!(
+                "pressure at point {}: {}",
+                i + 1,
+                below_minimum_message(*p)
+            ));
+        }
+        if let Some((i, p)) = ambient_pa
+            .iter()
+            .enumerate()
             .find(|(_, p)| **p > MAX_AMBIENT_PA)
         {
             return Err(format!(
@@ -376,6 +470,13 @@ impl PressureHistory {
             return Err(format!(
                 "water-vapour pressure {vapour_pa} Pa is out of range 0..1e5"
             ));
+        }
+        if let Some((i, p)) = ambient_pa
+            .iter()
+            .enumerate()
+            .find(|(_, p)| **p <= vapour_pa)
+        {
+            return Err(vapour_above_ambient_message(vapour_pa, *p, times_s[i]));
         }
         let saturation = Saturation {
             gas: gas[0],
@@ -588,6 +689,18 @@ mod tests {
         assert!((h.inspired_partial_pressure_on(Gas::N2, seg, 100.0) - 0.79 * 2e5).abs() < 1e-6);
         // what the faces took before the fix at the step's end: the next segment's gas
         assert_eq!(h.inspired_partial_pressure(Gas::N2, 100.0), 0.0);
+    }
+
+    #[test]
+    fn pressures_below_1_kpa_and_vapour_at_ambient_are_refused() {
+        let h = |p: f64, vapour: f64| {
+            PressureHistory::with_gas("t", vec![0.0, 10.0], vec![1e5, p], GasMix::AIR, vapour)
+        };
+        assert!(h(MIN_AMBIENT_PA, 0.0).is_ok());
+        assert!(h(999.0, 0.0).unwrap_err().contains("below the accepted"));
+        assert!(h(1e-10, 0.0).is_err());
+        assert!(h(2e4, 6270.0).is_ok());
+        assert!(h(2e4, 2e4).unwrap_err().contains("not below the ambient"));
     }
 
     #[test]

@@ -14,7 +14,7 @@ use ::toml::Spanned;
 use serde::Deserialize;
 
 use super::PressureHistory;
-use crate::error::{line_of_key, toml_error, InputError};
+use crate::error::{line_of_key, toml_error_with_path, InputError};
 use crate::gas::GasMix;
 use crate::units::{PressureUnit, TimeUnit, ATM_PA};
 
@@ -41,8 +41,9 @@ pub struct RawProfile {
     pub gas: Option<Spanned<String>>,
     /// Water-vapour pressure subtracted at the open faces, Pa (default 0: chamber gas).
     pub water_vapour_pa: Option<Spanned<f64>>,
-    /// Breakpoints `[time, pressure]`, piecewise linear (exclusive with `leg`).
-    pub points: Option<Vec<Spanned<[f64; 2]>>>,
+    /// Breakpoints `[time, pressure]`, piecewise linear (exclusive with `leg`); read as lists
+    /// so that a row with a third number is refused, not cut to two.
+    pub points: Option<Vec<Spanned<Vec<f64>>>>,
     /// Starting pressure for `leg` profiles, in `pressure_unit` (default: the surface).
     pub start: Option<Spanned<f64>>,
     /// Legs (exclusive with `points`).
@@ -100,7 +101,8 @@ pub fn read(path: &Path) -> Result<TomlProfile, InputError> {
 
 /// Parse and validate TOML profile text; `path` is used in error messages and for the default name.
 pub fn parse(text: &str, path: &Path) -> Result<TomlProfile, InputError> {
-    let raw: RawProfile = ::toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+    let raw: RawProfile =
+        ::toml::from_str(text).map_err(|e| toml_error_with_path(path, text, &e))?;
     validate(raw, text, path).map_err(|e| crate::error::ensure_line(e, text))
 }
 
@@ -175,6 +177,18 @@ pub fn validate(raw: RawProfile, text: &str, path: &Path) -> Result<TomlProfile,
                     format!("surface pressure {v} Pa must be positive (sea level is 101325)"),
                 ));
             }
+            if !(super::MIN_AMBIENT_PA..=super::MAX_AMBIENT_PA).contains(&v) {
+                return Err(cx.err(
+                    s.span().start,
+                    "surface_pressure_pa",
+                    format!(
+                        "surface pressure {} Pa is outside the accepted {} ..= {} Pa (sea level is 101325 Pa; is it in kPa or bar?)",
+                        crate::error::num(v),
+                        crate::error::num(super::MIN_AMBIENT_PA),
+                        crate::error::num(super::MAX_AMBIENT_PA)
+                    ),
+                ));
+            }
             v
         }
         None => ATM_PA,
@@ -231,8 +245,17 @@ pub fn validate(raw: RawProfile, text: &str, path: &Path) -> Result<TomlProfile,
                 ));
             }
             for p in points {
-                let [t, v] = *p.get_ref();
                 let off = p.span().start;
+                let &[t, v] = p.get_ref().as_slice() else {
+                    return Err(cx.err(
+                        off,
+                        "points",
+                        format!(
+                            "a point has {} number(s); expected 2 numbers [time, pressure]",
+                            p.get_ref().len()
+                        ),
+                    ));
+                };
                 if !t.is_finite() || !v.is_finite() {
                     return Err(cx.err(
                         off,
@@ -400,6 +423,23 @@ pub fn validate(raw: RawProfile, text: &str, path: &Path) -> Result<TomlProfile,
                 ),
             ));
         }
+        if p < super::MIN_AMBIENT_PA {
+            return Err(cx.err(
+                off,
+                pressure_field,
+                format!("point {}: {}", k + 1, super::below_minimum_message(p)),
+            ));
+        }
+    }
+    // the water vapour is taken out of the ambient pressure at the faces: it must stay below
+    // the lowest ambient pressure, or no gas would be left there
+    if let (Some(v), Some(&(t, p, _))) = (&raw.water_vapour_pa, pts.iter().find(|q| q.1 <= vapour))
+    {
+        return Err(cx.err(
+            v.span().start,
+            "water_vapour_pa",
+            super::vapour_above_ambient_message(vapour, p, t),
+        ));
     }
 
     // One rule for every reader: at least two points, and no longer than the duration limit.
@@ -636,6 +676,64 @@ gas = "o2"
         // without a switch at time 0 the start is the first segment's gas, as before
         let r = p("time_unit = \"s\"\npressure_unit = \"bar\"\ngas = \"ean32\"\npoints = [[0, 1], [10, 1]]\n").unwrap();
         assert_eq!(r.history.saturation.gas, r.history.gas[0]);
+    }
+
+    #[test]
+    fn rows_of_three_numbers_pressures_below_1_kpa_and_vapour_above_ambient_are_refused() {
+        let head = "time_unit = \"s\"\npressure_unit = \"pa\"\n";
+        let e = p(&format!(
+            "{head}points = [\n [0, 1e5],\n [10, 1e5, 99],\n]\n"
+        ))
+        .unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(5), Some("points")),
+            "{e}"
+        );
+        assert!(e.message.contains("expected 2 numbers"), "{e}");
+        let e = p(&format!("{head}points = [[0, 1e5, 5, 7], [10, 1e5]]\n")).unwrap_err();
+        assert!(e.message.contains("expected 2 numbers"), "{e}");
+        // 1 kPa is accepted, anything below it refused on the point's own line
+        assert!(p(&format!("{head}points = [[0, 1e5], [10, 1000]]\n")).is_ok());
+        let e = p(&format!("{head}points = [[0, 1e5],\n[10, 999]]\n")).unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(4), Some("points")),
+            "{e}"
+        );
+        let e = p(&format!("{head}points = [[0, 1e5],\n[10, 1e-10]]\n")).unwrap_err();
+        assert_eq!(e.line, Some(4), "{e}");
+        // water vapour at or above the lowest ambient pressure leaves no gas at the faces
+        let e = p(&format!(
+            "{head}water_vapour_pa = 50000\npoints = [[0, 101325], [10, 20000]]\n"
+        ))
+        .unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(3), Some("water_vapour_pa")),
+            "{e}"
+        );
+        assert!(p(&format!(
+            "{head}water_vapour_pa = 6270\npoints = [[0, 101325], [10, 20000]]\n"
+        ))
+        .is_ok());
+        // a surface pressure in kPa by mistake
+        let e = p("time_unit = \"s\"\npressure_unit = \"bar\"\nsurface_pressure_pa = 101.325\npoints = [[0, 1], [1, 1]]\n").unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(3), Some("surface_pressure_pa")),
+            "{e}"
+        );
+        // a serde type error names its key
+        let e = p(&format!(
+            "{head}points = [[0, 1e5], [1, 1e5]]\nrepeat = 2.5\n"
+        ))
+        .unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(4), Some("repeat")),
+            "{e}"
+        );
     }
 
     #[test]

@@ -258,6 +258,11 @@ fn sync_dir(dir: &Path) {
 /// folder or absent, empty or written by decophantom, hold no file the tool did not write (its
 /// manifest), and be neither an input of the run nor hold one. Also removes debris of earlier
 /// interrupted commits beside it. Errors are bad input naming `--out` (exit 2).
+///
+/// The place is checked too (missing folders above it are created at the commit): the nearest
+/// existing folder above `dir` must be a folder, not a file, and one this process can create
+/// entries in (a probe file is created and removed), so that a run is never done only to fail
+/// at the end.
 pub fn check_target(dir: &Path, inputs: &[&Path]) -> Result<(), Error> {
     let out_err = |m: String| -> Error { InputError::new(m).in_file(dir).field("--out").into() };
     let name = dir
@@ -272,6 +277,7 @@ pub fn check_target(dir: &Path, inputs: &[&Path]) -> Result<(), Error> {
         _ => PathBuf::from("."),
     };
     clean_debris(&parent, &name);
+    check_place(dir, "--out", true)?;
     // an input is the output, or lies inside it (symlinks and `..` resolved)
     let canon = |p: &Path| std::fs::canonicalize(p).ok();
     if let Some(d) = canon(dir) {
@@ -447,6 +453,229 @@ pub fn write_file_atomic_with_inputs(
     result
 }
 
+/// Check the place of an output `path` (a file or a folder) before any work, naming `flag`
+/// (`--out`, `--plot`) and the user's path in every refusal (exit 2):
+///
+/// - the folder that will hold it must exist (`create_missing = false`: a single output file),
+///   or, with `create_missing` (output folders, whose missing parents the commit creates), the
+///   nearest existing folder above it is used instead;
+/// - that folder must be a folder, not a file (`--out notes.txt/run1`);
+/// - this process must be able to create entries in it: a probe file `.NAME.tmp-PID-N` (the
+///   temporary-file pattern, so a killed process's probe is removed as debris) is created and
+///   removed at once. Permissions alone cannot tell (root, ACLs, read-only mounts).
+pub fn check_place(path: &Path, flag: &str, create_missing: bool) -> Result<(), Error> {
+    let err = |m: String| -> Error { InputError::new(m).in_file(path).field(flag).into() };
+    let parent = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    // the nearest existing entry at or above the parent, and the name to be created in it
+    let mut holder = parent.clone();
+    let mut child = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let meta = loop {
+        match std::fs::metadata(&holder) {
+            Ok(m) => break m,
+            Err(e) => {
+                let up = match holder.parent() {
+                    Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+                    Some(_) => PathBuf::from("."),
+                    None => holder.clone(),
+                };
+                if up == holder {
+                    return Err(err(format!(
+                        "no existing folder was found above '{}' ({})",
+                        parent.display(),
+                        e.kind()
+                    )));
+                }
+                child = holder
+                    .file_name()
+                    .map(|n| n.to_string_lossy().into_owned())
+                    .unwrap_or(child);
+                holder = up;
+            }
+        }
+    };
+    if !meta.is_dir() {
+        return Err(err(format!(
+            "'{}' is a file, not a folder; an output cannot be written under it: give a path in a folder",
+            holder.display()
+        )));
+    }
+    if !create_missing && holder != parent {
+        return Err(err(format!(
+            "the folder '{}' does not exist; create it first or give a path in an existing folder",
+            parent.display()
+        )));
+    }
+    let probe = holder.join(format!(
+        ".{child}.tmp-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    match std::fs::OpenOptions::new()
+        .write(true)
+        .create_new(true)
+        .open(&probe)
+    {
+        Ok(f) => {
+            drop(f);
+            let _ = std::fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => Err(err(format!(
+            "cannot create files in the folder '{}' ({}); choose a folder you can write to",
+            holder.display(),
+            e.kind()
+        ))),
+    }
+}
+
+/// How the last line of a single output file ([`marker_line`]) is written: `#` for TOML and CSV
+/// (both readers skip `#` lines), an XML/HTML comment for SVG and Markdown.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum CommentStyle {
+    /// `# …` (TOML, CSV).
+    Hash,
+    /// `<!-- … -->` (SVG, Markdown; the text holds no `--`).
+    Xml,
+}
+
+/// The last line of a single output file that `tool` (e.g. `plan`) writes with `body` above
+/// it: the 64-bit FNV-1a hash of the body, the single file's counterpart of an output folder's
+/// manifest ([`MARKER`]). A later run replaces the file only while this line still matches the
+/// lines above it ([`check_new_file`]).
+pub fn marker_line(tool: &str, body: &str, style: CommentStyle) -> String {
+    let text = format!(
+        "written by decophantom {tool}; fnv1a-64 of the lines above: {:016x} (a later {tool} replaces this file only while it is unchanged)",
+        crate::phantom::checkpoint::fnv1a(body.as_bytes())
+    );
+    match style {
+        CommentStyle::Hash => format!("# {text}\n"),
+        CommentStyle::Xml => format!("<!-- {text} -->\n"),
+    }
+}
+
+/// Whether `text` is a file `tool` wrote, unchanged since: its last line is the
+/// [`marker_line`] of the lines above it (in either comment style).
+pub fn written_unchanged(text: &str, tool: &str) -> bool {
+    let Some(body_end) = text.trim_end_matches('\n').rfind('\n').map(|i| i + 1) else {
+        return false;
+    };
+    let (body, last) = text.split_at(body_end);
+    [CommentStyle::Hash, CommentStyle::Xml]
+        .iter()
+        .any(|&st| last == marker_line(tool, body, st))
+}
+
+/// Check a single output file of `tool` (`plan --out`, `plan --plot`) before any work, naming
+/// `flag` and the user's path in every refusal (exit 2): everything [`check_file_target`]
+/// checks (not a folder, not an input), the place ([`check_place`]: an existing folder this
+/// process can write in), and the folders' manifest rule as a single file allows it: an
+/// existing file is replaced only if `tool` wrote it and it is unchanged since (its last line
+/// is its [`marker_line`]); any other existing file — a user's, one `tool` wrote and someone
+/// edited, one of an older version without the line — is refused and kept.
+pub fn check_new_file(path: &Path, inputs: &[&Path], flag: &str, tool: &str) -> Result<(), Error> {
+    let err = |m: String| -> Error { InputError::new(m).in_file(path).field(flag).into() };
+    check_file_target(path, inputs).map_err(|e| match e {
+        Error::Input(mut i) => {
+            i.field = Some(flag.to_string());
+            Error::Input(i)
+        }
+        other => other,
+    })?;
+    check_place(path, flag, false)?;
+    match std::fs::symlink_metadata(path) {
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(err(format!("cannot be checked ({})", e.kind()))),
+        Ok(m) if m.file_type().is_symlink() => {
+            return Err(err(
+                "is a symbolic link; an output never replaces one: give another file name".into(),
+            ))
+        }
+        Ok(_) => {}
+    }
+    let text = std::fs::read(path)
+        .ok()
+        .and_then(|b| String::from_utf8(b).ok());
+    match text {
+        Some(t) if written_unchanged(&t, tool) => Ok(()),
+        Some(t)
+            if t.lines()
+                .last()
+                .is_some_and(|l| l.contains(&format!("written by decophantom {tool};"))) =>
+        {
+            Err(err(format!(
+                "exists and was written by {tool} but changed since (its last line's hash no longer matches); it is never replaced: give another file name, or remove it first"
+            )))
+        }
+        _ => Err(err(format!(
+            "exists and was not written by decophantom {tool}; an existing file is never replaced: give another file name, or remove it first"
+        ))),
+    }
+}
+
+/// Write a single output file of `tool` whole or not at all, `body` followed by its
+/// [`marker_line`]: [`check_new_file`] first (again: the file may have appeared or been
+/// edited while the run went on), then the bytes go to a temporary file beside it, are flushed,
+/// and are put in place — with a hard link when nothing is there (which fails rather than
+/// replace a file that appeared in between; a rename where the file system has no hard links),
+/// else renamed over the unchanged file `tool` wrote.
+pub fn write_new_file(
+    path: &Path,
+    body: &str,
+    style: CommentStyle,
+    inputs: &[&Path],
+    flag: &str,
+    tool: &str,
+) -> Result<(), Error> {
+    use std::io::Write as _;
+    let _guard = Committing::start();
+    check_new_file(path, inputs, flag, tool)?;
+    let exists = std::fs::symlink_metadata(path).is_ok();
+    let dir = match path.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let tmp = dir.join(format!(
+        ".{name}.tmp-{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    ));
+    let bytes = format!("{body}{}", marker_line(tool, body, style));
+    let appeared = || -> Error {
+        InputError::new("a file appeared there while the run went on; it was not replaced: give another file name")
+            .in_file(path)
+            .field(flag)
+            .into()
+    };
+    let result = (|| {
+        let mut f = std::fs::File::create(&tmp).map_err(|e| io_err(path, e))?;
+        f.write_all(bytes.as_bytes()).map_err(|e| io_err(path, e))?;
+        f.sync_all().map_err(|e| io_err(path, e))?;
+        drop(f);
+        if exists {
+            return std::fs::rename(&tmp, path).map_err(|e| io_err(path, e));
+        }
+        match std::fs::hard_link(&tmp, path) {
+            Ok(()) => Ok(()),
+            Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Err(appeared()),
+            Err(_) if std::fs::symlink_metadata(path).is_ok() => Err(appeared()),
+            Err(_) => std::fs::rename(&tmp, path).map_err(|e| io_err(path, e)),
+        }
+    })();
+    let _ = std::fs::remove_file(&tmp);
+    sync_dir(&dir);
+    result
+}
+
 /// Check an output file before any work: not a folder, not one of `inputs` (symlinks and `..`
 /// resolved); removes `.NAME.tmp-PID-N` debris of dead processes beside it.
 pub fn check_file_target(path: &Path, inputs: &[&Path]) -> Result<(), Error> {
@@ -478,6 +707,26 @@ pub fn check_file_target(path: &Path, inputs: &[&Path]) -> Result<(), Error> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_single_file_is_its_tools_only_while_unchanged() {
+        for style in [CommentStyle::Hash, CommentStyle::Xml] {
+            let body = "time_min,depth_m,gas\n0,0,air\n";
+            let text = format!("{body}{}", marker_line("plan", body, style));
+            assert!(written_unchanged(&text, "plan"));
+            assert!(!written_unchanged(&text, "synth"));
+            assert!(!written_unchanged(&text.replace("air", "32"), "plan"));
+            assert!(!written_unchanged(body, "plan"));
+            // an XML comment may not hold `--` between its delimiters
+            let line = marker_line("plan", body, style);
+            let inner = line
+                .trim_end()
+                .trim_start_matches("<!--")
+                .trim_end_matches("-->");
+            assert!(!inner.contains("--"), "{line}");
+        }
+        assert!(!written_unchanged("", "plan"));
+    }
 
     #[test]
     fn bad_relative_paths_are_refused() {

@@ -144,6 +144,13 @@ impl CriteriaSet {
     }
 }
 
+/// Accepted range of `[protocol] observe_after_surfacing_min`, min: at least 1 min, so that
+/// the after-surfacing window (the criteria with `window = "after-surfacing"`, the plots of the
+/// surface phase) holds recorded frames — with 0 it was empty and scored 0, a silent pass — and
+/// at most a week (10 080 min; bubbles in gel grow for tens of minutes to hours after
+/// surfacing).
+pub const OBSERVE_AFTER_SURFACING_RANGE_MIN: (f64, f64) = (1.0, 10_080.0);
+
 /// Read and validate a criteria file.
 pub fn load_criteria(path: &Path) -> Result<CriteriaSet, InputError> {
     let text = crate::error::read_text(path, "the criteria file")?;
@@ -189,10 +196,14 @@ pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError
     let rp = raw.protocol.unwrap_or_default();
     let mut protocol = Protocol::default();
     if let Some(m) = rp.observe_after_surfacing_min {
-        if !(m.is_finite() && (0.0..=7.0 * 24.0 * 60.0).contains(&m)) {
+        let (lo, hi) = OBSERVE_AFTER_SURFACING_RANGE_MIN;
+        if !(m.is_finite() && (lo..=hi).contains(&m)) {
             return Err(top(
                 "protocol.observe_after_surfacing_min",
-                format!("must be between 0 and 10080 min (got {m})"),
+                format!(
+                    "must be between {lo} and {hi} min (got {}); the after-surfacing window needs at least a minute of watching",
+                    crate::error::num(m)
+                ),
             ));
         }
         protocol.observe_after_surfacing_s = m * 60.0;
@@ -285,15 +296,28 @@ pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError
             Some(_) => return Err(err("label", "must be a string".into())),
             None => kind.clone(),
         };
+        let params = t.clone();
         let criterion = build(&kind, t).map_err(|m| {
             if m.starts_with("unknown criterion") {
                 return err("kind", m);
             }
-            // serde: "unknown field `x`, expected ..." / "missing field `x`"; builders: "x: ..."
-            let field = m
+            let quoted = m
                 .split_once('`')
                 .and_then(|(_, r)| r.split_once('`'))
-                .map(|(f, _)| f.to_string())
+                .map(|(f, _)| f.to_string());
+            // serde: "unknown variant `moon`, expected ..." names the value, not the key: the
+            // field is the key that holds that text
+            if m.starts_with("unknown variant") {
+                let key = quoted.as_deref().and_then(|v| {
+                    params
+                        .iter()
+                        .find(|(_, x)| x.as_str() == Some(v))
+                        .map(|(k, _)| k.clone())
+                });
+                return err(key.as_deref().unwrap_or("kind"), m);
+            }
+            // serde: "unknown field `x`, expected ..." / "missing field `x`"; builders: "x: ..."
+            let field = quoted
                 .or_else(|| {
                     m.split_once(": ")
                         .map(|(f, _)| f.to_string())

@@ -684,6 +684,69 @@ fn fit_and_discover_commands_write_their_reports_and_refuse_bad_data() {
     }
 }
 
+/// D12 and the search's own D2: `--only` must select candidates — a start that matches none,
+/// an empty name (`''`, `,,`) — or `discover` is refused before any simulation (exit 2, naming
+/// `--only` and listing the candidates these phantoms have); and the data must leave two
+/// residual degrees of freedom to the largest candidate's model (here the baseline has no free
+/// parameter and `surface-area-law` has two, so 3 observations are refused and nothing is
+/// written, not even the journal).
+#[test]
+fn discover_refuses_an_only_that_selects_nothing_and_too_few_observations() {
+    let dir = tempdir("discover-only");
+    let e = lab(&dir, "air", 3.2e-3, 400e-6, false);
+    let e = e.to_str().unwrap();
+    let m = dir.join("m.csv");
+    std::fs::write(
+        &m,
+        "experiment,bubble,time_s,radius_m\nosc,0,0,2e-4\nosc,0,30,1.9e-4\nosc,0,60,2e-4\ndec,0,0,6e-5\ndec,0,60,8e-5\n",
+    )
+    .unwrap();
+    let out = dir.join("out");
+    for only in ["nope", "", ",,", "perfusion,nope"] {
+        let o = cmd(&[
+            "discover",
+            "--measured",
+            m.to_str().unwrap(),
+            "--experiments",
+            e,
+            "--only",
+            only,
+            "--out",
+            out.to_str().unwrap(),
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "--only '{only}': {err}");
+        assert!(err.contains("<command line>: field '--only'"), "{err}");
+        assert!(
+            err.contains("known: surface-permeability, surface-area-law"),
+            "{err}"
+        );
+        assert!(!out.exists() && !dir.join("out.partial").exists());
+    }
+    let three = dir.join("three.csv");
+    std::fs::write(
+        &three,
+        "experiment,bubble,time_s,radius_m\nosc,0,0,2e-4\nosc,0,30,1.9e-4\ndec,0,60,8e-5\n",
+    )
+    .unwrap();
+    let o = cmd(&[
+        "discover",
+        "--measured",
+        three.to_str().unwrap(),
+        "--experiments",
+        e,
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("three.csv:4:") && err.contains("needs at least 4"),
+        "{err}"
+    );
+    assert!(!out.exists() && !dir.join("out.partial").exists());
+}
+
 /// The lab of the journal tests: the two experiments on a 400 µm grid (512 cells), data with a
 /// hidden surface permeability sampled every 20 s. Returns (experiments file, measurements file).
 fn journal_lab(name: &str) -> (PathBuf, PathBuf, PathBuf) {
@@ -872,7 +935,7 @@ fn discover_journal_keeps_finished_simulations_and_skips_them_on_restart() {
 }
 
 /// The diagnosis sets the residuals against the *simulated* radius. Built so that the answer is
-/// known exactly: simulated radii f (a baseline synthesis without noise), residuals e made
+/// known exactly: simulated radii f (a baseline synthesis with 1 nm of noise), residuals e made
 /// orthogonal to 1 and to f by Gram–Schmidt in this test, measured radii y = f + e. Against f the
 /// correlation is 0 (to rounding); against y it would be sd(e)/√(Var f + Var e) > 0 for any
 /// model, the artefact the review of 27 Nov 2026 found (a true model flagged in 192 of 200 seeds).
@@ -882,7 +945,9 @@ fn the_diagnosis_correlates_residuals_with_the_simulated_radius() {
     use decophantom::discover::diagnose::diagnose;
     let dir = tempdir("discover-diagnose-covariate");
     let ex = read_experiments(&lab(&dir, "air", 3.2e-3, 400e-6, false)).unwrap();
-    let clean = synthesize(&ex, &[], 1e-12, 5.0, 1).unwrap();
+    // 1 nm of noise, the least `synth` accepts (the sd_m range of measurements.csv): f is taken
+    // from these data, so whatever noise they carry is part of f
+    let clean = synthesize(&ex, &[], decophantom::fit::data::MIN_SD_M, 5.0, 1).unwrap();
     let data = parse_measurements(&clean, Path::new("clean.csv")).unwrap();
     let f: Vec<f64> = data
         .series

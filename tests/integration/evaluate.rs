@@ -746,3 +746,66 @@ fn identical_schedules_tie_instead_of_ranking_noise() {
     assert_eq!(rank("fast-copy"), (2, true));
     assert!(!md.contains("tied on"), "{md}");
 }
+
+/// D13 (bad-input review 2). The dive options of `evaluate` plan with `--algorithm`; given with
+/// schedules only they would be dropped silently (the schedule scored on its own gas), so they
+/// are refused (exit 2) on the command line and by the library, and no folder is created.
+#[test]
+fn dive_options_without_an_algorithm_are_refused() {
+    let d = tempdir("evaluate-unused");
+    let ph = write(&d, "phantom.toml", PHANTOM);
+    let good = write(&d, "criteria.toml", &criteria(1.0));
+    let fast = write(&d, "fast.csv", FAST);
+    let out = d.join("out");
+    for extra in [
+        ["--depth", "40"],
+        ["--time", "30"],
+        ["--gas", "32"],
+        ["--deco-gas", "50"],
+        ["--travel-gas", "21/35@0..40"],
+    ] {
+        let mut args = vec![
+            "evaluate",
+            "--schedule",
+            s(&fast),
+            "--criteria",
+            s(&good),
+            "--phantom",
+            s(&ph),
+            "--out",
+            s(&out),
+        ];
+        args.extend_from_slice(&extra);
+        let (code, o, e) = run(&args);
+        assert_eq!(code, 2, "{extra:?}: {o}{e}");
+        assert!(e.contains("--algorithm") && e.contains(extra[0]), "{e}");
+        assert!(!out.exists());
+    }
+    let req = decophantom::app::evaluate::EvaluateRequest {
+        depth_m: None,
+        time_min: None,
+        gas: Some("32".into()),
+        deco_gases: vec![],
+        travel_gases: vec![],
+        algorithms: vec![],
+        schedules: vec![fast.clone()],
+        dive: None,
+        elasticity: vec![],
+        phantom: Some(ph.clone()),
+        grid_step_m: None,
+        criteria: good.clone(),
+        repeat_after_min: None,
+        out: out.clone(),
+    };
+    match decophantom::app::evaluate::run(&req, &mut |_, _| {}) {
+        Err(decophantom::error::Error::Input(e)) => {
+            assert_eq!(
+                (e.file.as_deref(), e.field.as_deref()),
+                (Some(Path::new("<command line>")), Some("--gas")),
+                "{e}"
+            )
+        }
+        other => panic!("{other:?}"),
+    }
+    assert!(!out.exists());
+}

@@ -887,3 +887,754 @@ fn explicit_tolerance_factor_is_checked() {
         .numerics;
     assert_eq!(n.explicit_tolerance_factor, 2.0);
 }
+
+/// The phantom of the fit cases: a 2 mm cube (the largest sphere it holds has r = 1 mm), one
+/// bubble of 60 µm, every face open.
+const FIT_PHANTOM: &str = r#"[geometry]
+shape = "box"
+size_m = [2e-3, 2e-3, 2e-3]
+grid_step_m = 200e-6
+open_faces = ["x-", "x+", "y-", "y+", "top", "bottom"]
+[material]
+surface_tension = 0.07
+[material.elasticity]
+law = "hyperelastic"
+shear_modulus = 40.0
+[gases.n2]
+diffusivity = 2.5e-9
+ostwald = 0.014
+[gases.o2]
+diffusivity = 2.5e-9
+ostwald = 0.027
+[nuclei]
+min_radius_m = 20e-6
+[[bubbles]]
+position_m = [1e-3, 1e-3, 1e-3]
+initial_radius_m = 60e-6
+"#;
+
+/// A fit lab in `dir`: the phantom above, 60 psi gauge → 0 in 10 s then 50 s at the surface,
+/// and `experiments.toml` naming one experiment `name`. Returns the experiments file.
+fn fit_lab(dir: &Path, name: &str) -> PathBuf {
+    write(dir, "phantom.toml", FIT_PHANTOM);
+    write(
+        dir,
+        "profile.toml",
+        "time_unit = \"s\"\npressure_unit = \"psi-gauge\"\ngas = \"air\"\npoints = [[0, 60], [10, 0], [60, 0]]\n",
+    );
+    let name = toml::Value::String(name.to_string()).to_string();
+    write(
+        dir,
+        "experiments.toml",
+        &format!("[[experiment]]\nname = {name}\nprofile = \"profile.toml\"\nphantom = \"phantom.toml\"\n"),
+    )
+}
+
+/// Measured radii of bubble 0 of experiment `e1` (µm-scale growth after the decompression),
+/// the first `n` of seven rows, sd 2 µm.
+fn fit_rows(n: usize) -> String {
+    let rows = [
+        (0, 6.17e-5),
+        (10, 1.11e-4),
+        (20, 1.29e-4),
+        (30, 1.46e-4),
+        (40, 1.57e-4),
+        (50, 1.66e-4),
+        (60, 1.75e-4),
+    ];
+    let mut s = String::from("experiment,bubble,time_s,radius_m,sd_m\n");
+    for (t, r) in &rows[..n] {
+        s.push_str(&format!("e1,0,{t},{r:e},2e-6\n"));
+    }
+    s
+}
+
+fn fit_cmd(measured: &Path, experiments: &Path, params: &[&str], out: &Path) -> Output {
+    let mut args: Vec<&std::ffi::OsStr> = vec![
+        "fit".as_ref(),
+        "--measured".as_ref(),
+        measured.as_os_str(),
+        "--experiments".as_ref(),
+        experiments.as_os_str(),
+    ];
+    for p in params {
+        args.push("--param".as_ref());
+        args.push(p.as_ref());
+    }
+    args.push("--out".as_ref());
+    args.push(out.as_os_str());
+    run(&args)
+}
+
+/// Every number in a TOML document is finite.
+fn all_finite(v: &toml::Value, at: &str) {
+    match v {
+        toml::Value::Float(x) => assert!(x.is_finite(), "{at} = {x}"),
+        toml::Value::Array(a) => a.iter().for_each(|x| all_finite(x, at)),
+        toml::Value::Table(t) => t
+            .iter()
+            .for_each(|(k, x)| all_finite(x, &format!("{at}.{k}"))),
+        _ => {}
+    }
+}
+
+/// D2. A fit needs two residual degrees of freedom (n ≥ p + 2): 1 and 2 observations for one
+/// parameter are refused before any simulation (exit 2, the measurements file and its last
+/// line named, no output and no journal). At n = p + 2 = 3 the fit runs; AICc, whose K = p + 1
+/// needs n > p + 2, is not written but given with its reason, and no number written in
+/// fit.toml or report.md is NaN or infinite.
+#[test]
+fn fit_needs_two_residual_degrees_of_freedom_and_writes_no_non_finite_number() {
+    let dir = tempdir("hard-fit-dof");
+    let e = fit_lab(&dir, "e1");
+    let out = dir.join("out");
+    for n in [1, 2] {
+        let m = write(&dir, "m.csv", &fit_rows(n));
+        let o = fit_cmd(&m, &e, &["gases.n2.diffusivity"], &out);
+        assert_refused(&o, &[&format!("m.csv:{}:", n + 1), "at least p + 2 = 3"]);
+        assert!(!out.exists() && !dir.join("out.partial").exists());
+    }
+    let m = write(&dir, "m.csv", &fit_rows(3));
+    let o = fit_cmd(&m, &e, &["gases.n2.diffusivity"], &out);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let fit: toml::Table = std::fs::read_to_string(out.join("fit.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    all_finite(&toml::Value::Table(fit.clone()), "fit");
+    assert!(!fit.contains_key("aicc"), "{fit:?}");
+    let why = fit["absent"]["aicc"].as_str().unwrap();
+    assert!(why.contains("n > p + 2"), "{why}");
+    assert!(fit.contains_key("residual_variance"), "{fit:?}");
+    let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+    for word in report.split(|c: char| !c.is_alphanumeric()) {
+        assert!(word != "NaN" && word != "inf" && word != "nan", "{report}");
+    }
+    assert!(report.contains("needs n > p + 2"), "{report}");
+}
+
+/// D3. Bounds are checked against the field's accepted range by the phantom reader (D in
+/// 1e-14 ..= 1e-6 m²/s, γ in 0 ..= 1 N/m) before any simulation, naming `<command line>` and
+/// `--param`; an accepted range gives intervals inside the bounds, and an interval that was
+/// clipped to them says so in fit.toml and in report.md.
+#[test]
+fn fit_bounds_must_lie_in_the_fields_range_and_intervals_inside_the_bounds() {
+    let dir = tempdir("hard-fit-bounds");
+    let e = fit_lab(&dir, "e1");
+    let m = write(&dir, "m.csv", &fit_rows(7));
+    let out = dir.join("out");
+    for (bad, which) in [
+        ("gases.n2.diffusivity=-1..1", "lower bound"),
+        ("gases.n2.diffusivity=1e-9..1e-3", "upper bound"),
+        ("material.surface_tension=0..2", "upper bound"),
+        ("scale:gases.*.diffusivity=0..2", "lower bound"),
+    ] {
+        let o = fit_cmd(&m, &e, &[bad], &out);
+        assert_refused(&o, &["<command line>", "field '--param'", which]);
+        // the error is the command line's, not a line of the phantom
+        assert!(String::from_utf8_lossy(&o.stderr).starts_with("error: <command line>:"));
+        assert!(!out.exists() && !dir.join("out.partial").exists());
+    }
+    let o = fit_cmd(&m, &e, &["material.surface_tension=0..1"], &out);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let fit: toml::Table = std::fs::read_to_string(out.join("fit.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    all_finite(&toml::Value::Table(fit.clone()), "fit");
+    let p = &fit["parameter"].as_array().unwrap()[0];
+    let ci: Vec<f64> = p["ci95"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_float().unwrap())
+        .collect();
+    assert!(0.0 <= ci[0] && ci[0] <= ci[1] && ci[1] <= 1.0, "{ci:?}");
+    let bounds: Vec<f64> = p["bounds"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|x| x.as_float().unwrap())
+        .collect();
+    assert_eq!(bounds, vec![0.0, 1.0]);
+    if p["ci95_clipped_to_bounds"].as_bool().unwrap() {
+        let report = std::fs::read_to_string(out.join("report.md")).unwrap();
+        assert!(report.contains("clipped to the bounds"), "{report}");
+    }
+}
+
+/// D4. A measured radius larger than the experiment's phantom can hold (a 2 mm cube holds a
+/// sphere of at most r = 1 mm) is refused naming the file, its line and `radius_m`; 0.9 mm is
+/// accepted by the same check.
+#[test]
+fn a_radius_larger_than_the_phantom_is_refused() {
+    use decophantom::fit::data::{check_against, parse_measurements, read_experiments};
+    let dir = tempdir("hard-fit-radius");
+    let ex = read_experiments(&fit_lab(&dir, "e1")).unwrap();
+    let m = |r: &str| {
+        parse_measurements(
+            &format!("experiment,bubble,time_s,radius_m\ne1,0,0,6e-5\ne1,0,30,{r}\n"),
+            Path::new("m.csv"),
+        )
+        .unwrap()
+    };
+    check_against(&m("9e-4"), &ex).unwrap();
+    let e = check_against(&m("1.5e-3"), &ex).unwrap_err();
+    assert_eq!(
+        (e.line, e.field.as_deref(), e.file.as_deref()),
+        (Some(3), Some("radius_m"), Some(Path::new("m.csv"))),
+        "{e}"
+    );
+}
+
+fn synth_cmd(experiments: &Path, extra: &[&str], out: &Path) -> Output {
+    let mut args: Vec<&std::ffi::OsStr> = vec![
+        "synth".as_ref(),
+        "--experiments".as_ref(),
+        experiments.as_os_str(),
+        "--noise-sd".as_ref(),
+        "1e-6".as_ref(),
+    ];
+    args.extend(extra.iter().map(|a| -> &std::ffi::OsStr { a.as_ref() }));
+    args.push("--out".as_ref());
+    args.push(out.as_os_str());
+    run(&args)
+}
+
+/// D7, D14. An experiment name with a comma, quotes and a leading `#` goes through `synth`'s
+/// CSV and back through `fit`'s reader unchanged (the csv crate's quoting), and `fit` runs on
+/// it; a name the measurements cannot hold (leading space) is refused in the experiments file.
+/// `synth --out` never replaces a file it did not write (a user's file) or one edited since it
+/// wrote it; its own unchanged file is replaced.
+#[test]
+fn synth_names_round_trip_and_existing_files_are_kept() {
+    use decophantom::fit::data::read_measurements;
+    let dir = tempdir("hard-synth-names");
+    let name = "#e \"1\", x";
+    let e = fit_lab(&dir, name);
+    let out = dir.join("m.csv");
+    let o = synth_cmd(&e, &["--every", "10"], &out);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let m = read_measurements(&out).unwrap();
+    assert_eq!(m.series.len(), 1);
+    assert_eq!(m.series[0].experiment, name);
+    assert_eq!(m.len(), 7, "0, 10, …, 60 s");
+    let o = fit_cmd(&out, &e, &["gases.n2.diffusivity"], &dir.join("fit"));
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // its own file, unchanged: replaced
+    let o = synth_cmd(&e, &["--every", "20"], &out);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert_eq!(read_measurements(&out).unwrap().len(), 4, "0, 20, 40, 60 s");
+    // edited since: kept
+    let edited = std::fs::read_to_string(&out)
+        .unwrap()
+        .replacen(",20,", ",21,", 1);
+    std::fs::write(&out, &edited).unwrap();
+    let o = synth_cmd(&e, &["--every", "10"], &out);
+    assert_refused(&o, &["field '--out'", "changed since"]);
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), edited);
+    // a user's file: kept
+    let mine = write(&dir, "mine.csv", "user data\n");
+    let o = synth_cmd(&e, &["--every", "10"], &mine);
+    assert_refused(&o, &["field '--out'", "not written by decophantom synth"]);
+    assert_eq!(std::fs::read_to_string(&mine).unwrap(), "user data\n");
+    // a name the measurements cannot hold
+    let e2 = fit_lab(&dir, " e1");
+    let o = synth_cmd(&e2, &[], &dir.join("x.csv"));
+    assert_refused(&o, &["experiments.toml:2:", "field 'name'"]);
+    assert!(!dir.join("x.csv").exists());
+}
+
+/// D17, D20. `synth --every` is limited to 10⁶ rows before any simulation (1e-9 s over a 60 s
+/// profile would be 6·10¹⁰); `--noise-sd` to the sd range of measurements.csv; a value an
+/// effect sets is checked by the phantom reader and refused naming `<command line>` and
+/// `--effect` (never a phantom file's line); the same effect twice is refused as such.
+#[test]
+fn synth_limits_rows_and_names_effects_on_the_command_line() {
+    let dir = tempdir("hard-synth-limits");
+    let e = fit_lab(&dir, "e1");
+    let out = dir.join("m.csv");
+    let t = std::time::Instant::now();
+    let o = synth_cmd(&e, &["--every", "1e-9"], &out);
+    assert_refused(&o, &["field '--every'", "1000000"]);
+    assert!(t.elapsed().as_secs_f64() < 10.0, "{:?}", t.elapsed());
+    // 60 s every 6e-5 s is 10⁶ + 1 rows: one too many
+    let o = synth_cmd(&e, &["--every", "6e-5"], &out);
+    assert_refused(&o, &["field '--every'"]);
+    let o = run(&[
+        "synth".as_ref(),
+        "--experiments".as_ref(),
+        e.as_os_str(),
+        "--noise-sd".as_ref(),
+        "1".as_ref(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert_refused(&o, &["field '--noise-sd'"]);
+    for effect in ["perfusion=-1", "gases.n2.diffusivity=1"] {
+        let o = synth_cmd(&e, &["--effect", effect], &out);
+        assert_refused(&o, &["<command line>", "field '--effect'", effect]);
+        // the error is the command line's, not a line of the phantom
+        assert!(String::from_utf8_lossy(&o.stderr).starts_with("error: <command line>:"));
+    }
+    let o = synth_cmd(
+        &e,
+        &["--effect", "perfusion=1e-3", "--effect", "perfusion=2e-3"],
+        &out,
+    );
+    assert_refused(&o, &["field '--effect'", "given twice"]);
+    let o = synth_cmd(
+        &e,
+        &[
+            "--effect",
+            "perfusion=1e-3",
+            "--effect",
+            "perfusion.rate_per_s=2e-3",
+        ],
+        &out,
+    );
+    assert_refused(&o, &["field '--effect'", "both set perfusion.rate_per_s"]);
+    assert!(!out.exists());
+}
+
+// ---- bad-input review 2: schedule and criteria readers, output places ----
+
+/// D5. A schedule TOML's pressures are in Pa, in the ranges an algorithm file's conventions
+/// accept: `pa_per_m` 9 500–10 600 Pa/m (fresh to sea water), `surface_pressure_pa` 500–1 100
+/// hPa, `water_vapour_pa` 0–20 kPa. A value in other units is refused at its own field and line
+/// (before, `pa_per_m = 1` ran a 30 m dive at the surface and passed; 101.325 kPa was blamed on
+/// the water vapour), and the limits themselves are read. The `[summary]` is read, so its
+/// numbers are checked too (`cns_percent = nan` was accepted).
+#[test]
+fn schedule_pressures_are_pascals_of_water_and_air() {
+    use decophantom::algorithm::Schedule;
+    let base = schedule("10.0", "1.0");
+    let read = |text: &str| Schedule::from_toml_str(text, Path::new("s.toml"));
+    let with = |key: &str, v: &str| {
+        base.lines()
+            .map(|l| {
+                if l.starts_with(&format!("{key} =")) {
+                    format!("{key} = {v}")
+                } else {
+                    l.to_string()
+                }
+            })
+            .collect::<Vec<_>>()
+            .join("\n")
+    };
+    for (key, v, line) in [
+        ("pa_per_m", "1", 3),
+        ("pa_per_m", "9.985", 3),
+        ("pa_per_m", "0.09985", 3),
+        ("pa_per_m", "3043", 3),
+        ("pa_per_m", "12160", 3),
+        ("surface_pressure_pa", "101.325", 2),
+        ("surface_pressure_pa", "1.01325", 2),
+        ("surface_pressure_pa", "1013.25", 2),
+        ("water_vapour_pa", "62700", 4),
+        ("water_vapour_pa", "-1", 4),
+    ] {
+        let e = read(&with(key, v)).unwrap_err();
+        assert_eq!(
+            (e.field.as_deref(), e.line),
+            (Some(key), Some(line)),
+            "{key} = {v}: {e}"
+        );
+    }
+    let kpa = with("surface_pressure_pa", "101.325")
+        .replace("pa_per_m = 9985.0", "pa_per_m = 9.985")
+        .replace("water_vapour_pa = 6270.0", "water_vapour_pa = 6.27");
+    let e = read(&kpa).unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("surface_pressure_pa"), "{e}");
+    for (key, v) in [
+        ("pa_per_m", "9500"),
+        ("pa_per_m", "10600"),
+        ("pa_per_m", "9806.65"),
+        ("surface_pressure_pa", "50000"),
+        ("surface_pressure_pa", "110000"),
+        ("water_vapour_pa", "0"),
+        ("water_vapour_pa", "20000"),
+    ] {
+        let s = read(&with(key, v)).unwrap_or_else(|e| panic!("{key} = {v}: {e}"));
+        let got = match key {
+            "pa_per_m" => s.pa_per_m,
+            "surface_pressure_pa" => s.surface_pressure_pa,
+            _ => s.water_vapour_pa,
+        };
+        assert_eq!(got, v.parse::<f64>().unwrap());
+    }
+    let lines = base.lines().count();
+    for (key, v) in [
+        ("cns_percent", "nan"),
+        ("otu", "-1"),
+        ("runtime_min", "inf"),
+        ("runtime_min", "43201"),
+    ] {
+        let e = read(&format!("{base}[summary]\n{key} = {v}\n")).unwrap_err();
+        assert_eq!(
+            (e.field.clone(), e.line),
+            (Some(format!("summary.{key}")), Some(lines + 2)),
+            "{e}"
+        );
+    }
+    assert!(read(&format!("{base}[summary]\ncns_percent = 2.5\notu = 7\n")).is_ok());
+    // through the command: exit 2 naming the file, line and field, nothing run
+    let dir = tempdir("hard-sched-units");
+    let s = write(&dir, "s.toml", &with("pa_per_m", "1"));
+    let o = run(&[
+        "check".as_ref(),
+        "--schedule".as_ref(),
+        s.as_os_str(),
+        "--criteria".as_ref(),
+        criteria().as_os_str(),
+    ]);
+    assert_refused(&o, &["s.toml:3:", "field 'pa_per_m'"]);
+    assert!(o.stdout.is_empty());
+}
+
+/// D6, D20. The criteria protocol watches the surface at least a minute (with 0 the
+/// after-surfacing window was empty and its criterion a silent pass of 0, or a failed plot,
+/// exit 3), and a phantom must record at least two frames in that window; an unknown word in
+/// a criterion's setting names its key, not the word.
+#[test]
+fn criteria_watch_the_surface_and_name_the_key_of_a_bad_word() {
+    use decophantom::app::evaluate::breathed_gas_params;
+    use decophantom::phantom::params::PhantomParams;
+    use decophantom::risk::config::parse_criteria;
+    let parse = |t: &str| parse_criteria(t, Path::new("c.toml"));
+    let crit = "[[criterion]]\nkind = \"peak-area-growth-rate\"\nlimit = 80\nwindow = \"after-surfacing\"\n";
+    for m in ["0", "0.5", "10081", "nan"] {
+        let e = parse(&format!(
+            "[protocol]\nobserve_after_surfacing_min = {m}\n{crit}"
+        ))
+        .unwrap_err();
+        assert_eq!(
+            (e.field.as_deref(), e.line),
+            (Some("protocol.observe_after_surfacing_min"), Some(2)),
+            "{m}: {e}"
+        );
+    }
+    for m in ["1", "10080"] {
+        let c = parse(&format!(
+            "[protocol]\nobserve_after_surfacing_min = {m}\n{crit}"
+        ))
+        .unwrap();
+        assert_eq!(
+            c.protocol.observe_after_surfacing_s,
+            m.parse::<f64>().unwrap() * 60.0
+        );
+    }
+    for (kind, key, word) in [
+        ("peak-supersaturation", "at", "moon"),
+        ("peak-total-volume", "measure", "grow"),
+        ("peak-area-growth-rate", "window", "sometimes"),
+    ] {
+        let e = parse(&format!(
+            "[[criterion]]\nkind = \"{kind}\"\nlimit = 1\n{key} = \"{word}\"\n"
+        ))
+        .unwrap_err();
+        assert_eq!(
+            (e.field.clone(), e.line),
+            (Some(format!("criterion.{key}")), Some(4)),
+            "{e}"
+        );
+        assert!(e.message.contains(word), "{e}");
+    }
+    // the phantom's frames: at least two in the window (every ≤ window / 2)
+    let c = parse(&format!(
+        "[protocol]\nobserve_after_surfacing_min = 10\n{crit}"
+    ))
+    .unwrap();
+    let mut p = PhantomParams::box_phantom([2e-3; 3], 2e-4);
+    p.numerics.record_interval = 300.0;
+    assert!(breathed_gas_params(&p, &c.protocol).is_ok());
+    p.numerics.record_interval = 301.0;
+    let e = breathed_gas_params(&p, &c.protocol).unwrap_err();
+    assert_eq!(
+        e.field.as_deref(),
+        Some("numerics.record_interval_s"),
+        "{e}"
+    );
+    // through check: the phantom file and line named, nothing simulated
+    let dir = tempdir("hard-watch");
+    let ph = write(
+        &dir,
+        "ph.toml",
+        &format!("{}[numerics]\nrecord_interval_s = 86400\n", good_phantom()),
+    );
+    let line = good_phantom().lines().count() + 2;
+    let s = write(&dir, "s.toml", &schedule("10.0", "1.0"));
+    let out = dir.join("out");
+    let o = run(&[
+        "check".as_ref(),
+        "--schedule".as_ref(),
+        s.as_os_str(),
+        "--criteria".as_ref(),
+        criteria().as_os_str(),
+        "--phantom".as_ref(),
+        ph.as_os_str(),
+        "--out".as_ref(),
+        out.as_os_str(),
+    ]);
+    assert_refused(
+        &o,
+        &[
+            &format!("ph.toml:{line}:"),
+            "field 'numerics.record_interval_s'",
+        ],
+    );
+    assert!(!out.exists());
+}
+
+/// D10. A waypoint CSV naming a column twice is refused at the header (it was read silently
+/// from the first: `time_min,depth_m,depth_m` with 10 and 20 ran at 10 m).
+#[test]
+fn waypoint_csv_with_a_column_twice_is_refused() {
+    use decophantom::algorithm::conventions::DECOTENGU;
+    use decophantom::algorithm::waypoints::parse_waypoints_csv;
+    let read = |t: &str| {
+        parse_waypoints_csv(
+            t,
+            Path::new("w.csv"),
+            &DECOTENGU,
+            decophantom::gas::GasMix::AIR,
+        )
+    };
+    for (text, field) in [
+        (
+            "time_min,depth_m,depth_m\n0,0,0\n1,10,20\n3,10,20\n4,0,0\n",
+            "depth_m",
+        ),
+        (
+            "# c\ntime_min,TIME_MIN,depth_m\n0,0,0\n1,1,10\n2,2,0\n",
+            "time_min",
+        ),
+        (
+            "time_min,depth_m,gas,Gas\n0,0,air,32\n1,10,air,32\n2,0,,\n",
+            "gas",
+        ),
+    ] {
+        let e = read(text).unwrap_err();
+        let header = if text.starts_with('#') { 2 } else { 1 };
+        assert_eq!(
+            (e.field.as_deref(), e.line),
+            (Some(field), Some(header)),
+            "{e}"
+        );
+        assert!(e.message.contains("twice"), "{e}");
+    }
+    assert!(read("time_min,depth_m,gas\n0,0,air\n1,10,air\n2,0,\n").is_ok());
+}
+
+/// D19. The place of an output folder is checked before the run, naming `--out` and the
+/// user's path (exit 2): a folder under a file is refused, and one this user cannot write in
+/// (checked where the test does not run with privileges that bypass permissions); missing
+/// folders above it are created. Before, the run was done, then exit 3 named an internal
+/// staging path with the OS error twice.
+#[test]
+fn output_places_are_checked_before_the_run() {
+    let dir = tempdir("hard-places");
+    let ph = write(&dir, "ph.toml", &good_phantom());
+    let prof = write(&dir, "p.toml", SHORT_PROFILE);
+    let file = write(&dir, "afile", "mine");
+    let o = simulate_into(&dir, &prof, &ph, &file.join("sub"));
+    assert_refused(&o, &["afile/sub", "field '--out'", "is a file"]);
+    assert!(o.stdout.is_empty());
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(
+        !err.contains(".staging-") && !err.contains(".tmp-"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read_to_string(&file).unwrap(), "mine");
+    let deep = dir.join("new").join("deeper").join("out");
+    let o = simulate_into(&dir, &prof, &ph, &deep);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    assert!(deep.join("bubbles.csv").is_file());
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        let ro = dir.join("ro");
+        std::fs::create_dir(&ro).unwrap();
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o555)).unwrap();
+        // privileged (root): permissions do not stop it, so there is nothing to refuse
+        let privileged = std::fs::write(ro.join("probe"), "x").is_ok();
+        if !privileged {
+            let o = simulate_into(&dir, &prof, &ph, &ro.join("x"));
+            assert_refused(&o, &["ro/x", "field '--out'", "cannot create files"]);
+            assert!(o.stdout.is_empty());
+        }
+        std::fs::set_permissions(&ro, std::fs::Permissions::from_mode(0o755)).unwrap();
+    }
+    // no probe or staging debris beside the outputs
+    let names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    assert!(!names.iter().any(|n| n.starts_with('.')), "{names:?}");
+}
+
+/// D21. A schedule without stops has 0 min of stops, never −0.0 (the sum of an empty list of
+/// f64), in `check --json` and the reports.
+#[test]
+fn a_schedule_without_stops_has_zero_stop_time() {
+    use decophantom::algorithm::Schedule;
+    let text = schedule("10.0", "1.0");
+    let cut = text.find("[[stops]]").unwrap();
+    let s = Schedule::from_toml_str(&text[..cut], Path::new("s.toml")).unwrap();
+    assert!(s.stops.is_empty());
+    assert!(s.stop_time_min() == 0.0 && s.stop_time_min().is_sign_positive());
+    let json = serde_json::to_string(&decophantom::app::json::ScheduleJson::from(&s)).unwrap();
+    assert!(json.contains("\"stop_time_min\":0.0"), "{json}");
+}
+
+/// serde's type and length errors in a phantom name the key's dotted path, an unknown key in a
+/// table is named with its table, and a list of three numbers with a fourth is refused.
+#[test]
+fn phantom_type_and_length_errors_name_the_key_path() {
+    let good = good_phantom();
+    for (from, to, field) in [
+        (
+            "grid_step_m = 2e-4",
+            "grid_step_m = \"2e-4\"",
+            "geometry.grid_step_m",
+        ),
+        ("[2e-3, 2e-3, 2e-3]", "[2e-3, 2e-3]", "geometry.size_m"),
+        (
+            "[2e-3, 2e-3, 2e-3]",
+            "[2e-3, 2e-3, 2e-3, 5]",
+            "geometry.size_m",
+        ),
+        (
+            "[1e-3, 1e-3, 1e-3]",
+            "[1e-3, 1e-3, 1e-3, 0]",
+            "bubbles.position_m",
+        ),
+        (
+            "surface_tension = 0.07",
+            "bogus_key = 1",
+            "material.bogus_key",
+        ),
+    ] {
+        phantom_refused(&good.replace(from, to), field);
+    }
+}
+
+/// Bubbles that overlap at t = 0 (their volume would count twice) are refused naming both
+/// tables' lines; so is a population spacing that lets them overlap. A phantom without
+/// bubbles is refused with a line.
+#[test]
+fn overlapping_bubbles_and_bubble_free_phantoms_are_refused_with_lines() {
+    let two = |z: &str| {
+        format!(
+            "{}[[bubbles]]\nposition_m = [1e-3, 1e-3, {z}]\ninitial_radius_m = 5e-5\n",
+            good_phantom()
+        )
+    };
+    // [[bubbles]] on lines 15 and 18; R0 + R0 = 1e-4 m
+    for z in ["1e-3", "1.05e-3"] {
+        let e = parse_phantom(&two(z), Path::new("p.toml")).unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(18), Some("bubbles")),
+            "{e}"
+        );
+        assert!(e.message.contains("line 15"), "{e}");
+    }
+    assert!(parse_phantom(&two("1.2e-3"), Path::new("p.toml")).is_ok());
+    let population = |spacing: &str| {
+        let text = good_phantom();
+        let bare = &text[..text.find("[[bubbles]]").unwrap()];
+        format!("{bare}[population]\ncount = 2\ninitial_radius_m = 5e-5\nmin_spacing_m = {spacing}\nseed = 1\n")
+    };
+    phantom_refused(&population("1e-4"), "population.min_spacing_m");
+    assert!(parse_phantom(&population("3e-4"), Path::new("p.toml")).is_ok());
+
+    let dir = tempdir("hard-nobubble-line");
+    let text = good_phantom();
+    let bare = write(
+        &dir,
+        "bare.toml",
+        &text[..text.find("[[bubbles]]").unwrap()],
+    );
+    let ph = decophantom::phantom::config::load_phantom(&bare).unwrap();
+    let e = decophantom::phantom::config::require_bubbles(&ph.params, &bare).unwrap_err();
+    assert_eq!(
+        (e.line, e.field.as_deref()),
+        (Some(14), Some("bubbles")),
+        "{e}"
+    );
+}
+
+/// Command-line values are blamed on the command line: `--vapour-pa` out of range (not the
+/// profile's line), `--checkpoint-every` without a unit; a folder as `--profile` is named as a
+/// folder, not as a legacy file without `--units`; a near-vacuum profile (1e-10 Pa, below the
+/// 1 kPa floor) is refused on its line instead of running for ever.
+#[test]
+fn command_line_values_folders_and_vacuum_are_refused_up_front() {
+    let dir = tempdir("hard-cmdline");
+    let ph = write(&dir, "ph.toml", &good_phantom());
+    let prof = write(&dir, "p.toml", SHORT_PROFILE);
+    let legacy = write(&dir, "l.txt", "0 0\n1 10\n2 0\n");
+    let vacuum = write(
+        &dir,
+        "vac.toml",
+        "time_unit = \"s\"\npressure_unit = \"pa\"\npoints = [[0, 101325],\n [10, 1e-10], [60, 1e-10]]\n",
+    );
+    let sim = |profile: &Path, extra: &[&str]| {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "simulate".as_ref(),
+            "--profile".as_ref(),
+            profile.as_os_str(),
+            "--phantom".as_ref(),
+            ph.as_os_str(),
+            "--out".as_ref(),
+        ];
+        let out = dir.join("out");
+        args.push(out.as_os_str());
+        args.extend(extra.iter().map(std::ffi::OsStr::new));
+        run(&args)
+    };
+    let o = sim(&legacy, &["--units", "min,psi-gauge", "--vapour-pa", "1e6"]);
+    assert_refused(&o, &["<command line>", "--vapour-pa"]);
+    assert!(
+        !String::from_utf8_lossy(&o.stderr).contains("l.txt:"),
+        "{o:?}"
+    );
+    assert_refused(
+        &sim(&prof, &["--checkpoint-every", "5"]),
+        &["<command line>", "--checkpoint-every", "unit"],
+    );
+    assert_refused(&sim(&dir, &[]), &["this is a folder, not a profile"]);
+    assert_refused(&sim(&vacuum, &[]), &["vac.toml:4", "points", "1 kPa"]);
+    assert!(!dir.join("out").exists());
+}

@@ -997,3 +997,199 @@ fn logged_110_m_subsurface_dive_replans_with_travel_gases() {
             / 60.0
     );
 }
+
+/// D13, D14, D19, D20 (bad-input review 2). `plan`'s outputs are checked before planning,
+/// each refusal exit 2 naming the option and the user's path: `--out` and `--plot` the same
+/// file (the figure replaced the schedule), `--format` with `--json` and nothing to format, a
+/// folder that does not exist or is a file (before: exit 3 after the work, naming an internal
+/// temporary file), the algorithm file as `--plot` (named `--plot`, not `--out`). An existing
+/// file is replaced only if `plan` wrote it and it is unchanged since (its last line, a hash of
+/// the lines above, as an output folder's manifest): a user's file or an edited one is kept.
+#[test]
+fn plan_outputs_are_checked_first_and_a_users_file_is_kept() {
+    use decophantom::algorithm::Schedule;
+    let dir = crate::common::tempdir("plan-outputs");
+    let p = |name: &str| dir.join(name).to_str().unwrap().to_string();
+    let dive = |extra: &[&str]| {
+        let mut a = vec![
+            "--algorithm",
+            "algorithms/zhl16c-gf30-85.toml",
+            "--depth",
+            "30",
+            "--time",
+            "10",
+        ];
+        a.extend_from_slice(extra);
+        plan(&a)
+    };
+    let refused = |r: (i32, String, String), needles: &[&str]| {
+        assert_eq!(r.0, 2, "{}", r.2);
+        assert!(r.1.is_empty(), "{}", r.1);
+        for n in needles {
+            assert!(r.2.contains(n), "'{n}' not in {}", r.2);
+        }
+        assert!(!r.2.contains(".tmp-"), "{}", r.2);
+    };
+    let x = p("x.toml");
+    refused(dive(&["--out", &x, "--plot", &x]), &["field '--plot'"]);
+    assert!(!dir.join("x.toml").exists());
+    refused(dive(&["--json", "--format", "csv"]), &["field '--format'"]);
+    let missing = p("nodir/x.csv");
+    refused(
+        dive(&["--out", &missing]),
+        &[&missing, "field '--out'", "does not exist"],
+    );
+    std::fs::write(dir.join("afile"), "mine").unwrap();
+    let under = p("afile/x.csv");
+    refused(
+        dive(&["--out", &under]),
+        &[&under, "field '--out'", "is a file"],
+    );
+    let under = p("afile/x.svg");
+    refused(dive(&["--plot", &under]), &[&under, "field '--plot'"]);
+    let alg = root().join("algorithms/zhl16c-gf30-85.toml");
+    refused(
+        dive(&["--plot", alg.to_str().unwrap()]),
+        &["field '--plot'", "input"],
+    );
+    // a user's file: kept, for the schedule and the figure
+    for (name, flag) in [("mine.csv", "--out"), ("mine.svg", "--plot")] {
+        std::fs::write(dir.join(name), "user data\n").unwrap();
+        refused(
+            dive(&[flag, &p(name)]),
+            &[&format!("field '{flag}'"), "not written"],
+        );
+        assert_eq!(
+            std::fs::read_to_string(dir.join(name)).unwrap(),
+            "user data\n"
+        );
+    }
+    // plan's own files, unchanged: replaced (the new plan is there); edited: kept
+    let s = p("s.toml");
+    let svg = p("s.svg");
+    assert_eq!(dive(&["--out", &s, "--plot", &svg]).0, 0);
+    let (code, _, err) = plan(&[
+        "--algorithm",
+        "algorithms/zhl16c-gf30-85.toml",
+        "--depth",
+        "30",
+        "--time",
+        "15",
+        "--out",
+        &s,
+        "--plot",
+        &svg,
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let read = Schedule::read(&dir.join("s.toml")).unwrap();
+    assert_eq!(read.legs[1].end_depth_m, 30.0);
+    assert!(read.runtime_min() >= 15.0, "{}", read.runtime_min());
+    roxmltree::Document::parse(&std::fs::read_to_string(dir.join("s.svg")).unwrap())
+        .expect("well-formed SVG with its marker comment");
+    let edited = std::fs::read_to_string(dir.join("s.toml"))
+        .unwrap()
+        .replacen("label = ", "label = \"mine\"\n# was ", 1);
+    std::fs::write(dir.join("s.toml"), &edited).unwrap();
+    refused(dive(&["--out", &s]), &["field '--out'", "changed since"]);
+    assert_eq!(std::fs::read_to_string(dir.join("s.toml")).unwrap(), edited);
+    // the CSV, with its marker line, reads back as the same schedule
+    let c = p("s.csv");
+    assert_eq!(dive(&["--out", &c]).0, 0);
+    let back = decophantom::algorithm::waypoints::read_schedule(
+        &dir.join("s.csv"),
+        &decophantom::algorithm::conventions::DECOTENGU,
+        decophantom::gas::GasMix::AIR,
+    )
+    .unwrap();
+    assert_eq!(back.runtime_min(), 13.0);
+    // nothing else left in the folder (no temporary or probe files)
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        ["afile", "mine.csv", "mine.svg", "s.csv", "s.svg", "s.toml"]
+    );
+}
+
+/// D18 (bad-input review 2). A plan lasts at most the 30 days (43 200 min) a history may:
+/// travel rates below 1000 m / 43 200 min ≈ 0.0231 m/min are refused on the command line and
+/// in an algorithm file, and a plan whose runtime (bottom time, travel, stops) would exceed the
+/// limit is refused naming the option that made it long (before: `--ascent-rate 1e-9` planned a
+/// 3·10¹⁰ min dive). The same checks cover the algorithm file's `pa_per_m` (D5).
+#[test]
+fn plan_rates_and_runtime_stay_within_thirty_days() {
+    let dive = |extra: &[&str]| {
+        let mut a = vec![
+            "--algorithm",
+            "algorithms/zhl16c-gf30-85.toml",
+            "--depth",
+            "30",
+            "--time",
+            "10",
+        ];
+        a.extend_from_slice(extra);
+        plan(&a)
+    };
+    let min = decophantom::algorithm::conventions::MIN_TRAVEL_RATE_M_MIN;
+    assert!((min * 43_200.0 - 1000.0).abs() < 1e-9);
+    for (opt, v) in [
+        ("--ascent-rate", "1e-9"),
+        ("--descent-rate", "1e-9"),
+        ("--ascent-rate", "0.023"),
+    ] {
+        let (code, out, err) = dive(&[opt, v]);
+        assert_eq!(code, 2, "{opt} {v}: {err}");
+        assert!(
+            out.is_empty() && err.contains(&format!("field '{opt}'")),
+            "{err}"
+        );
+    }
+    let (code, out, err) = dive(&["--ascent-rate", "0.03"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("Total dive time"), "{out}");
+    // a bottom time within 43 200 min whose stops take the dive past it
+    let (code, _, err) = plan(&[
+        "--algorithm",
+        "algorithms/zhl16c-gf30-85.toml",
+        "--depth",
+        "30",
+        "--time",
+        "43000",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("field '--time'") && err.contains("43200"),
+        "{err}"
+    );
+    // the algorithm file's own conventions
+    let dir = crate::common::tempdir("plan-conventions");
+    for (key, v) in [
+        ("ascent_rate_m_min", "1e-9"),
+        ("pa_per_m", "1.0"),
+        ("pa_per_m", "9.985"),
+        ("surface_pressure_pa", "101.325"),
+    ] {
+        let f = dir.join("a.toml");
+        std::fs::write(
+            &f,
+            format!("kind = \"zhl16\"\n[conventions]\npreset = \"decotengu\"\n{key} = {v}\n[params]\nmodel = \"zh-l16c\"\ngf_low = 30\ngf_high = 85\n"),
+        )
+        .unwrap();
+        let (code, _, err) = plan(&[
+            "--algorithm",
+            f.to_str().unwrap(),
+            "--depth",
+            "30",
+            "--time",
+            "10",
+        ]);
+        assert_eq!(code, 2, "{key} = {v}: {err}");
+        assert!(
+            err.contains("a.toml:4:") && err.contains(&format!("conventions.{key}")),
+            "{err}"
+        );
+    }
+}

@@ -827,3 +827,114 @@ fn load_dispatches_dive_logs() {
     assert!(profile::load(&ostc, &opts(TimeUnit::S, PressureUnit::Pa)).is_err());
     assert!(profile::load(&legacy_path("step-10psi.txt"), &two).is_err());
 }
+
+/// Subsurface XML values carry units: known ones are converted (ft, mbar, kPa), an unknown one
+/// is refused naming the line and attribute; a sample out of time order is sorted with a note
+/// naming its line; an empty UDDF `<depth>` is refused naming its line.
+#[test]
+fn dive_log_units_order_and_empty_values() {
+    use decophantom::profile::divelog;
+    let p = Path::new("u.xml");
+    let log = |surface: &str, depth: &str, t: &str| {
+        divelog::parse(
+            &format!(
+                "<divelog><dives><dive>\n<divecomputer>\n<surface pressure='{surface}'/>\n<sample time='0:00 min' depth='0 m'/>\n<sample time='{t}' depth='{depth}'/>\n<sample time='2:00 min' depth='0 m'/>\n</divecomputer></dive></dives></divelog>"
+            ),
+            p,
+        )
+        .map(|mut d| d.remove(0))
+    };
+    // 1012 mbar = 101 200 Pa; 69 ft = 69 · 0.3048 m (international foot)
+    let d = log("1012 mbar", "69 ft", "1:00 min").unwrap();
+    close(d.surface_pa, 101_200.0, "1012 mbar");
+    close(d.samples[1].1, 69.0 * 0.3048, "69 ft");
+    // 1.012 kPa is 1012 Pa, not 1.012 bar: implausible, so the default is used and noted
+    let d = log("1.012 kPa", "10 m", "1:00 min").unwrap();
+    assert_eq!(d.surface_pa, ATM_PA);
+    assert!(
+        d.notes.iter().any(|n| n.contains("1012 Pa")),
+        "{:?}",
+        d.notes
+    );
+    let e = log("1.012 bar", "21.1 furlong", "1:00 min").unwrap_err();
+    assert_eq!(
+        (e.line, e.field.as_deref()),
+        (Some(5), Some("sample.depth")),
+        "{e}"
+    );
+    let e = log("760 torr", "10 m", "1:00 min").unwrap_err();
+    assert_eq!(
+        (e.line, e.field.as_deref()),
+        (Some(3), Some("surface.pressure")),
+        "{e}"
+    );
+    // the 2:00 sample on line 6 comes after 3:00 in the file: read sorted, and said so
+    let d = log("1.012 bar", "10 m", "3:00 min").unwrap();
+    assert_eq!(
+        d.samples.iter().map(|s| s.0).collect::<Vec<_>>(),
+        vec![0.0, 120.0, 180.0]
+    );
+    assert!(
+        d.notes
+            .iter()
+            .any(|n| n.contains("out of time order") && n.contains("line 6")),
+        "{:?}",
+        d.notes
+    );
+    let d = log("1.012 bar", "10 m", "1:00 min").unwrap();
+    assert!(
+        !d.notes.iter().any(|n| n.contains("order")),
+        "{:?}",
+        d.notes
+    );
+
+    let uddf = |depth: &str| {
+        divelog::parse(
+            &format!("<uddf><profiledata><repetitiongroup><dive><samples>\n<waypoint><depth>0</depth><divetime>0</divetime></waypoint>\n<waypoint><depth>{depth}</depth><divetime>600</divetime></waypoint>\n<waypoint><depth>0</depth><divetime>1200</divetime></waypoint>\n</samples></dive></repetitiongroup></profiledata></uddf>"),
+            Path::new("u.uddf"),
+        )
+    };
+    assert_eq!(uddf("20").unwrap()[0].samples.len(), 3);
+    for bad in ["", "20 furlong"] {
+        let e = uddf(bad).unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(3), Some("waypoint.depth")),
+            "{e}"
+        );
+    }
+}
+
+/// `--vapour-pa` is a command-line value: out of range, or not below the profile's lowest
+/// ambient pressure, it is blamed on `<command line>`, not on the profile file. A folder given
+/// as the profile is named as a folder, whatever the other options.
+#[test]
+fn vapour_option_and_folder_profiles_name_their_source() {
+    let dir = std::env::temp_dir().join(format!("decophantom-vapour-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let txt = dir.join("low.txt");
+    // 101.325 kPa down to 20 kPa absolute
+    std::fs::write(&txt, "0 101.325\n10 20\n20 20\n").unwrap();
+    let with = |v: f64| LoadOptions {
+        vapour_pa: Some(v),
+        ..opts(TimeUnit::S, PressureUnit::Kpa)
+    };
+    assert_eq!(
+        profile::load(&txt, &with(6270.0)).unwrap().vapour_pa,
+        6270.0
+    );
+    for v in [1e6, 5e4, 2e4] {
+        let e = profile::load(&txt, &with(v)).unwrap_err();
+        assert_eq!(e.file.as_deref(), Some(Path::new("<command line>")), "{e}");
+        assert_eq!(e.field.as_deref(), Some("--vapour-pa"), "{e}");
+    }
+    for o in [
+        LoadOptions::default(),
+        opts(TimeUnit::Min, PressureUnit::Msw),
+    ] {
+        let e = profile::load(&dir, &o).unwrap_err();
+        assert_eq!(e.file.as_deref(), Some(dir.as_path()), "{e}");
+        assert!(e.message.contains("folder") && e.field.is_none(), "{e}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
