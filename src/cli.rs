@@ -585,7 +585,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 checkpoint_every: a
                     .checkpoint_every
                     .as_deref()
-                    .map(checkpoint_interval)
+                    .map(decophantom::phantom::checkpoint::parse_interval)
                     .transpose()?,
                 checkpoint_at_step: a.checkpoint_at_step,
                 resume: a.resume,
@@ -819,22 +819,6 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             Ok(0)
         }
     }
-}
-
-/// `--checkpoint-every`: a wall-clock interval with its unit (`60s`, `5min`, `1h`). A bare
-/// number is refused, as the message says: `5` could mean seconds or minutes.
-fn checkpoint_interval(text: &str) -> Result<std::time::Duration, decophantom::error::InputError> {
-    if text
-        .trim()
-        .ends_with(|c: char| c.is_ascii_digit() || c == '.')
-    {
-        return Err(decophantom::error::InputError::new(format!(
-            "'{text}' has no unit: give a positive number with a unit, e.g. 60s, 5min or 1h"
-        ))
-        .in_file("<command line>")
-        .field("--checkpoint-every"));
-    }
-    decophantom::phantom::checkpoint::parse_interval(text)
 }
 
 /// Refuse runs estimated above 6 h unless `--force` (the library itself sets no limit).

@@ -1236,8 +1236,8 @@ pub fn remove(file: &Path) {
     }
 }
 
-/// Parse a wall-clock interval: a number with a unit `s`, `min` or `h` (`60s`, `5min`, `1.5h`;
-/// a bare number is seconds). Positive and at most 30 days.
+/// Parse a wall-clock interval: a number with a unit `s`, `min` or `h` (`60s`, `5min`, `1.5h`).
+/// Positive and at most 30 days. A bare number is refused: `5` could mean seconds or minutes.
 pub fn parse_interval(text: &str) -> Result<Duration, InputError> {
     let t = text.trim();
     let err = || {
@@ -1255,7 +1255,14 @@ pub fn parse_interval(text: &str) -> Result<Duration, InputError> {
     // `e` of an exponent vs a unit: units here never start with e
     let (num, unit) = t.split_at(split);
     let factor = match unit.trim() {
-        "" | "s" | "sec" => 1.0,
+        "" => {
+            return Err(InputError::new(format!(
+                "'{text}' has no unit: give a positive number with a unit, e.g. 60s, 5min or 1h"
+            ))
+            .in_file("<command line>")
+            .field("--checkpoint-every"))
+        }
+        "s" | "sec" => 1.0,
         "min" | "m" => 60.0,
         "h" => 3600.0,
         _ => return Err(err()),
@@ -1399,7 +1406,8 @@ mod tests {
         assert_eq!(s("60s").unwrap(), 60.0);
         assert_eq!(s("5min").unwrap(), 300.0);
         assert_eq!(s("1.5h").unwrap(), 5400.0);
-        assert_eq!(s("90").unwrap(), 90.0);
+        // a bare number has no unit: refused (seconds or minutes?)
+        assert!(parse_interval("90").unwrap_err().to_string().contains("no unit"));
         assert_eq!(s(" 2 min ").unwrap(), 120.0);
         assert_eq!(s("0.25s").unwrap(), 0.25);
         for bad in [
