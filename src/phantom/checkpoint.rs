@@ -1407,7 +1407,10 @@ mod tests {
         assert_eq!(s("5min").unwrap(), 300.0);
         assert_eq!(s("1.5h").unwrap(), 5400.0);
         // a bare number has no unit: refused (seconds or minutes?)
-        assert!(parse_interval("90").unwrap_err().to_string().contains("no unit"));
+        assert!(parse_interval("90")
+            .unwrap_err()
+            .to_string()
+            .contains("no unit"));
         assert_eq!(s(" 2 min ").unwrap(), 120.0);
         assert_eq!(s("0.25s").unwrap(), 0.25);
         for bad in [
