@@ -888,35 +888,27 @@ fn explicit_tolerance_factor_is_checked() {
     assert_eq!(n.explicit_tolerance_factor, 2.0);
 }
 
-/// The phantom of the fit cases: a 2 mm cube (the largest sphere it holds has r = 1 mm), one
-/// bubble of 60 µm, every face open.
-const FIT_PHANTOM: &str = r#"[geometry]
-shape = "box"
-size_m = [2e-3, 2e-3, 2e-3]
-grid_step_m = 200e-6
-open_faces = ["x-", "x+", "y-", "y+", "top", "bottom"]
-[material]
-surface_tension = 0.07
-[material.elasticity]
-law = "hyperelastic"
-shear_modulus = 40.0
-[gases.n2]
-diffusivity = 2.5e-9
-ostwald = 0.014
-[gases.o2]
-diffusivity = 2.5e-9
-ostwald = 0.027
-[nuclei]
-min_radius_m = 20e-6
-[[bubbles]]
-position_m = [1e-3, 1e-3, 1e-3]
-initial_radius_m = 60e-6
-"#;
+/// The phantom of the fit cases: the module's small phantom ([`phantom`], a 2 mm cube: the
+/// largest sphere it holds has r = 1 mm) with every face open, a hyperelastic gel, one bubble of
+/// 60 µm and nuclei down to 20 µm.
+fn fit_phantom() -> String {
+    phantom(
+        "0.07",
+        "law = \"hyperelastic\"\nshear_modulus = 40.0",
+        "2.5e-9",
+        "[1e-3, 1e-3, 1e-3]",
+        "60e-6",
+    )
+    .replace(
+        "grid_step_m = 2e-4\n",
+        "grid_step_m = 2e-4\nopen_faces = [\"x-\", \"x+\", \"y-\", \"y+\", \"top\", \"bottom\"]\n",
+    ) + "[nuclei]\nmin_radius_m = 20e-6\n"
+}
 
 /// A fit lab in `dir`: the phantom above, 60 psi gauge → 0 in 10 s then 50 s at the surface,
 /// and `experiments.toml` naming one experiment `name`. Returns the experiments file.
 fn fit_lab(dir: &Path, name: &str) -> PathBuf {
-    write(dir, "phantom.toml", FIT_PHANTOM);
+    write(dir, "phantom.toml", &fit_phantom());
     write(
         dir,
         "profile.toml",
