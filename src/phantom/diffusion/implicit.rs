@@ -4,6 +4,18 @@
 
 use super::*;
 
+#[derive(Clone, Copy)]
+pub(super) struct SyncPtr(*mut f64);
+unsafe impl Send for SyncPtr {}
+unsafe impl Sync for SyncPtr {}
+
+impl SyncPtr {
+    /// The pointer (a method, so that a closure captures the whole `Send` wrapper).
+    fn get(self) -> *mut f64 {
+        self.0
+    }
+}
+
 /// Solve (I − r·A_d) u* = u (+ boundary terms) along direction `dir` in place; `cp` is scratch
 /// of the grid's length. Lines are independent tridiagonal systems; a line segment begins
 /// wherever a cell's minus side is not an interior face.
@@ -43,9 +55,10 @@ pub(super) fn sweep(
                 .map(move |lo| (b, lo, (lo + chunk).min(n_inner)))
         })
         .collect();
-    let ptrs = SyncPtrs([u.as_mut_ptr(), cp.as_mut_ptr()]);
+    let up = SyncPtr(u.as_mut_ptr());
+    let cpp = SyncPtr(cp.as_mut_ptr());
     items.par_iter().for_each(|&(b, lo, hi)| {
-        let [up, cpp] = ptrs.get();
+        let (up, cpp) = (up, cpp);
         let base = b * block_stride;
         // SAFETY: work items cover disjoint cell sets (distinct blocks, or distinct inner
         // ranges of the same block), and each item only touches its own cells.
@@ -56,13 +69,13 @@ pub(super) fn sweep(
                     let idx = row + i * inner_stride;
                     let c = *codes.get_unchecked(idx);
                     if c & INSIDE_BIT == 0 {
-                        *cpp.add(idx) = 0.0;
+                        *cpp.0.add(idx) = 0.0;
                         continue;
                     }
                     let m = c & 3;
                     let p = (c >> 2) & 3;
                     let bdiag = 1.0 + r * (weight(m) + weight(p));
-                    let mut rhs = *up.add(idx);
+                    let mut rhs = *up.0.add(idx);
                     if m == SIDE_OPEN {
                         rhs += 2.0 * r * cb;
                     }
@@ -72,23 +85,23 @@ pub(super) fn sweep(
                     let cm = if p == SIDE_INTERIOR { -r } else { 0.0 };
                     let denom = if m == SIDE_INTERIOR {
                         let prev = idx - along_stride;
-                        rhs += r * *up.add(prev);
-                        bdiag + r * *cpp.add(prev)
+                        rhs += r * *up.0.add(prev);
+                        bdiag + r * *cpp.0.add(prev)
                     } else {
                         bdiag
                     };
                     let inv = 1.0 / denom;
-                    *cpp.add(idx) = cm * inv;
-                    *up.add(idx) = rhs * inv;
+                    *cpp.0.add(idx) = cm * inv;
+                    *up.0.add(idx) = rhs * inv;
                 }
             }
             for a in (0..n_along.saturating_sub(1)).rev() {
                 let row = base + a * along_stride;
                 for i in lo..hi {
                     let idx = row + i * inner_stride;
-                    let cpi = *cpp.add(idx);
+                    let cpi = *cpp.0.add(idx);
                     if cpi != 0.0 {
-                        *up.add(idx) -= cpi * *up.add(idx + along_stride);
+                        *up.0.add(idx) -= cpi * *up.0.add(idx + along_stride);
                     }
                 }
             }
@@ -804,16 +817,14 @@ impl ImplicitSolver {
             self.per_field.push(Default::default());
         }
         let plan = self.plan.as_ref().expect("refreshed");
-        let [inflow] = planned_steps(grid, plan, [(u, &mut self.per_field[0], cb)], r, isa);
-        inflow
+        let (table, xvals) = &mut self.per_field[0];
+        planned_step(grid, plan, table, xvals, u, r, cb, isa)
     }
 
     /// Several fields' steps over the same grid, field `f` with diffusivity and boundary value
-    /// `dc[f] = (D_f, c_b,f)`, each the same bits as [`Self::step`] alone. Fields of equal
-    /// diffusivity (N2 and O2 in every preset) share their tridiagonal matrices, and are solved
-    /// together, in one pass over the lines that reads the plan and looks up the pivots once
-    /// for all of them; fields of different diffusivity are stepped side by side (rayon).
-    /// Returns each field's inflow into `inflow[f]`.
+    /// `dc[f] = (D_f, c_b,f)`, each the same bits as [`Self::step`] alone; the fields are
+    /// stepped side by side (rayon), so one field's serial parts (its table, its inflow sums)
+    /// overlap the other's sweeps. Returns each field's inflow into `inflow[f]`.
     pub fn steps(
         &mut self,
         grid: &Grid,
@@ -825,7 +836,7 @@ impl ImplicitSolver {
         self.steps_with(grid, fields, dc, dt, inflow, Isa::detect())
     }
 
-    pub(super) fn steps_with(
+    fn steps_with(
         &mut self,
         grid: &Grid,
         fields: &mut [&mut [f64]],
@@ -848,36 +859,15 @@ impl ImplicitSolver {
         }
         let plan = self.plan.as_ref().expect("refreshed");
         let h2 = grid.h * grid.h;
-        // the fields grouped by r (its bits), in field order within a group
-        let mut groups: Vec<(f64, Vec<FusedField<'_>>)> = Vec::new();
-        for (((u, pf), &(d, cb)), inflow) in fields
-            .iter_mut()
-            .zip(self.per_field.iter_mut())
-            .zip(dc)
-            .zip(inflow.iter_mut())
-        {
-            assert_eq!(u.len(), grid.len());
-            let r = d * dt / h2;
-            let member = ((&mut **u, pf, cb), inflow);
-            match groups.iter_mut().find(|(q, _)| q.to_bits() == r.to_bits()) {
-                Some((_, g)) => g.push(member),
-                None => groups.push((r, vec![member])),
-            }
-        }
-        groups.into_par_iter().for_each(|(r, group)| {
-            let (members, inflows): (Vec<_>, Vec<_>) = group.into_iter().unzip();
-            let out = match members.len() {
-                1 => planned_steps::<1>(grid, plan, to_array_of(members.into_iter()), r, isa)
-                    .to_vec(),
-                2 => planned_steps::<2>(grid, plan, to_array_of(members.into_iter()), r, isa)
-                    .to_vec(),
-                _ => planned_steps::<3>(grid, plan, to_array_of(members.into_iter()), r, isa)
-                    .to_vec(),
-            };
-            for (to, x) in inflows.into_iter().zip(out) {
-                *to = x;
-            }
-        });
+        fields
+            .par_iter_mut()
+            .zip(self.per_field.par_iter_mut())
+            .zip(dc.par_iter())
+            .zip(inflow.par_iter_mut())
+            .for_each(|(((u, (table, xvals)), &(d, cb)), inflow)| {
+                assert_eq!(u.len(), grid.len());
+                *inflow = planned_step(grid, plan, table, xvals, u, d * dt / h2, cb, isa);
+            });
     }
 
     /// Bring the plan level with the grid's codes; false when the grid takes the generic
@@ -905,65 +895,33 @@ impl ImplicitSolver {
     }
 }
 
-/// One field of a fused step: the field, its factor table and x-open values, its boundary
-/// value C_b.
-type Member<'a> = (&'a mut [f64], &'a mut (Tables, Vec<f64>), f64);
-
-/// A [`Member`] and where its inflow goes.
-type FusedField<'a> = (Member<'a>, &'a mut f64);
-
-/// The planned LOD step ([`ImplicitSolver::step`]) of `G` fields with one ratio r = D·dt/h²,
-/// each with its own factor table (its open faces' terms) and x-open values, in one pass over
-/// the lines (each field the same operations, so the same bits, as alone). Returns each
-/// field's boundary inflow.
-pub(super) fn planned_steps<const G: usize>(
+/// One field's planned LOD step ([`ImplicitSolver::step`]) with its own factor table and
+/// x-open values; r = D·dt/h². Returns the boundary inflow.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn planned_step(
     grid: &Grid,
     plan: &LinePlan,
-    members: [Member<'_>; G],
+    table: &mut Tables,
+    xvals: &mut Vec<f64>,
+    u: &mut [f64],
     r: f64,
+    cb: f64,
     isa: Isa,
-) -> [f64; G] {
-    let cbs = members.each_ref().map(|m| m.2);
-    let (mut us, pfs): (Vec<_>, Vec<_>) = members.into_iter().map(|(u, pf, _)| (u, pf)).unzip();
-    let mut tables = Vec::with_capacity(G);
-    let mut xvals: Vec<&mut Vec<f64>> = Vec::with_capacity(G);
-    for ((table, xv), &cb) in pfs.into_iter().map(|pf| (&mut pf.0, &mut pf.1)).zip(&cbs) {
-        table.fill(plan.max_len, r, cb);
-        xv.resize(grid.open_cells[0].len(), 0.0);
-        tables.push(&*table);
-        xvals.push(xv);
+) -> f64 {
+    table.fill(plan.max_len, r, cb);
+    xvals.resize(grid.open_cells[0].len(), 0.0);
+    sweep_xy(grid, plan, table, u, xvals, isa);
+    // the x inflow from the values right after the x sweep, summed in cell order
+    let mut fx = 0.0;
+    for (&(_, cnt), &x) in grid.open_cells[0].iter().zip(xvals.iter()) {
+        fx += r * 2.0 * cnt as f64 * (cb - x);
     }
-    let tables: [&Tables; G] = std::array::from_fn(|g| tables[g]);
-    let mut us: [&mut [f64]; G] = to_array_of(us.drain(..));
-    let mut xvals: [&mut Vec<f64>; G] = to_array_of(xvals.into_iter());
-    sweep_xy(grid, plan, tables, &mut us, &mut xvals, isa);
-    // the x inflow from the values right after the x sweep, summed in cell order, and the y
-    // inflow: each field's sums in turn, the fields side by side
-    let xy: Vec<f64> = (0..G)
-        .into_par_iter()
-        .map(|g| {
-            let mut fx = 0.0;
-            for (&(_, cnt), &x) in grid.open_cells[0].iter().zip(xvals[g].iter()) {
-                fx += r * 2.0 * cnt as f64 * (cbs[g] - x);
-            }
-            let mut inflow = 0.0;
-            inflow += fx;
-            inflow + open_face_inflow(grid, 1, us[g], r, cbs[g])
-        })
-        .collect();
-    sweep_z(grid, plan, tables, &mut us, isa);
-    let z: Vec<f64> = (0..G)
-        .into_par_iter()
-        .map(|g| open_face_inflow(grid, 2, us[g], r, cbs[g]))
-        .collect();
-    std::array::from_fn(|g| xy[g] + z[g])
-}
-
-/// An iterator of exactly `G` items as an array.
-fn to_array_of<T, const G: usize>(items: impl Iterator<Item = T>) -> [T; G] {
-    let v: Vec<T> = items.collect();
-    v.try_into()
-        .unwrap_or_else(|_| unreachable!("exactly {G} items"))
+    let mut inflow = 0.0;
+    inflow += fx;
+    inflow += open_face_inflow(grid, 1, u, r, cb);
+    sweep_z(grid, plan, table, u, isa);
+    inflow += open_face_inflow(grid, 2, u, r, cb);
+    inflow
 }
 
 /// Solve the lines of a stack of rows in place: row a (0 ≤ a < `n_along`) holds cells
@@ -976,8 +934,8 @@ fn to_array_of<T, const G: usize>(items: impl Iterator<Item = T>) -> [T; G] {
 /// the rows, and every table index is below `table.len()`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(super) unsafe fn solve_rows<const G: usize>(
-    bufs: [*mut f64; G],
+pub(super) unsafe fn solve_rows(
+    buf: *mut f64,
     index: *const u16,
     stride: usize,
     n_along: usize,
@@ -987,13 +945,11 @@ pub(super) unsafe fn solve_rows<const G: usize>(
     row_start: &[u32],
     row0: usize,
     rows_per: usize,
-    tables: [&Tables; G],
+    tables: &Tables,
     isa: Isa,
 ) {
-    // the fields share the pivots, weights and links (one r); only the open faces' terms
-    // (2·r·C_b) are each field's own
-    let (inv, cneg, r) = (&tables[0].inv[..], &tables[0].cneg[..], tables[0].r);
-    debug_assert!(tables.iter().all(|t| t.r.to_bits() == r.to_bits()));
+    let table = &tables.factors[..];
+    let (inv, cneg, r) = (&tables.inv[..], &tables.cneg[..], tables.r);
     let row_runs = |a: usize| -> &[Run] {
         let (r0, r1) = ((row0 + a) * rows_per, (row0 + a + 1) * rows_per);
         let rr = &runs[row_start[r0] as usize..row_start[r1] as usize];
@@ -1007,11 +963,11 @@ pub(super) unsafe fn solve_rows<const G: usize>(
     };
     // forward elimination
     for a in 0..n_along {
-        let curs = bufs.map(|b| b.add(a * stride));
-        let prevs = if a > 0 {
-            bufs.map(|b| b.add((a - 1) * stride) as *const f64)
+        let cur = buf.add(a * stride);
+        let prev = if a > 0 {
+            buf.add((a - 1) * stride)
         } else {
-            curs.map(|c| c as *const f64)
+            cur
         };
         let ix = index.add(a * stride);
         for run in row_runs(a) {
@@ -1022,44 +978,42 @@ pub(super) unsafe fn solve_rows<const G: usize>(
             }
             if run.idx == GATHER_MID {
                 // a > 0: a middle row has a previous row
-                mid_fwd(isa, curs, prevs, ix, inv.as_ptr(), r, s, e);
+                mid_fwd(isa, cur, prev, ix, inv.as_ptr(), r, s, e);
             } else if run.idx == GATHER {
-                for i in s..e {
-                    let k = *ix.add(i) as usize;
-                    for g in 0..G {
-                        let f = tables[g].factors.get_unchecked(k);
-                        let (cur, prev) = (curs[g], prevs[g]);
-                        let rhs = if a == 0 {
-                            *cur.add(i) + f.open_minus + f.open_plus
-                        } else {
-                            *cur.add(i) + f.open_minus + f.open_plus + f.link * *prev.add(i)
-                        };
+                if a == 0 {
+                    for i in s..e {
+                        let f = table.get_unchecked(*ix.add(i) as usize);
+                        let rhs = *cur.add(i) + f.open_minus + f.open_plus;
+                        *cur.add(i) = rhs * f.inv;
+                    }
+                } else {
+                    for i in s..e {
+                        let f = table.get_unchecked(*ix.add(i) as usize);
+                        let rhs = *cur.add(i) + f.open_minus + f.open_plus + f.link * *prev.add(i);
                         *cur.add(i) = rhs * f.inv;
                     }
                 }
             } else {
+                let f = *table.get_unchecked(run.idx as usize);
+                let (c, p) = (cur.add(s), prev.add(s));
                 let n = e - s;
-                for g in 0..G {
-                    let f = *tables[g].factors.get_unchecked(run.idx as usize);
-                    let (c, p) = (curs[g].add(s), prevs[g].add(s));
-                    match f.flags {
-                        0 => fwd::<false, false, false>(c, p, n, &f),
-                        OPEN_MINUS => fwd::<true, false, false>(c, p, n, &f),
-                        OPEN_PLUS => fwd::<false, true, false>(c, p, n, &f),
-                        3 => fwd::<true, true, false>(c, p, n, &f),
-                        LINKED => fwd::<false, false, true>(c, p, n, &f),
-                        5 => fwd::<true, false, true>(c, p, n, &f),
-                        6 => fwd::<false, true, true>(c, p, n, &f),
-                        _ => fwd::<true, true, true>(c, p, n, &f),
-                    }
+                match f.flags {
+                    0 => fwd::<false, false, false>(c, p, n, &f),
+                    OPEN_MINUS => fwd::<true, false, false>(c, p, n, &f),
+                    OPEN_PLUS => fwd::<false, true, false>(c, p, n, &f),
+                    3 => fwd::<true, true, false>(c, p, n, &f),
+                    LINKED => fwd::<false, false, true>(c, p, n, &f),
+                    5 => fwd::<true, false, true>(c, p, n, &f),
+                    6 => fwd::<false, true, true>(c, p, n, &f),
+                    _ => fwd::<true, true, true>(c, p, n, &f),
                 }
             }
         }
     }
     // back substitution
     for a in (0..n_along.saturating_sub(1)).rev() {
-        let curs = bufs.map(|b| b.add(a * stride));
-        let nexts = bufs.map(|b| b.add((a + 1) * stride) as *const f64);
+        let cur = buf.add(a * stride);
+        let next = buf.add((a + 1) * stride);
         let ix = index.add(a * stride);
         for run in row_runs(a) {
             let s = (run.start as usize).max(lo);
@@ -1068,7 +1022,7 @@ pub(super) unsafe fn solve_rows<const G: usize>(
                 break;
             }
             if run.idx == GATHER_MID {
-                mid_back(isa, curs, nexts, ix, cneg.as_ptr(), s, e);
+                mid_back(isa, cur, next, ix, cneg.as_ptr(), s, e);
             } else if run.idx == GATHER {
                 // each cell's own weight, skipped where it is zero (a segment's last cell, a cell
                 // outside), as the generic sweep does: the x sweep's copy holds stale values
@@ -1077,19 +1031,14 @@ pub(super) unsafe fn solve_rows<const G: usize>(
                 for i in s..e {
                     let w = *cneg.as_ptr().add(*ix.add(i) as usize);
                     if w != 0.0 {
-                        for g in 0..G {
-                            *curs[g].add(i) -= w * *nexts[g].add(i);
-                        }
+                        *cur.add(i) -= w * *next.add(i);
                     }
                 }
             } else {
-                let cneg = cneg.get_unchecked(run.idx as usize);
-                if *cneg != 0.0 {
-                    for g in 0..G {
-                        let (cur, next) = (curs[g], nexts[g]);
-                        for i in s..e {
-                            *cur.add(i) -= cneg * *next.add(i);
-                        }
+                let cneg = table.get_unchecked(run.idx as usize).cneg;
+                if cneg != 0.0 {
+                    for i in s..e {
+                        *cur.add(i) -= cneg * *next.add(i);
                     }
                 }
             }
@@ -1097,19 +1046,18 @@ pub(super) unsafe fn solve_rows<const G: usize>(
     }
 }
 
-/// The forward elimination of a run of middle rows, cells `s..e`, in each of the fields:
-/// cur = (cur + r·prev)·inv\[ix\], the pivots looked up per cell (gathered once for all the
-/// fields in the vector sets).
+/// The forward elimination of a run of middle rows, cells `s..e`:
+/// cur = (cur + r·prev)·inv\[ix\], the pivots looked up per cell (gathered in the vector sets).
 ///
 /// # Safety
 /// The pointers are valid for the cells `s..e`, every index is below the table's length, and
 /// the CPU has the instruction set `isa`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(super) unsafe fn mid_fwd<const G: usize>(
+pub(super) unsafe fn mid_fwd(
     isa: Isa,
-    curs: [*mut f64; G],
-    prevs: [*const f64; G],
+    cur: *mut f64,
+    prev: *const f64,
     ix: *const u16,
     inv: *const f64,
     r: f64,
@@ -1118,31 +1066,27 @@ pub(super) unsafe fn mid_fwd<const G: usize>(
 ) {
     #[cfg(target_arch = "x86_64")]
     let s = match isa {
-        Isa::Avx512 => mid_fwd_avx512(curs, prevs, ix, inv, r, s, e),
-        Isa::Avx2 => mid_fwd_avx2(curs, prevs, ix, inv, r, s, e),
+        Isa::Avx512 => mid_fwd_avx512(cur, prev, ix, inv, r, s, e),
+        Isa::Avx2 => mid_fwd_avx2(cur, prev, ix, inv, r, s, e),
         Isa::Portable => s,
     };
     #[cfg(not(target_arch = "x86_64"))]
     let _ = isa;
     for i in s..e {
-        let f = *inv.add(*ix.add(i) as usize);
-        for g in 0..G {
-            let rhs = *curs[g].add(i) + r * *prevs[g].add(i);
-            *curs[g].add(i) = rhs * f;
-        }
+        let rhs = *cur.add(i) + r * *prev.add(i);
+        *cur.add(i) = rhs * *inv.add(*ix.add(i) as usize);
     }
 }
 
-/// The back substitution of a run of middle rows, cells `s..e`, in each of the fields:
-/// cur −= cneg\[ix\]·next.
+/// The back substitution of a run of middle rows, cells `s..e`: cur −= cneg\[ix\]·next.
 ///
 /// # Safety
 /// As [`mid_fwd`].
 #[inline(always)]
-pub(super) unsafe fn mid_back<const G: usize>(
+pub(super) unsafe fn mid_back(
     isa: Isa,
-    curs: [*mut f64; G],
-    nexts: [*const f64; G],
+    cur: *mut f64,
+    next: *const f64,
     ix: *const u16,
     cneg: *const f64,
     s: usize,
@@ -1150,31 +1094,28 @@ pub(super) unsafe fn mid_back<const G: usize>(
 ) {
     #[cfg(target_arch = "x86_64")]
     let s = match isa {
-        Isa::Avx512 => mid_back_avx512(curs, nexts, ix, cneg, s, e),
-        Isa::Avx2 => mid_back_avx2(curs, nexts, ix, cneg, s, e),
+        Isa::Avx512 => mid_back_avx512(cur, next, ix, cneg, s, e),
+        Isa::Avx2 => mid_back_avx2(cur, next, ix, cneg, s, e),
         Isa::Portable => s,
     };
     #[cfg(not(target_arch = "x86_64"))]
     let _ = isa;
     for i in s..e {
-        let w = *cneg.add(*ix.add(i) as usize);
-        for g in 0..G {
-            *curs[g].add(i) -= w * *nexts[g].add(i);
-        }
+        *cur.add(i) -= *cneg.add(*ix.add(i) as usize) * *next.add(i);
     }
 }
 
 /// The vector forms of [`mid_fwd`] and [`mid_back`] for one instruction set:
-/// `$lanes` cells at a time with the pivots or weights gathered once for every field (the
-/// same operations per cell, so the same bits); each returns where the scalar tail starts.
+/// `$lanes` cells at a time with the pivots or weights gathered (the same operations per
+/// cell, so the same bits); each returns where the scalar tail starts.
 macro_rules! gathered_mid_runs {
     ($feature:literal, $fwd:ident, $back:ident, $lanes:literal, $gather:ident,
      $set1:ident, $load:ident, $store:ident, $add:ident, $sub:ident, $mul:ident) => {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = $feature)]
-        unsafe fn $fwd<const G: usize>(
-            curs: [*mut f64; G],
-            prevs: [*const f64; G],
+        unsafe fn $fwd(
+            cur: *mut f64,
+            prev: *const f64,
             ix: *const u16,
             inv: *const f64,
             r: f64,
@@ -1186,11 +1127,9 @@ macro_rules! gathered_mid_runs {
             let mut i = s;
             while i + $lanes <= e {
                 let f = $gather(ix.add(i), inv);
-                for g in 0..G {
-                    let p = $mul(rv, $load(prevs[g].add(i)));
-                    let rhs = $add($load(curs[g].add(i)), p);
-                    $store(curs[g].add(i), $mul(rhs, f));
-                }
+                let p = $mul(rv, $load(prev.add(i)));
+                let rhs = $add($load(cur.add(i)), p);
+                $store(cur.add(i), $mul(rhs, f));
                 i += $lanes;
             }
             i
@@ -1198,9 +1137,9 @@ macro_rules! gathered_mid_runs {
 
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = $feature)]
-        unsafe fn $back<const G: usize>(
-            curs: [*mut f64; G],
-            nexts: [*const f64; G],
+        unsafe fn $back(
+            cur: *mut f64,
+            next: *const f64,
             ix: *const u16,
             cneg: *const f64,
             s: usize,
@@ -1210,10 +1149,8 @@ macro_rules! gathered_mid_runs {
             let mut i = s;
             while i + $lanes <= e {
                 let w = $gather(ix.add(i), cneg);
-                for g in 0..G {
-                    let t = $mul(w, $load(nexts[g].add(i)));
-                    $store(curs[g].add(i), $sub($load(curs[g].add(i)), t));
-                }
+                let t = $mul(w, $load(next.add(i)));
+                $store(cur.add(i), $sub($load(cur.add(i)), t));
                 i += $lanes;
             }
             i
@@ -1415,45 +1352,40 @@ pub(super) unsafe fn x_lines_avx(
 }
 
 thread_local! {
-    /// Per thread, one z-plane transposed per field of a fused step (the x sweep's working
-    /// copies).
+    /// Per thread, one z-plane transposed (the x sweep's working copy).
     static PLANE: std::cell::RefCell<Vec<f64>> = const { std::cell::RefCell::new(Vec::new()) };
 }
 
-/// The x and y sweeps of one z-plane `b` in each of `G` fields that share the factor tables'
-/// pivots (one r; the plane stays in the core's cache): transpose each field's plane into its
-/// copy `ts[g]` so the x lines run across rows, solve, transpose back, keep the x-open cells'
+/// The x and y sweeps of one z-plane `b` (the plane stays in the core's cache): transpose it
+/// into `t` so the x lines run across rows, solve, transpose back, keep the x-open cells'
 /// values, solve the y lines.
 ///
 /// # Safety
-/// `us[g]` is a field of the grid, `xvals[g]` as `grid.open_cells[0]`, `ts[g]` has a plane's
-/// length (and none overlap); no other thread touches plane `b` or its entries of `xvals`.
+/// `u` is the grid's field, `xvals` as `grid.open_cells[0]`, `t` has a plane's length; no
+/// other thread touches plane `b` or its entries of `xvals`.
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-pub(super) unsafe fn xy_plane<const G: usize>(
+pub(super) unsafe fn xy_plane(
     grid: &Grid,
     plan: &LinePlan,
-    tables: [&Tables; G],
-    us: [*mut f64; G],
-    xvals: [*mut f64; G],
-    ts: [*mut f64; G],
+    table: &Tables,
+    u: *mut f64,
+    xvals: *mut f64,
+    t: *mut f64,
     b: usize,
     isa: Isa,
 ) {
     let [nx, ny, _] = grid.n;
     let plane = nx * ny;
-    let ups = us.map(|u| u.add(b * plane));
+    let up = u.add(b * plane);
     let xs = x_row_stride(ny);
     let ext = &grid.inside_extents[b * ny..(b + 1) * ny];
     let lines = |into_t: bool| {
-        for g in 0..G {
-            #[cfg(target_arch = "x86_64")]
-            if isa != Isa::Portable {
-                x_lines_avx(ups[g], nx, ts[g], xs, ext, into_t);
-                continue;
-            }
-            x_lines(ups[g], nx, ts[g], xs, ext, into_t)
+        #[cfg(target_arch = "x86_64")]
+        if isa != Isa::Portable {
+            return x_lines_avx(up, nx, t, xs, ext, into_t);
         }
+        x_lines(up, nx, t, xs, ext, into_t)
     };
     // rows of t past the longest line hold no cell
     let n_rows = ext
@@ -1465,7 +1397,7 @@ pub(super) unsafe fn xy_plane<const G: usize>(
     // cell of the gel reads it, see `solve_rows`)
     lines(true);
     solve_rows(
-        ts,
+        t,
         plan.index[0].as_ptr().add(b * nx * xs),
         xs,
         n_rows,
@@ -1475,18 +1407,15 @@ pub(super) unsafe fn xy_plane<const G: usize>(
         &plan.row_start[0],
         b * nx,
         1,
-        tables,
+        table,
         isa,
     );
     lines(false);
     for q in plan.xopen_start[b]..plan.xopen_start[b + 1] {
-        let idx = grid.open_cells[0].get_unchecked(q).0 as usize;
-        for g in 0..G {
-            *xvals[g].add(q) = *us[g].add(idx);
-        }
+        *xvals.add(q) = *u.add(grid.open_cells[0].get_unchecked(q).0 as usize);
     }
     solve_rows(
-        ups,
+        up,
         plan.index[1].as_ptr().add(b * plane),
         nx,
         ny,
@@ -1496,28 +1425,28 @@ pub(super) unsafe fn xy_plane<const G: usize>(
         &plan.row_start[1],
         b * ny,
         1,
-        tables,
+        table,
         isa,
     );
 }
 
-/// The z sweep of the columns `lo..hi` (plane indices) in each of the fields.
+/// The z sweep of the columns `lo..hi` (plane indices).
 ///
 /// # Safety
-/// `us[g]` is a field of the grid; no other thread touches these columns.
+/// `u` is the grid's field; no other thread touches these columns.
 #[inline(always)]
-pub(super) unsafe fn z_chunk<const G: usize>(
+pub(super) unsafe fn z_chunk(
     grid: &Grid,
     plan: &LinePlan,
-    tables: [&Tables; G],
-    us: [*mut f64; G],
+    table: &Tables,
+    u: *mut f64,
     lo: usize,
     hi: usize,
     isa: Isa,
 ) {
     let [nx, ny, nz] = grid.n;
     solve_rows(
-        us,
+        u,
         plan.index[2].as_ptr(),
         nx * ny,
         nz,
@@ -1527,62 +1456,45 @@ pub(super) unsafe fn z_chunk<const G: usize>(
         &plan.row_start[2],
         0,
         ny,
-        tables,
+        table,
         isa,
     );
 }
 
-isa_variants!(xy_plane, xy_plane_avx2, xy_plane_avx512, <const G: usize>
-    (grid: &Grid, plan: &LinePlan, tables: [&Tables; G], us: [*mut f64; G], xvals: [*mut f64; G], ts: [*mut f64; G], b: usize, isa: Isa));
-isa_variants!(z_chunk, z_chunk_avx2, z_chunk_avx512, <const G: usize>
-    (grid: &Grid, plan: &LinePlan, tables: [&Tables; G], us: [*mut f64; G], lo: usize, hi: usize, isa: Isa));
+isa_variants!(xy_plane, xy_plane_avx2, xy_plane_avx512,
+    (grid: &Grid, plan: &LinePlan, table: &Tables, u: *mut f64, xvals: *mut f64, t: *mut f64, b: usize, isa: Isa));
+isa_variants!(z_chunk, z_chunk_avx2, z_chunk_avx512,
+    (grid: &Grid, plan: &LinePlan, table: &Tables, u: *mut f64, lo: usize, hi: usize, isa: Isa));
 
-/// Raw pointers of `G` fields, shareable across the sweeps' tasks (each task writes its own
-/// cells).
-#[derive(Clone, Copy)]
-pub(super) struct SyncPtrs<const G: usize>([*mut f64; G]);
-unsafe impl<const G: usize> Send for SyncPtrs<G> {}
-unsafe impl<const G: usize> Sync for SyncPtrs<G> {}
-
-impl<const G: usize> SyncPtrs<G> {
-    /// The pointers (a method, so that a closure captures the whole `Send` wrapper).
-    fn get(self) -> [*mut f64; G] {
-        self.0
-    }
-}
-
-/// The x and y sweeps, plane by plane (planes in parallel), in each of the fields.
-fn sweep_xy<const G: usize>(
+/// The x and y sweeps, plane by plane (planes in parallel).
+fn sweep_xy(
     grid: &Grid,
     plan: &LinePlan,
-    tables: [&Tables; G],
-    us: &mut [&mut [f64]; G],
-    xvals: &mut [&mut Vec<f64>; G],
+    table: &Tables,
+    u: &mut [f64],
+    xvals: &mut [f64],
     isa: Isa,
 ) {
     let [nx, ny, nz] = grid.n;
-    let up = SyncPtrs(std::array::from_fn(|g| us[g].as_mut_ptr()));
-    let xp = SyncPtrs(std::array::from_fn(|g| xvals[g].as_mut_ptr()));
-    let copy = nx * x_row_stride(ny);
+    let up = SyncPtr(u.as_mut_ptr());
+    let xp = SyncPtr(xvals.as_mut_ptr());
     let run = |b: usize| {
         PLANE.with(|t| {
             let mut t = t.borrow_mut();
-            if t.len() < G * copy {
-                t.resize(G * copy, 0.0);
+            if t.len() < nx * x_row_stride(ny) {
+                t.resize(nx * x_row_stride(ny), 0.0);
             }
             let tp = t.as_mut_ptr();
-            // SAFETY: the copies are disjoint pieces of `t`, this thread's own
-            let ts: [*mut f64; G] = std::array::from_fn(|g| unsafe { tp.add(g * copy) });
-            // SAFETY: each plane is handled by one call; the plan was built for this grid
-            // (checked by codes_id); the ISA was detected.
+            // SAFETY: each plane is handled by one call; `t` is this thread's own; the
+            // plan was built for this grid (checked by codes_id); the ISA was detected.
             unsafe {
                 match isa {
-                    Isa::Portable => xy_plane(grid, plan, tables, up.get(), xp.get(), ts, b, isa),
+                    Isa::Portable => xy_plane(grid, plan, table, up.get(), xp.get(), tp, b, isa),
                     #[cfg(target_arch = "x86_64")]
-                    Isa::Avx2 => xy_plane_avx2(grid, plan, tables, up.get(), xp.get(), ts, b, isa),
+                    Isa::Avx2 => xy_plane_avx2(grid, plan, table, up.get(), xp.get(), tp, b, isa),
                     #[cfg(target_arch = "x86_64")]
                     Isa::Avx512 => {
-                        xy_plane_avx512(grid, plan, tables, up.get(), xp.get(), ts, b, isa)
+                        xy_plane_avx512(grid, plan, table, up.get(), xp.get(), tp, b, isa)
                     }
                 }
             }
@@ -1592,16 +1504,10 @@ fn sweep_xy<const G: usize>(
 }
 
 /// The z sweep, columns in chunks (in parallel) small enough that a chunk's nz planes stay
-/// in the core's L2 cache between the forward and the backward pass (a quarter of a 2 MiB L2
-/// per field: on the Fig. 5 cylinder 1 136 columns, 9 KiB per plane; half that was 2 % slower
-/// on the dive, docs/speed-history.md, session 19).
-fn sweep_z<const G: usize>(
-    grid: &Grid,
-    plan: &LinePlan,
-    tables: [&Tables; G],
-    us: &mut [&mut [f64]; G],
-    isa: Isa,
-) {
+/// in the core's L2 cache between the forward and the backward pass (a quarter of a 2 MiB L2:
+/// on the Fig. 5 cylinder 1 136 columns, 9 KiB per plane; half that was 2 % slower on the
+/// dive, docs/speed-history.md, session 19).
+fn sweep_z(grid: &Grid, plan: &LinePlan, table: &Tables, u: &mut [f64], isa: Isa) {
     let [nx, ny, nz] = grid.n;
     let plane = nx * ny;
     const L2_BUDGET: usize = 512 * 1024;
@@ -1609,18 +1515,18 @@ fn sweep_z<const G: usize>(
     let by_cache = (L2_BUDGET / (8 * nz)).max(64);
     let by_threads = plane.div_ceil(4 * threads);
     let chunk = by_cache.min(by_threads).max(8).next_multiple_of(8);
-    let up = SyncPtrs(std::array::from_fn(|g| us[g].as_mut_ptr()));
+    let up = SyncPtr(u.as_mut_ptr());
     let n_chunks = plane.div_ceil(chunk);
     (0..n_chunks).into_par_iter().for_each(|c| {
         let (lo, hi) = (c * chunk, ((c + 1) * chunk).min(plane));
         // SAFETY: chunks are disjoint column sets; the plan matches the grid.
         unsafe {
             match isa {
-                Isa::Portable => z_chunk(grid, plan, tables, up.get(), lo, hi, isa),
+                Isa::Portable => z_chunk(grid, plan, table, up.get(), lo, hi, isa),
                 #[cfg(target_arch = "x86_64")]
-                Isa::Avx2 => z_chunk_avx2(grid, plan, tables, up.get(), lo, hi, isa),
+                Isa::Avx2 => z_chunk_avx2(grid, plan, table, up.get(), lo, hi, isa),
                 #[cfg(target_arch = "x86_64")]
-                Isa::Avx512 => z_chunk_avx512(grid, plan, tables, up.get(), lo, hi, isa),
+                Isa::Avx512 => z_chunk_avx512(grid, plan, table, up.get(), lo, hi, isa),
             }
         }
     });

@@ -82,19 +82,18 @@ use rayon::prelude::*;
 /// Instantiate a kernel for an instruction set: `#[target_feature]` lets the compiler
 /// vectorise the inlined body with that set's registers (no FMA: Rust never contracts).
 macro_rules! isa_variants {
-    ($name:ident, $avx2:ident, $avx512:ident, $(<const $g:ident: usize>)?
-     ($($arg:ident: $ty:ty),*) $(-> $ret:ty)?) => {
+    ($name:ident, $avx2:ident, $avx512:ident, ($($arg:ident: $ty:ty),*) $(-> $ret:ty)?) => {
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx2")]
         #[allow(clippy::too_many_arguments)]
-        unsafe fn $avx2$(<const $g: usize>)?($($arg: $ty),*) $(-> $ret)? {
-            $name$(::<$g>)?($($arg),*)
+        unsafe fn $avx2($($arg: $ty),*) $(-> $ret)? {
+            $name($($arg),*)
         }
         #[cfg(target_arch = "x86_64")]
         #[target_feature(enable = "avx512f")]
         #[allow(clippy::too_many_arguments)]
-        unsafe fn $avx512$(<const $g: usize>)?($($arg: $ty),*) $(-> $ret)? {
-            $name$(::<$g>)?($($arg),*)
+        unsafe fn $avx512($($arg: $ty),*) $(-> $ret)? {
+            $name($($arg),*)
         }
     };
 }
