@@ -90,7 +90,7 @@ pub fn toml_error(path: &Path, text: &str, err: &toml::de::Error) -> InputError 
     let line = err
         .span()
         .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
-    let msg = err.message().trim().to_string();
+    let msg = without_type_names(err.message().trim());
     // serde names the offending key as "unknown field `x`"; surface it as the field.
     let field = msg
         .strip_prefix("unknown field `")
@@ -104,6 +104,25 @@ pub fn toml_error(path: &Path, text: &str, err: &toml::de::Error) -> InputError 
         e = e.field(f);
     }
     e
+}
+
+/// A serde message in the words of the file, not of the code: serde names the Rust type a
+/// table is read into (`invalid type: integer `1`, expected struct RawStop`), which a user never
+/// wrote; every such type is a TOML table, so the message says so.
+fn without_type_names(msg: &str) -> String {
+    let mut out = String::with_capacity(msg.len());
+    let mut rest = msg;
+    while let Some(i) = rest.find("expected struct ") {
+        out.push_str(&rest[..i]);
+        out.push_str("expected a table");
+        let after = &rest[i + "expected struct ".len()..];
+        let name_len = after
+            .find(|c: char| !(c.is_alphanumeric() || c == '_'))
+            .unwrap_or(after.len());
+        rest = &after[name_len..];
+    }
+    out.push_str(rest);
+    out
 }
 
 /// [`toml_error`] with the field named by its dotted path, for serde's type and length errors
@@ -284,5 +303,33 @@ mod tests {
         let text = "[p]\npoints = [\n  [0, 0], # t = 0\n  [1, 2, 3],\n]\n";
         let off = text.find("[1, 2, 3]").unwrap();
         assert_eq!(toml_field_at(text, off, "x").as_deref(), Some("p.points"));
+    }
+
+    /// A table given as a number: the message names a table, not the Rust type it is read
+    /// into (`RawStop` leaked into a schedule file's errors before session 29).
+    #[test]
+    fn type_names_do_not_reach_the_message() {
+        #[derive(Debug, serde::Deserialize)]
+        #[allow(dead_code)]
+        struct RawInner {
+            a: f64,
+        }
+        #[derive(Debug, serde::Deserialize)]
+        #[allow(dead_code)]
+        struct RawOuter {
+            inner: Vec<RawInner>,
+        }
+        let text = "inner = [1]\n";
+        let err = toml::from_str::<RawOuter>(text).unwrap_err();
+        assert!(err.message().contains("RawInner"), "{}", err.message());
+        let e = toml_error(Path::new("f.toml"), text, &err).to_string();
+        assert_eq!(
+            e, "f.toml:1: invalid type: integer `1`, expected a table",
+            "{e}"
+        );
+        assert_eq!(
+            without_type_names("expected struct A_1, or expected struct B."),
+            "expected a table, or expected a table."
+        );
     }
 }

@@ -1,7 +1,7 @@
 //! A planned dive and the schedule an algorithm produces for it.
 
 use super::conventions::Conventions;
-use crate::error::{line_of_key, toml_error, InputError};
+use crate::error::{line_of_key, toml_error_with_path, InputError};
 use crate::gas::GasMix;
 use crate::profile::PressureHistory;
 use serde::{Deserialize, Serialize};
@@ -543,7 +543,8 @@ impl Schedule {
     }
 
     fn from_toml_str_unlined(text: &str, path: &Path) -> Result<Schedule, InputError> {
-        let raw: RawSchedule = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+        let raw: RawSchedule =
+            toml::from_str(text).map_err(|e| toml_error_with_path(path, text, &e))?;
         let at_key = |key: &str, msg: String| {
             let mut e = InputError::new(msg).in_file(path).field(key);
             if let Some(l) = line_of_key(text, key) {

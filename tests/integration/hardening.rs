@@ -314,6 +314,17 @@ fn numbers_that_would_be_written_wrong_are_refused() {
     )
     .unwrap_err();
     assert!(e.field.as_deref().unwrap().contains("depth_m"), "{e}");
+    // a table given as a number: its key and "a table", not the Rust type `RawStop` (session 29)
+    let text = schedule("10.0", "1.0").replace("[[stops]]", "[x]");
+    let text = text.replacen("[[legs]]", "stops = [1]\n\n[[legs]]", 1);
+    let e =
+        decophantom::algorithm::Schedule::from_toml_str(&text, Path::new("s.toml")).unwrap_err();
+    assert_eq!(
+        (e.line, e.field.as_deref()),
+        (Some(6), Some("stops")),
+        "{e}"
+    );
+    assert!(e.to_string().ends_with("expected a table"), "{e}");
     // plan --time 1e308 (printed "inf min", "CNS: inf %") and VPM-B --time 1e20 ("-0 min")
     for (alg, time) in [
         ("algorithms/zhl16c-gf30-85.toml", "1e308"),
