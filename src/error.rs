@@ -17,13 +17,29 @@ pub enum Error {
     #[error("interrupted: {0}")]
     Interrupted(String),
     /// An I/O failure while writing outputs.
-    #[error("{path}: {source}")]
+    #[error("{path}: {error}")]
     Io {
         /// The file or folder involved.
         path: PathBuf,
-        /// The underlying error.
-        source: std::io::Error,
+        /// The underlying error: in the message, and deliberately not chained as its source
+        /// (the binary prints the chain, which would repeat the OS text).
+        error: std::io::Error,
     },
+}
+
+impl Error {
+    /// An [`Error::Io`] at `path`.
+    pub fn io(path: &Path, error: std::io::Error) -> Error {
+        Error::Io {
+            path: path.to_path_buf(),
+            error,
+        }
+    }
+
+    /// [`Error::io`] at `path`, for `map_err`.
+    pub fn io_at(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
+        move |error| Error::io(path, error)
+    }
 }
 
 /// A bad-input error with its location.
@@ -303,6 +319,17 @@ mod tests {
         let text = "[p]\npoints = [\n  [0, 0], # t = 0\n  [1, 2, 3],\n]\n";
         let off = text.find("[1, 2, 3]").unwrap();
         assert_eq!(toml_field_at(text, off, "x").as_deref(), Some("p.points"));
+    }
+
+    /// The binary prints an error with its chain (`{:#}`): an I/O error's OS text once
+    /// (twice before session 29, as the message's and again as its source's).
+    #[test]
+    fn an_io_error_prints_its_os_text_once() {
+        let e = Error::io(Path::new("out/x.csv"), std::io::Error::other("disk full"));
+        assert_eq!(
+            format!("{:#}", anyhow::Error::from(e)),
+            "out/x.csv: disk full"
+        );
     }
 
     /// A table given as a number: the message names a table, not the Rust type it is read

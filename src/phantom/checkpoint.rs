@@ -1193,10 +1193,7 @@ pub fn prepare(file: &Path) -> Result<(), Error> {
     }
     match std::fs::symlink_metadata(file) {
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => Ok(()),
-        Err(e) => Err(Error::Io {
-            path: file.to_path_buf(),
-            source: e,
-        }),
+        Err(e) => Err(Error::io(file, e)),
         Ok(m) if !m.is_file() => Err(err(
             "exists and is not a checkpoint file; move it, or choose another --out".into(),
         )),
@@ -1364,10 +1361,7 @@ impl Checkpointer {
             .parent()
             .filter(|d| !d.as_os_str().is_empty())
         {
-            std::fs::create_dir_all(dir).map_err(|e| Error::Io {
-                path: dir.to_path_buf(),
-                source: e,
-            })?;
+            std::fs::create_dir_all(dir).map_err(Error::io_at(dir))?;
         }
         crate::report::output::write_file_atomic_with_inputs(&self.stats.path, &bytes, &guard)?;
         if let Some(dir) = self

@@ -15,13 +15,6 @@ use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
-    move |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
 /// The journal folder of an output folder: `OUT.partial` beside it.
 pub fn dir_of(out: &Path) -> PathBuf {
     let name = out
@@ -81,7 +74,7 @@ impl Journal {
         contents: &[String],
     ) -> Result<Journal, Error> {
         let dir = dir_of(out);
-        std::fs::create_dir_all(&dir).map_err(io(&dir))?;
+        std::fs::create_dir_all(&dir).map_err(Error::io_at(&dir))?;
         let mut files = Vec::new();
         for (i, name) in names.iter().enumerate() {
             let path = dir.join(name);
@@ -90,12 +83,12 @@ impl Journal {
             } else {
                 contents[i].clone()
             };
-            std::fs::write(&path, text).map_err(io(&path))?;
+            std::fs::write(&path, text).map_err(Error::io_at(&path))?;
             files.push(
                 std::fs::OpenOptions::new()
                     .append(true)
                     .open(&path)
-                    .map_err(io(&path))?,
+                    .map_err(Error::io_at(&path))?,
             );
         }
         Ok(Journal {
@@ -114,8 +107,10 @@ impl Journal {
             .map_err(|_| Error::Solver("journal lock poisoned".into()))?;
         for i in (0..parts.len().min(files.len())).rev() {
             let path = self.dir.join(&self.names[i]);
-            files[i].write_all(parts[i].as_bytes()).map_err(io(&path))?;
-            files[i].flush().map_err(io(&path))?;
+            files[i]
+                .write_all(parts[i].as_bytes())
+                .map_err(Error::io_at(&path))?;
+            files[i].flush().map_err(Error::io_at(&path))?;
         }
         Ok(())
     }

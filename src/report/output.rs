@@ -68,13 +68,6 @@ impl Drop for Committing {
 const MARKER_HEADER: &str =
     "This folder was written whole by decophantom; the next run into it replaces it.";
 
-fn io_err(path: &Path, source: std::io::Error) -> Error {
-    Error::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
 impl OutputSet {
     /// An empty set.
     pub fn new() -> Self {
@@ -184,16 +177,16 @@ impl OutputSet {
                 .into())
             }
             Err(e) if e.kind() == std::io::ErrorKind::NotFound => false,
-            Err(e) => return Err(io_err(dir, e)),
+            Err(e) => return Err(Error::io(dir, e)),
         };
-        std::fs::create_dir_all(&parent).map_err(|e| io_err(&parent, e))?;
+        std::fs::create_dir_all(&parent).map_err(|e| Error::io(&parent, e))?;
         let tag = format!(
             "{}-{}",
             std::process::id(),
             COUNTER.fetch_add(1, Ordering::Relaxed)
         );
         let staging = parent.join(format!(".{name}.staging-{tag}"));
-        std::fs::create_dir(&staging).map_err(|e| io_err(&staging, e))?;
+        std::fs::create_dir(&staging).map_err(|e| Error::io(&staging, e))?;
         if let Err(e) = self.write_all(&staging) {
             let _ = std::fs::remove_dir_all(&staging);
             return Err(e);
@@ -201,7 +194,7 @@ impl OutputSet {
         if !exists {
             if let Err(e) = std::fs::rename(&staging, dir) {
                 let _ = std::fs::remove_dir_all(&staging);
-                return Err(io_err(dir, e));
+                return Err(Error::io(dir, e));
             }
             sync_dir(&parent);
             return Ok(());
@@ -209,12 +202,12 @@ impl OutputSet {
         let old = parent.join(format!(".{name}.old-{tag}"));
         if let Err(e) = std::fs::rename(dir, &old) {
             let _ = std::fs::remove_dir_all(&staging);
-            return Err(io_err(dir, e));
+            return Err(Error::io(dir, e));
         }
         if let Err(e) = std::fs::rename(&staging, dir) {
             let _ = std::fs::rename(&old, dir);
             let _ = std::fs::remove_dir_all(&staging);
-            return Err(io_err(dir, e));
+            return Err(Error::io(dir, e));
         }
         sync_dir(&parent);
         // The new folder is complete and in place; the old one is only garbage now (it may be
@@ -227,7 +220,7 @@ impl OutputSet {
         for (rel, bytes) in &self.files {
             let path = staging.join(rel);
             if let Some(p) = path.parent() {
-                std::fs::create_dir_all(p).map_err(|e| io_err(&path, e))?;
+                std::fs::create_dir_all(p).map_err(|e| Error::io(&path, e))?;
             }
             write_synced(&path, bytes)?;
         }
@@ -242,9 +235,9 @@ impl OutputSet {
 
 fn write_synced(path: &Path, bytes: &[u8]) -> Result<(), Error> {
     use std::io::Write;
-    let mut f = std::fs::File::create(path).map_err(|e| io_err(path, e))?;
-    f.write_all(bytes).map_err(|e| io_err(path, e))?;
-    f.sync_all().map_err(|e| io_err(path, e))
+    let mut f = std::fs::File::create(path).map_err(|e| Error::io(path, e))?;
+    f.write_all(bytes).map_err(|e| Error::io(path, e))?;
+    f.sync_all().map_err(|e| Error::io(path, e))
 }
 
 /// Flush a folder's entries (the renames) where the platform allows it; best effort.
@@ -300,11 +293,11 @@ pub fn check_target(dir: &Path, inputs: &[&Path]) -> Result<(), Error> {
             ))
         }
         Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
-        Err(e) => return Err(io_err(dir, e)),
+        Err(e) => return Err(Error::io(dir, e)),
     }
     let marker = dir.join(MARKER);
     if !marker.is_file() {
-        let mut it = std::fs::read_dir(dir).map_err(|e| io_err(dir, e))?;
+        let mut it = std::fs::read_dir(dir).map_err(|e| Error::io(dir, e))?;
         if it.next().is_none() {
             return Ok(());
         }
@@ -312,7 +305,7 @@ pub fn check_target(dir: &Path, inputs: &[&Path]) -> Result<(), Error> {
             "exists and was not written by decophantom (no {MARKER} file); choose a new folder or empty this one"
         )));
     }
-    let text = std::fs::read_to_string(&marker).map_err(|e| io_err(&marker, e))?;
+    let text = std::fs::read_to_string(&marker).map_err(|e| Error::io(&marker, e))?;
     let Some((_, list)) = text.split_once("\nfiles:\n") else {
         // a marker of an older version, without a manifest: replaced as before
         return Ok(());
@@ -320,8 +313,8 @@ pub fn check_target(dir: &Path, inputs: &[&Path]) -> Result<(), Error> {
     let written: std::collections::HashSet<&str> = list.lines().collect();
     let mut stack = vec![dir.to_path_buf()];
     while let Some(d) = stack.pop() {
-        for entry in std::fs::read_dir(&d).map_err(|e| io_err(&d, e))? {
-            let entry = entry.map_err(|e| io_err(&d, e))?;
+        for entry in std::fs::read_dir(&d).map_err(|e| Error::io(&d, e))? {
+            let entry = entry.map_err(|e| Error::io(&d, e))?;
             let path = entry.path();
             let is_dir = entry.file_type().map(|t| t.is_dir()).unwrap_or(false);
             if is_dir {
@@ -442,10 +435,10 @@ pub fn write_file_atomic_with_inputs(
         COUNTER.fetch_add(1, Ordering::Relaxed)
     ));
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp).map_err(|e| io_err(&tmp, e))?;
-        f.write_all(bytes).map_err(|e| io_err(&tmp, e))?;
-        f.sync_all().map_err(|e| io_err(&tmp, e))?;
-        std::fs::rename(&tmp, path).map_err(|e| io_err(path, e))
+        let mut f = std::fs::File::create(&tmp).map_err(|e| Error::io(&tmp, e))?;
+        f.write_all(bytes).map_err(|e| Error::io(&tmp, e))?;
+        f.sync_all().map_err(|e| Error::io(&tmp, e))?;
+        std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e))
     })();
     if result.is_err() {
         let _ = std::fs::remove_file(&tmp);
@@ -657,18 +650,19 @@ pub fn write_new_file(
             .into()
     };
     let result = (|| {
-        let mut f = std::fs::File::create(&tmp).map_err(|e| io_err(path, e))?;
-        f.write_all(bytes.as_bytes()).map_err(|e| io_err(path, e))?;
-        f.sync_all().map_err(|e| io_err(path, e))?;
+        let mut f = std::fs::File::create(&tmp).map_err(|e| Error::io(path, e))?;
+        f.write_all(bytes.as_bytes())
+            .map_err(|e| Error::io(path, e))?;
+        f.sync_all().map_err(|e| Error::io(path, e))?;
         drop(f);
         if exists {
-            return std::fs::rename(&tmp, path).map_err(|e| io_err(path, e));
+            return std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e));
         }
         match std::fs::hard_link(&tmp, path) {
             Ok(()) => Ok(()),
             Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => Err(appeared()),
             Err(_) if std::fs::symlink_metadata(path).is_ok() => Err(appeared()),
-            Err(_) => std::fs::rename(&tmp, path).map_err(|e| io_err(path, e)),
+            Err(_) => std::fs::rename(&tmp, path).map_err(|e| Error::io(path, e)),
         }
     })();
     let _ = std::fs::remove_file(&tmp);

@@ -127,13 +127,6 @@ impl Results {
     }
 }
 
-fn io(path: &Path) -> impl Fn(std::io::Error) -> Error + '_ {
-    move |source| Error::Io {
-        path: path.to_path_buf(),
-        source,
-    }
-}
-
 /// The `sensitivity.csv` header.
 pub fn header(spec: &StudySpec) -> String {
     let mut h = vec!["index".to_string()];
@@ -436,7 +429,7 @@ pub fn outputs(res: &Results, shard: Shard, command: &str) -> Result<OutputSet, 
 /// would change an input; [`crate::report::output::check_target`] covers the output being an
 /// input or holding one. The nearest existing ancestor of `out` is resolved (symlinks, `..`).
 fn check_out_not_inside(out: &Path, inputs: &[PathBuf]) -> Result<(), Error> {
-    let abs = std::path::absolute(out).map_err(io(out))?;
+    let abs = std::path::absolute(out).map_err(Error::io_at(out))?;
     let Some(anc) = abs.ancestors().find_map(|a| std::fs::canonicalize(a).ok()) else {
         return Ok(());
     };
@@ -501,7 +494,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, command: &str) -> Result<Results, Err
         let s = &spec.get_or_insert((fp, s)).1;
         let csv = d.join("sensitivity.csv");
         rows.extend(parse_rows(
-            &std::fs::read_to_string(&csv).map_err(io(&csv))?,
+            &std::fs::read_to_string(&csv).map_err(Error::io_at(&csv))?,
             s,
         ));
         courses.extend(parse_courses(
