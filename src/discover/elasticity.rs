@@ -3,7 +3,7 @@
 //! where every form gives Ω_law = 0 and the model is exactly the phantom's. (Adding the law
 //! the phantom already has refits its modulus.)
 
-use super::{log_scan, CandidateEffect, EffectParam, Prepared};
+use super::{log_scan, CandidateEffect, EffectParam, Phantoms, Prepared};
 use crate::fit::paths::ParamSpec;
 use crate::phantom::elasticity::law_names;
 
@@ -90,7 +90,7 @@ impl CandidateEffect for ExtraElasticity {
 }
 
 /// Registry entry: one candidate per form other than `none`.
-pub fn build(_: &[toml::Table]) -> Vec<Box<dyn CandidateEffect>> {
+pub fn build(_: &Phantoms) -> Vec<Box<dyn CandidateEffect>> {
     law_names()
         .into_iter()
         .filter(|l| *l != "none")

@@ -50,9 +50,20 @@ pub trait CandidateEffect: Send + Sync {
     fn prepare(&self, docs: &mut [toml::Table]) -> Result<Option<Prepared>, String>;
 }
 
+/// What the candidates are built for: the experiments' phantoms, one TOML document each, and
+/// the largest water-vapour pressure their profiles subtract at the open faces (Pa, 0 when
+/// none does: [`crate::fit::data::Experiments::vapour_pa`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Phantoms<'a> {
+    /// One phantom document per experiment.
+    pub docs: &'a [toml::Table],
+    /// Water vapour subtracted at the open faces, Pa (the largest over the experiments).
+    pub vapour_pa: f64,
+}
+
 /// Builds the candidates of one registry entry for given phantoms (an entry may expand to
 /// several variants, e.g. one per elasticity law or one per open face).
-pub type Build = fn(&[toml::Table]) -> Vec<Box<dyn CandidateEffect>>;
+pub type Build = fn(&Phantoms) -> Vec<Box<dyn CandidateEffect>>;
 
 /// The registry: entry name → variants.
 pub const REGISTRY: &[(&str, Build)] = &[
@@ -67,18 +78,23 @@ pub const REGISTRY: &[(&str, Build)] = &[
 ];
 
 /// Every candidate for these phantoms, in registry order.
-pub fn all_candidates(docs: &[toml::Table]) -> Vec<Box<dyn CandidateEffect>> {
-    REGISTRY.iter().flat_map(|(_, b)| b(docs)).collect()
+pub fn all_candidates(phantoms: &Phantoms) -> Vec<Box<dyn CandidateEffect>> {
+    REGISTRY.iter().flat_map(|(_, b)| b(phantoms)).collect()
 }
 
 /// The candidate of this name (a registry name or a variant such as `elasticity:hyperelastic`).
-pub fn find(docs: &[toml::Table], name: &str) -> Option<Box<dyn CandidateEffect>> {
-    all_candidates(docs).into_iter().find(|c| c.name() == name)
+pub fn find(phantoms: &Phantoms, name: &str) -> Option<Box<dyn CandidateEffect>> {
+    all_candidates(phantoms)
+        .into_iter()
+        .find(|c| c.name() == name)
 }
 
 /// An effect switched on by one phantom setting whose null value is 0 (perfusion, fixed gases):
 /// the setting is written as 0 in every phantom, fitted in log space from `start` (≈ the null),
 /// after a scan of `scan`. Does not apply where a phantom already has the setting above 0.
+/// With a `floor` (the fixed gases on profiles that subtract water vapour, where 0 means that
+/// vapour and a value below it is refused) the setting is fitted from `floor` + `start` within
+/// `floor`..`floor` + `ceiling`, and the scan is shifted by `floor`.
 pub struct ZeroNullSetting {
     /// Candidate name.
     pub name: &'static str,
@@ -88,6 +104,10 @@ pub struct ZeroNullSetting {
     pub start: f64,
     /// Scan range (log-spaced, 5 values).
     pub scan: (f64, f64),
+    /// Least value other than the null that the phantom accepts (0: none).
+    pub floor: f64,
+    /// With a floor, the fit's range above it.
+    pub ceiling: f64,
 }
 
 impl CandidateEffect for ZeroNullSetting {
@@ -105,11 +125,19 @@ impl CandidateEffect for ZeroNullSetting {
         for d in docs.iter_mut() {
             paths::set(d, self.path, 0.0)?;
         }
+        let mut spec = ParamSpec::positive(self.path, self.floor + self.start);
+        if self.floor > 0.0 {
+            spec.lower = Some(self.floor);
+            spec.upper = Some(self.floor + self.ceiling);
+        }
         Ok(Some(Prepared {
             params: vec![EffectParam {
-                spec: ParamSpec::positive(self.path, self.start),
+                spec,
                 null: 0.0,
-                scan: log_scan(self.scan.0, self.scan.1, 5),
+                scan: log_scan(self.scan.0, self.scan.1, 5)
+                    .into_iter()
+                    .map(|x| self.floor + x)
+                    .collect(),
             }],
             dof: 1,
         }))

@@ -1,7 +1,7 @@
 //! `diffusivity-scale` and `solubility-scale`: every gas's bulk diffusivity D (eq. 2.1) or
 //! Ostwald coefficient L (eq. 2.2) multiplied by one factor s. Null s = 1.
 
-use super::{log_scan, CandidateEffect, EffectParam, Prepared};
+use super::{log_scan, CandidateEffect, EffectParam, Phantoms, Prepared};
 use crate::fit::paths::{self, ParamSpec, SCALE_PREFIX};
 
 /// Scale every number matching a pattern.
@@ -33,7 +33,7 @@ impl CandidateEffect for Scale {
 }
 
 /// Registry entry `diffusivity-scale`.
-pub fn build_diffusivity(_: &[toml::Table]) -> Vec<Box<dyn CandidateEffect>> {
+pub fn build_diffusivity(_: &Phantoms) -> Vec<Box<dyn CandidateEffect>> {
     vec![Box::new(Scale {
         name: "diffusivity-scale",
         pattern: "gases.*.diffusivity",
@@ -41,7 +41,7 @@ pub fn build_diffusivity(_: &[toml::Table]) -> Vec<Box<dyn CandidateEffect>> {
 }
 
 /// Registry entry `solubility-scale`.
-pub fn build_solubility(_: &[toml::Table]) -> Vec<Box<dyn CandidateEffect>> {
+pub fn build_solubility(_: &Phantoms) -> Vec<Box<dyn CandidateEffect>> {
     vec![Box::new(Scale {
         name: "solubility-scale",
         pattern: "gases.*.ostwald",

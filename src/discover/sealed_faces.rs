@@ -3,7 +3,7 @@
 //! open face, each counted as one degree of freedom and as one candidate in the Bonferroni
 //! correction. Null: the face open.
 
-use super::{CandidateEffect, Prepared};
+use super::{CandidateEffect, Phantoms, Prepared};
 use crate::phantom::grid::{Face, Shape};
 
 /// Seal one face.
@@ -68,7 +68,8 @@ impl CandidateEffect for SealFace {
 }
 
 /// Registry entry: one variant per face open in every phantom.
-pub fn build(docs: &[toml::Table]) -> Vec<Box<dyn CandidateEffect>> {
+pub fn build(phantoms: &Phantoms) -> Vec<Box<dyn CandidateEffect>> {
+    let docs = phantoms.docs;
     let Some(first) = docs.first().and_then(open_faces) else {
         return Vec::new();
     };

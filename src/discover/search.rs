@@ -18,7 +18,7 @@
 //! weights carry the estimated numerical error, which the measurements need not contain.
 
 use super::diagnose::{diagnose, Diagnostics};
-use super::{all_candidates, Prepared};
+use super::{all_candidates, Phantoms, Prepared};
 use crate::error::{Error, InputError};
 use crate::fit::data::{Experiments, Measurements};
 use crate::fit::lsq::{Estimate, LsqOptions};
@@ -352,6 +352,23 @@ fn try_candidate(
     }
 }
 
+/// The candidates are built for these phantom documents and the experiments' profiles.
+fn phantoms<'a>(experiments: &Experiments, docs: &'a [toml::Table]) -> Phantoms<'a> {
+    Phantoms {
+        docs,
+        vapour_pa: experiments.vapour_pa(),
+    }
+}
+
+/// The names of the candidates for the experiments' own phantoms.
+fn candidate_names(experiments: &Experiments) -> Vec<String> {
+    let docs: Vec<toml::Table> = experiments.list.iter().map(|e| e.phantom.clone()).collect();
+    all_candidates(&phantoms(experiments, &docs))
+        .iter()
+        .map(|c| c.name())
+        .collect()
+}
+
 /// Run the search. `progress(done, total)` is called as candidate fits finish (total is an
 /// estimate: rounds × candidates).
 pub fn discover(
@@ -370,8 +387,7 @@ pub fn fingerprint(
     data: &Measurements,
     opts: &DiscoverOptions,
 ) -> String {
-    let docs: Vec<toml::Table> = experiments.list.iter().map(|e| e.phantom.clone()).collect();
-    let names: Vec<String> = all_candidates(&docs).iter().map(|c| c.name()).collect();
+    let names = candidate_names(experiments);
     crate::fit::journal::fingerprint(
         "discover",
         &[
@@ -387,8 +403,7 @@ pub fn fingerprint(
 /// selects every `elasticity:<law>`). Refused (exit 2) naming `<command line>` and `--only`,
 /// with the candidates these phantoms have.
 pub fn check_only(experiments: &Experiments, only: &[String]) -> Result<(), InputError> {
-    let docs: Vec<toml::Table> = experiments.list.iter().map(|e| e.phantom.clone()).collect();
-    let names: Vec<String> = all_candidates(&docs).iter().map(|c| c.name()).collect();
+    let names = candidate_names(experiments);
     let bad = |m: String| InputError::new(m).in_file("<command line>").field("--only");
     for o in only {
         if o.trim().is_empty() {
@@ -412,7 +427,7 @@ pub fn check_only(experiments: &Experiments, only: &[String]) -> Result<(), Inpu
 /// those selected): its model must leave two residual degrees of freedom.
 fn largest_candidate(experiments: &Experiments, only: &[String]) -> usize {
     let docs: Vec<toml::Table> = experiments.list.iter().map(|e| e.phantom.clone()).collect();
-    all_candidates(&docs)
+    all_candidates(&phantoms(experiments, &docs))
         .iter()
         .filter(|c| only.is_empty() || only.iter().any(|o| c.name().starts_with(o.as_str())))
         .filter_map(|c| {
@@ -508,10 +523,11 @@ pub fn discover_with(
     let mut discrete = 0usize;
     let mut added: Vec<(Added, Vec<String>)> = Vec::new();
     let mut rounds = Vec::new();
-    let total_guess = all_candidates(&current.model.docs).len() * (opts.max_effects.min(2) + 1);
+    let total_guess = all_candidates(&phantoms(experiments, &current.model.docs)).len()
+        * (opts.max_effects.min(2) + 1);
     let done = std::sync::atomic::AtomicUsize::new(0);
     while effects.len() < opts.max_effects {
-        let cands: Vec<_> = all_candidates(&current.model.docs)
+        let cands: Vec<_> = all_candidates(&phantoms(experiments, &current.model.docs))
             .into_iter()
             .filter(|c| {
                 let name = c.name();

@@ -4,7 +4,7 @@
 //! (1 for D_surf = D_bulk), or, on a phantom already on the area law, its own k and a.
 
 use super::surface_permeability::{set_str, surface_law};
-use super::{log_scan, CandidateEffect, EffectParam, Prepared};
+use super::{log_scan, CandidateEffect, EffectParam, Phantoms, Prepared};
 use crate::fit::paths::{self, ParamSpec};
 
 /// The area-law candidate.
@@ -64,6 +64,6 @@ impl CandidateEffect for SurfaceAreaLaw {
 }
 
 /// Registry entry.
-pub fn build(_: &[toml::Table]) -> Vec<Box<dyn CandidateEffect>> {
+pub fn build(_: &Phantoms) -> Vec<Box<dyn CandidateEffect>> {
     vec![Box::new(SurfaceAreaLaw)]
 }

@@ -2,7 +2,7 @@
 //! D_surf = D_bulk/k (the paper's §4.1 found k = 30). On a phantom whose surface law already has
 //! a fold, the candidate refits that fold. Null: k = 1 (D_surf = D_bulk), or the fold as given.
 
-use super::{log_scan, CandidateEffect, EffectParam, Prepared};
+use super::{log_scan, CandidateEffect, EffectParam, Phantoms, Prepared};
 use crate::fit::paths::{self, ParamSpec};
 
 /// The surface-permeability candidate.
@@ -67,6 +67,6 @@ impl CandidateEffect for SurfacePermeability {
 }
 
 /// Registry entry.
-pub fn build(_: &[toml::Table]) -> Vec<Box<dyn CandidateEffect>> {
+pub fn build(_: &Phantoms) -> Vec<Box<dyn CandidateEffect>> {
     vec![Box::new(SurfacePermeability)]
 }

@@ -373,6 +373,16 @@ pub struct Experiments {
 }
 
 impl Experiments {
+    /// The largest water-vapour pressure the experiments' profiles subtract at the open faces,
+    /// Pa (0 when none does): every bubble holds at least that much of gases the model does not
+    /// carry ([`crate::phantom::params::PhantomParams::bubble_fixed_gases_for`]).
+    pub fn vapour_pa(&self) -> f64 {
+        self.list
+            .iter()
+            .map(|e| e.profile.vapour_pa)
+            .fold(0.0, f64::max)
+    }
+
     /// The experiment of this name.
     pub fn get(&self, name: &str) -> Option<&Experiment> {
         self.list.iter().find(|e| e.name == name)

@@ -78,7 +78,13 @@ pub fn model_with(experiments: &Experiments, effects: &[EffectSetting]) -> Resul
     let mut set_by: Vec<(String, String)> = Vec::new();
     for e in effects {
         let mut paths_set: Vec<String> = Vec::new();
-        match discover::find(&docs, &e.name) {
+        match discover::find(
+            &discover::Phantoms {
+                docs: &docs,
+                vapour_pa: experiments.vapour_pa(),
+            },
+            &e.name,
+        ) {
             Some(c) => {
                 let prepared = c.prepare(&mut docs).map_err(bad)?.ok_or_else(|| {
                     bad(format!(
@@ -110,10 +116,13 @@ pub fn model_with(experiments: &Experiments, effects: &[EffectSetting]) -> Resul
                 paths_set.push(e.name.clone());
             }
             None => {
-                let names: Vec<String> = discover::all_candidates(&docs)
-                    .iter()
-                    .map(|c| c.name())
-                    .collect();
+                let names: Vec<String> = discover::all_candidates(&discover::Phantoms {
+                    docs: &docs,
+                    vapour_pa: experiments.vapour_pa(),
+                })
+                .iter()
+                .map(|c| c.name())
+                .collect();
                 return Err(bad(format!(
                     "unknown effect '{}'; known: {} (or a phantom path such as gases.n2.diffusivity=2e-9)",
                     e.name,
