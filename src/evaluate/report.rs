@@ -384,7 +384,7 @@ pub fn add_report(
 
     page.section("Phantom runs");
     page.table(&runs_table(ev)?);
-    page.text("Wall-clock times of the runs are in `timing.csv` (they change from run to run, so the report leaves them out).");
+    page.text("Wall-clock times of the runs are in `timing.csv`, written beside this report by each run (they change from run to run, so the report leaves them out, and the repository's example reports do not keep the file).");
     set.add(format!("{prefix}timing.csv"), timing_csv(ev));
     Ok(())
 }

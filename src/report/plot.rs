@@ -265,14 +265,8 @@ impl LinePlot {
             let mut legend = LegendPlace::Inside(corner);
             if covered > 0 {
                 if !self.log_y && !has_secondary && fh < 0.45 {
-                    // room above the data (below it on a depth axis, not above the
-                    // surface): the data fill 1 − fh − 2 % of the height
-                    let span = (yr.end - yr.start) / (1.0 - fh - 0.02);
-                    yr = if self.y_down {
-                        yr.end - span..yr.end
-                    } else {
-                        yr.start..yr.start + span
-                    };
+                    // room above the data (below it on a depth axis, not above the surface)
+                    yr = room_for_legend(yr, fh, self.y_down);
                     corner = Corner::emptiest(&fractions(&yr), fw, fh).0;
                     legend = LegendPlace::Inside(corner);
                 } else {
@@ -509,7 +503,7 @@ struct LinesToDraw<'p> {
 
 /// A corner of the plotting area for the legend.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-enum Corner {
+pub(crate) enum Corner {
     UpperRight,
     UpperLeft,
     LowerRight,
@@ -517,7 +511,7 @@ enum Corner {
 }
 
 impl Corner {
-    fn position(self) -> SeriesLabelPosition {
+    pub(crate) fn position(self) -> SeriesLabelPosition {
         match self {
             Corner::UpperRight => SeriesLabelPosition::UpperRight,
             Corner::UpperLeft => SeriesLabelPosition::UpperLeft,
@@ -554,9 +548,41 @@ impl Corner {
     }
 }
 
+/// The y range `yr` extended (upward, or downward on a depth axis) so that the data fill
+/// 1 − `fh` − 2 % of the height and a legend `fh` of the plotting area high fits beside them.
+pub(crate) fn room_for_legend(yr: Range<f64>, fh: f64, down: bool) -> Range<f64> {
+    let span = (yr.end - yr.start) / (1.0 - fh - 0.02);
+    if down {
+        yr.end - span..yr.end
+    } else {
+        yr.start..yr.start + span
+    }
+}
+
+/// A legend's corner for data `pts(yr)` (fractions of a plotting area of `plot` px, for the
+/// y range `yr`) and a legend box of `legend` px: the corner that covers the fewest points;
+/// when every corner covers some and the legend is under 45 % of the height, the y range is
+/// extended upward first ([`room_for_legend`]). Returns the corner, the y range and how many
+/// points the legend still covers.
+pub(crate) fn place_legend(
+    yr: Range<f64>,
+    plot: (f64, f64),
+    legend: (f64, f64),
+    pts: impl Fn(&Range<f64>) -> Vec<(f64, f64)>,
+) -> (Corner, Range<f64>, usize) {
+    let (fw, fh) = (legend.0 / plot.0.max(1.0), legend.1 / plot.1.max(1.0));
+    let (corner, covered) = Corner::emptiest(&pts(&yr), fw, fh);
+    if covered == 0 || fh >= 0.45 {
+        return (corner, yr, covered);
+    }
+    let yr = room_for_legend(yr, fh, false);
+    let (corner, covered) = Corner::emptiest(&pts(&yr), fw, fh);
+    (corner, yr, covered)
+}
+
 /// Legend box size in px for labels of `lengths` characters, by the same font-less estimate
 /// plotters uses (0.7 em per character, em = size / 1.24²), with the glyph and margins.
-fn legend_box_px(lengths: impl Iterator<Item = usize>) -> (f64, f64) {
+pub(crate) fn legend_box_px(lengths: impl Iterator<Item = usize>) -> (f64, f64) {
     let mut n = 0usize;
     let mut chars = 0usize;
     for l in lengths {
@@ -571,7 +597,7 @@ fn legend_box_px(lengths: impl Iterator<Item = usize>) -> (f64, f64) {
 }
 
 /// Points of a polyline in plot fractions, with extra points so that no gap exceeds 0.02.
-fn densify(run: &[(f64, f64)], out: &mut Vec<(f64, f64)>) {
+pub(crate) fn densify(run: &[(f64, f64)], out: &mut Vec<(f64, f64)>) {
     for w in run.windows(2) {
         let (a, b) = (w[0], w[1]);
         let d = ((b.0 - a.0).abs()).max((b.1 - a.1).abs());
@@ -598,7 +624,6 @@ impl LinesToDraw<'_> {
         Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
     {
         let e = |e: plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>| e.to_string();
-        let tick = |v: &f64| fmt_tick(*v);
         let Some(y2) = self.y2.clone() else {
             self.mesh(&mut chart).map_err(e)?;
             for (i, s) in self.plot.series.iter().enumerate() {
@@ -620,6 +645,8 @@ impl LinesToDraw<'_> {
         };
         // The secondary coordinates take over the right label area, so they must exist
         // before the primary mesh is drawn (or it would label the right axis too).
+        let span2 = y2.end - y2.start;
+        let tick = move |v: &f64| fmt_tick_in(*v, span2);
         let mut dual = chart.set_secondary_coord(xr, y2);
         self.mesh(&mut dual).map_err(e)?;
         dual.configure_secondary_axes()
@@ -666,10 +693,12 @@ impl LinesToDraw<'_> {
         X: Ranged<ValueType = f64> + ValueFormatter<f64>,
         Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
     {
-        let tick = |v: &f64| fmt_tick(*v);
+        let (xs, ys) = (chart.x_range(), chart.y_range());
+        let (xspan, yspan) = (xs.end - xs.start, ys.end - ys.start);
+        let tick = |v: &f64| fmt_tick_in(*v, xspan);
         // a downward axis holds −y: label it +y
         let down = self.plot.y_down;
-        let ytick = move |v: &f64| fmt_tick(if down { -*v } else { *v });
+        let ytick = move |v: &f64| fmt_tick_in(if down { -*v } else { *v }, yspan);
         chart
             .configure_mesh()
             .x_desc(self.plot.x_label.as_str())
@@ -766,6 +795,16 @@ fn decades((lo, hi): (f64, f64)) -> (f64, f64) {
         b = a * 10.0;
     }
     (a * (1.0 - 1e-12), b * (1.0 + 1e-12))
+}
+
+/// [`fmt_tick`] on an axis spanning `span`: a tick within 10⁻⁹ of the span from 0 is the
+/// axis's zero missed by the tick steps' rounding (e.g. −2.22e-16 where the steps cross 0),
+/// labelled 0.
+pub fn fmt_tick_in(v: f64, span: f64) -> String {
+    if v.abs() <= 1e-9 * span.abs() {
+        return "0".into();
+    }
+    fmt_tick(v)
 }
 
 /// A short tick label: up to four significant digits, exponent form outside 1e-3..1e5.
@@ -880,15 +919,56 @@ impl BarChart {
         ng: usize,
         yr: Range<f64>,
     ) -> Result<(), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>> {
-        let y0 = yr.start.max(0.0).min(yr.end);
         let (below, _) = title_area(root, &self.title)?;
+        // The legend's corner, from the bars in fractions of the plotting area (each bar
+        // sampled across its width, so that no corner hides a bar's edge), and room above the
+        // bars when every corner covers some: the plotting area as the chart below lays it out
+        let width = 0.8 / ng.max(1) as f64;
+        let (aw, ah) = below.dim_in_pixel();
+        let plot = (
+            aw as f64 - 2.0 * 18.0 - 110.0,
+            ah as f64 - 6.0 - 18.0 - 90.0,
+        );
+        let names = self
+            .groups
+            .iter()
+            .map(String::as_str)
+            .chain(self.reference.iter().map(|r| r.1.as_str()));
+        let legend = legend_box_px(names.map(|n| n.chars().count()));
+        let bars_in = |yr: &Range<f64>| {
+            let y0 = yr.start.max(0.0).min(yr.end);
+            let fy = |v: f64| (v - yr.start) / (yr.end - yr.start);
+            let mut pts = Vec::new();
+            for (c, row) in self.values.iter().enumerate() {
+                for (g, v) in row.iter().enumerate().filter(|(_, v)| v.is_finite()) {
+                    let left = c as f64 + 0.1 + g as f64 * width;
+                    for k in 0..=4 {
+                        let x = (left + width * 0.92 * k as f64 / 4.0) / nc as f64;
+                        densify(&[(x, fy(y0)), (x, fy(*v))], &mut pts);
+                    }
+                    densify(
+                        &[
+                            (left / nc as f64, fy(*v)),
+                            ((left + width * 0.92) / nc as f64, fy(*v)),
+                        ],
+                        &mut pts,
+                    );
+                }
+            }
+            if let Some((r, _)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
+                densify(&[(0.0, fy(*r)), (1.0, fy(*r))], &mut pts);
+            }
+            pts
+        };
+        let (corner, yr, _) = place_legend(yr, plot, legend, bars_in);
+        let y0 = yr.start.max(0.0).min(yr.end);
         let mut chart = ChartBuilder::on(&below)
             .margin(18)
             .margin_top(6)
             .x_label_area_size(90)
             .y_label_area_size(110)
-            .build_cartesian_2d(0.0..nc as f64, yr)?;
-        let tick = |v: &f64| fmt_tick(*v);
+            .build_cartesian_2d(0.0..nc as f64, yr.clone())?;
+        let tick = |v: &f64| fmt_tick_in(*v, yr.end - yr.start);
         chart
             .configure_mesh()
             .disable_x_mesh()
@@ -901,7 +981,6 @@ impl BarChart {
             .light_line_style(RGBColor(235, 235, 235))
             .bold_line_style(RGBColor(205, 205, 205))
             .draw()?;
-        let width = 0.8 / ng.max(1) as f64;
         for g in 0..ng {
             let color = PALETTE[g % PALETTE.len()];
             let bars: Vec<Rectangle<(f64, f64)>> = (0..nc)
@@ -961,28 +1040,6 @@ impl BarChart {
                 ))?;
             }
         }
-        // Keep the legend off the bars: sample each bar's extent in plot fractions.
-        let yr = chart.y_range();
-        let fy = |v: f64| (v - yr.start) / (yr.end - yr.start);
-        let mut pts = Vec::new();
-        for (c, row) in self.values.iter().enumerate() {
-            for (g, v) in row.iter().enumerate().filter(|(_, v)| v.is_finite()) {
-                let x = (c as f64 + 0.1 + (g as f64 + 0.5) * width) / nc as f64;
-                densify(&[(x, fy(y0)), (x, fy(*v))], &mut pts);
-            }
-        }
-        if let Some((r, _)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
-            densify(&[(0.0, fy(*r)), (1.0, fy(*r))], &mut pts);
-        }
-        let area = chart.plotting_area().dim_in_pixel();
-        let names = self
-            .groups
-            .iter()
-            .map(String::as_str)
-            .chain(self.reference.iter().map(|r| r.1.as_str()));
-        let (bw, bh) = legend_box_px(names.map(|n| n.chars().count()));
-        let (corner, _) =
-            Corner::emptiest(&pts, bw / area.0.max(1) as f64, bh / area.1.max(1) as f64);
         chart
             .configure_series_labels()
             .position(corner.position())
@@ -1024,8 +1081,85 @@ fn wrap(s: &str, n: usize) -> Vec<String> {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
+
+    /// The `<rect>`s of an SVG as (x, y, width, height, attributes).
+    pub(crate) fn svg_rects(svg: &str) -> Vec<(f64, f64, f64, f64, String)> {
+        let num = |tag: &str, key: &str| -> f64 {
+            let k = format!(" {key}=\"");
+            let i = tag.find(&k).map(|i| i + k.len()).unwrap_or(0);
+            tag[i..]
+                .split('"')
+                .next()
+                .unwrap_or("")
+                .parse()
+                .unwrap_or(f64::NAN)
+        };
+        svg.split("<rect")
+            .skip(1)
+            .map(|r| {
+                let tag = r.split('>').next().unwrap_or("");
+                let (x, y) = (num(tag, "x"), num(tag, "y"));
+                (x, y, num(tag, "width"), num(tag, "height"), tag.to_string())
+            })
+            .collect()
+    }
+
+    /// The legend's box: the translucent white background plotters draws under it.
+    pub(crate) fn legend_box(svg: &str) -> (f64, f64, f64, f64) {
+        let r = svg_rects(svg)
+            .into_iter()
+            .find(|r| r.4.contains("opacity=\"0.85\""))
+            .expect("a legend box");
+        (r.0, r.1, r.2, r.3)
+    }
+
+    /// A bar chart whose tall bars stand at both ends (every corner of the plotting area
+    /// holds part of a bar): the legend goes above them, over no bar (the review's
+    /// demo/criteria.svg had the legend over the GF 100/100 bar, session 29).
+    #[test]
+    fn a_bar_charts_legend_covers_no_bar() {
+        let chart = BarChart {
+            title: "t".into(),
+            x_label: "criterion".into(),
+            y_label: "value / limit".into(),
+            categories: vec!["a".into(), "b".into(), "c".into()],
+            groups: vec!["GF 30/85".into(), "GF 50/80".into(), "VPM-B +2".into()],
+            values: vec![
+                vec![1.5, 1.4, 1.55],
+                vec![0.2, 0.3, 0.25],
+                vec![1.5, 1.45, 1.3],
+            ],
+            reference: Some((1.0, "limit".into())),
+            size: DEFAULT_SIZE,
+        };
+        let svg = chart.to_svg().unwrap();
+        let (lx, ly, lw, lh) = legend_box(&svg);
+        let bars: Vec<_> = svg_rects(&svg)
+            .into_iter()
+            .filter(|r| r.4.contains("stroke=\"none\"") && r.4.contains("opacity=\"1\""))
+            .filter(|r| r.2 < 100.0) // the bars, not the background
+            .filter(|r| !(r.0 >= lx && r.0 + r.2 <= lx + lw && r.1 >= ly && r.1 + r.3 <= ly + lh))
+            .collect(); // (and not the legend's own swatches)
+        assert_eq!(bars.len(), 9, "{bars:?}");
+        for (x, y, w, h, _) in bars {
+            let apart = x + w <= lx || lx + lw <= x || y + h <= ly || ly + lh <= y;
+            assert!(
+                apart,
+                "bar at ({x}, {y}) {w}×{h} under the legend ({lx}, {ly}) {lw}×{lh}"
+            );
+        }
+    }
+
+    #[test]
+    fn a_tick_at_the_axis_zero_reads_0() {
+        // a tick step's rounding misses 0 by 2.2e-16 on an axis spanning 1.6
+        assert_eq!(fmt_tick_in(-2.220446049250313e-16, 1.6), "0");
+        assert_eq!(fmt_tick_in(0.2, 1.6), "0.2");
+        // a small value on an axis of small values keeps its digits
+        assert_eq!(fmt_tick_in(2e-15, 1e-14), "2e-15");
+    }
 
     #[test]
     fn tick_labels_are_short() {
