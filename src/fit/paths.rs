@@ -181,6 +181,43 @@ pub fn expand(doc: &toml::Table, pattern: &str) -> Vec<String> {
 /// `scale:gases.*.diffusivity` = 1.5 multiplies every gas's diffusivity by 1.5.
 pub const SCALE_PREFIX: &str = "scale:";
 
+/// A parameter path in a reader's words: its symbol (the paper's where it has one) and its
+/// unit (`None`: dimensionless), e.g. `material.surface_tension` → ("γ", Some("N/m")),
+/// `scale:gases.*.diffusivity` → ("D factor", None); a path it does not know is its own name.
+pub fn describe(path: &str) -> (String, Option<&'static str>) {
+    let gas = |g: &str| g.to_uppercase();
+    let segs: Vec<&str> = path.split('.').collect();
+    match (path, segs.as_slice()) {
+        ("material.surface_tension", _) => ("γ".into(), Some("N/m")),
+        ("material.elasticity.shear_modulus", _) => ("μ".into(), Some("Pa")),
+        ("material.surface.fold", _) => ("k (surface fold)".into(), None),
+        ("material.temperature_k", _) => ("T".into(), Some("K")),
+        ("material.bubble_fixed_gases_pa", _) => ("p_fixed".into(), Some("Pa")),
+        ("perfusion.rate_per_s", _) => ("perfusion rate".into(), Some("1/s")),
+        ("scale:gases.*.diffusivity", _) => ("D factor".into(), None),
+        ("scale:gases.*.ostwald", _) => ("L factor".into(), None),
+        (_, ["gases", g, "ostwald"]) => (format!("L_{}", gas(g)), None),
+        (_, ["gases", g, "diffusivity"]) => (format!("D_{}", gas(g)), Some("m²/s")),
+        _ => (path.to_string(), None),
+    }
+}
+
+/// [`describe`] as an axis or category label: `γ (N/m)`, `L_N2`.
+pub fn label(path: &str) -> String {
+    match describe(path) {
+        (sym, Some(unit)) => format!("{sym} ({unit})"),
+        (sym, None) => sym,
+    }
+}
+
+/// [`describe`] with a value, for a legend: `γ = 0.07 N/m`, `L_N2 = 0.014`.
+pub fn with_value(path: &str, value: &str) -> String {
+    match describe(path) {
+        (sym, Some(unit)) => format!("{sym} = {value} {unit}"),
+        (sym, None) => format!("{sym} = {value}"),
+    }
+}
+
 /// Apply a parameter to a document: a plain path is set; a `scale:` pattern multiplies every
 /// number it matches (an error if it matches none).
 pub fn apply(doc: &mut toml::Table, path: &str, value: f64) -> Result<(), String> {
@@ -421,6 +458,20 @@ impl ParamSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn paths_in_a_readers_words() {
+        assert_eq!(label("material.surface_tension"), "γ (N/m)");
+        assert_eq!(label("gases.n2.ostwald"), "L_N2");
+        assert_eq!(label("gases.o2.diffusivity"), "D_O2 (m²/s)");
+        assert_eq!(label("scale:gases.*.diffusivity"), "D factor");
+        assert_eq!(
+            with_value("material.elasticity.shear_modulus", "1e6"),
+            "μ = 1e6 Pa"
+        );
+        // a path it does not know stays itself
+        assert_eq!(label("geometry.grid_step_m"), "geometry.grid_step_m");
+    }
 
     fn doc() -> toml::Table {
         "[gases.n2]\ndiffusivity = 2.5e-9\nostwald = 0.014\n[[bubbles]]\nposition_m = [1.0, 2.0, 3.0]\ninitial_radius_m = 1e-4\n"

@@ -851,9 +851,43 @@ pub struct BarChart {
     pub size: (u32, u32),
 }
 
+/// A [`BarChart`] whose bars carry intervals, drawn as error bars (e.g. Sobol' indices with
+/// their bootstrap 95 % intervals).
+#[derive(Debug, Clone, PartialEq)]
+pub struct IntervalBars {
+    /// The bars (`chart.values` are the point estimates).
+    pub chart: BarChart,
+    /// `intervals[category][group]` = (lower, upper), in the y-axis unit; a non-finite end
+    /// leaves that bar without its error bar.
+    pub intervals: Vec<Vec<(f64, f64)>>,
+}
+
+impl IntervalBars {
+    /// Render to an SVG document.
+    pub fn to_svg(&self) -> Result<String, PlotError> {
+        let shape_ok = self.intervals.len() == self.chart.values.len()
+            && self
+                .intervals
+                .iter()
+                .zip(&self.chart.values)
+                .all(|(i, v)| i.len() == v.len());
+        if !shape_ok {
+            return Err(PlotError::Invalid {
+                title: self.chart.title.clone(),
+                message: "the intervals do not match the bars".into(),
+            });
+        }
+        self.chart.svg(Some(&self.intervals))
+    }
+}
+
 impl BarChart {
     /// Render to an SVG document.
     pub fn to_svg(&self) -> Result<String, PlotError> {
+        self.svg(None)
+    }
+
+    fn svg(&self, intervals: Option<&[Vec<(f64, f64)>]>) -> Result<String, PlotError> {
         let invalid = |m: String| PlotError::Invalid {
             title: self.title.clone(),
             message: m,
@@ -892,6 +926,9 @@ impl BarChart {
         if let Some((r, _)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
             ys.push(*r);
         }
+        for iv in intervals.into_iter().flatten().flatten() {
+            ys.extend([iv.0, iv.1].into_iter().filter(|v| v.is_finite()));
+        }
         let (lo, hi) = bounds(ys.into_iter()).expect("non-empty");
         let yr = pad_linear((lo, hi), true);
         let nc = self.categories.len();
@@ -905,7 +942,7 @@ impl BarChart {
         {
             let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
             root.fill(&WHITE).map_err(|e| draw_err(e.to_string()))?;
-            self.draw(&root, nc, ng, yr)
+            self.draw(&root, nc, ng, yr, intervals)
                 .map_err(|e| draw_err(format!("{e:?}")))?;
             root.present().map_err(|e| draw_err(e.to_string()))?;
         }
@@ -918,7 +955,14 @@ impl BarChart {
         nc: usize,
         ng: usize,
         yr: Range<f64>,
+        intervals: Option<&[Vec<(f64, f64)>]>,
     ) -> Result<(), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>> {
+        // a bar's interval, where it has a finite one
+        let interval = |c: usize, g: usize| {
+            intervals
+                .and_then(|iv| iv.get(c)?.get(g).copied())
+                .filter(|(a, b)| a.is_finite() && b.is_finite())
+        };
         let (below, _) = title_area(root, &self.title)?;
         // The legend's corner, from the bars in fractions of the plotting area (each bar
         // sampled across its width, so that no corner hides a bar's edge), and room above the
@@ -953,6 +997,10 @@ impl BarChart {
                         ],
                         &mut pts,
                     );
+                    if let Some((a, b)) = interval(c, g) {
+                        let x = (left + width * 0.46) / nc as f64;
+                        densify(&[(x, fy(a)), (x, fy(b))], &mut pts);
+                    }
                 }
             }
             if let Some((r, _)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
@@ -999,6 +1047,30 @@ impl BarChart {
                 .legend(move |(x, y)| {
                     Rectangle::new([(x, y - 7), (x + 16, y + 7)], color.filled())
                 });
+        }
+        if intervals.is_some() {
+            let black = ShapeStyle {
+                color: BLACK.to_rgba(),
+                filled: true,
+                stroke_width: 2,
+            };
+            let bars: Vec<_> = (0..nc)
+                .flat_map(|c| (0..ng).map(move |g| (c, g)))
+                .filter(|&(c, g)| self.values[c][g].is_finite())
+                .filter_map(|(c, g)| {
+                    let (a, b) = interval(c, g)?;
+                    let x = c as f64 + 0.1 + g as f64 * width + width * 0.46;
+                    Some(ErrorBar::new_vertical(
+                        x,
+                        a,
+                        self.values[c][g],
+                        b,
+                        black,
+                        10,
+                    ))
+                })
+                .collect();
+            chart.draw_series(bars)?;
         }
         if let Some((r, name)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
             let st = ShapeStyle {
@@ -1150,6 +1222,51 @@ pub(crate) mod tests {
                 "bar at ({x}, {y}) {w}×{h} under the legend ({lx}, {ly}) {lw}×{lh}"
             );
         }
+    }
+
+    /// Interval bars: one error bar per bar with a finite interval, the y axis reaching the
+    /// highest upper end, the wrong shape refused.
+    #[test]
+    fn interval_bars_draw_their_intervals() {
+        let chart = BarChart {
+            title: "Sobol' indices".into(),
+            x_label: "parameter".into(),
+            y_label: "index".into(),
+            categories: vec!["μ (Pa)".into(), "D factor".into()],
+            groups: vec!["S1".into(), "ST".into()],
+            values: vec![vec![0.8, 1.2], vec![0.01, 0.03]],
+            reference: None,
+            size: DEFAULT_SIZE,
+        };
+        let bars = IntervalBars {
+            chart: chart.clone(),
+            intervals: vec![
+                vec![(0.5, 1.1), (0.7, 2.1)],
+                vec![(0.0, 0.02), (f64::NAN, 0.05)],
+            ],
+        };
+        let svg = bars.to_svg().unwrap();
+        // plotters draws an error bar as three 2-px black lines (the stem and two caps)
+        let lines: Vec<&str> = svg
+            .split("<line")
+            .skip(1)
+            .filter(|l| l.contains("stroke=\"#000000\" stroke-width=\"2\""))
+            .collect();
+        assert_eq!(lines.len(), 9, "three finite intervals: {lines:?}");
+        // the highest cap (2.1) lies inside the plotting area, below the title
+        let top = lines
+            .iter()
+            .filter_map(|l| {
+                let i = l.find(" y1=\"")? + 5;
+                l[i..].split('"').next()?.parse::<f64>().ok()
+            })
+            .fold(f64::INFINITY, f64::min);
+        assert!(top > 40.0 && top < 600.0, "top cap at y = {top}");
+        let wrong = IntervalBars {
+            chart,
+            intervals: vec![vec![(0.0, 1.0)]],
+        };
+        assert!(wrong.to_svg().is_err());
     }
 
     #[test]

@@ -66,6 +66,32 @@ impl Metric {
         }
     }
 
+    /// The quantity in words, for titles (the bubble named when one is chosen).
+    pub fn words(&self) -> String {
+        let w = match self.kind.as_str() {
+            "r_max" => "peak radius R_max",
+            "t_max" => "time of the peak radius t_max",
+            "plateau" => "growth plateau R_p",
+            "half_life" => "growth half-life",
+            "peak_volume" => "peak volume",
+            _ => "final radius",
+        };
+        match self.bubble {
+            Some(b) => format!("{w} of bubble {b}"),
+            None => w.to_string(),
+        }
+    }
+
+    /// The unit a plot shows the metric in and the factor from its SI value: radii in µm,
+    /// volumes in mm³, times in s.
+    pub fn plot_unit(&self) -> (&'static str, f64) {
+        match self.unit() {
+            "m" => ("µm", 1e6),
+            "m³" => ("mm³", 1e9),
+            u => (u, 1.0),
+        }
+    }
+
     /// Unit, for tables and plots.
     pub fn unit(&self) -> &'static str {
         match self.kind.as_str() {

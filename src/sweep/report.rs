@@ -5,10 +5,11 @@
 use super::design::{morris_indices, oat_index, sobol_indices, Method, BOOTSTRAP, SOBOL_MIN_ROWS};
 use super::run::Results;
 use crate::error::Error;
+use crate::fit::paths;
 use crate::fit::report::sig;
 use crate::report::html::Page;
 use crate::report::output::OutputSet;
-use crate::report::plot::{BarChart, LinePlot, PlotError, Series};
+use crate::report::plot::{BarChart, IntervalBars, LinePlot, PlotError, Series};
 use crate::report::table::{Cell, Column, Table};
 
 /// One row of indices.csv: metric, parameter and the method's numbers.
@@ -317,7 +318,9 @@ pub fn add_indices_and_report(
     }
     for (mi, m) in spec.metrics.iter().enumerate() {
         let mrows: Vec<&IndexRow> = rows.iter().filter(|r| r.0 == m.name()).collect();
-        let cats: Vec<String> = mrows.iter().map(|r| r.1.clone()).collect();
+        // parameters by their symbols and units, the metric in its plot unit (µm, mm³, s)
+        let cats: Vec<String> = mrows.iter().map(|r| paths::label(&r.1)).collect();
+        let (unit, scale) = m.plot_unit();
         let (groups, values, title, ylab): (Vec<String>, Vec<Vec<f64>>, String, String) =
             match spec.method {
                 Method::Oat => (
@@ -327,29 +330,27 @@ pub fn add_indices_and_report(
                     ],
                     mrows
                         .iter()
-                        .map(|r| vec![r.2[4] - r.2[3], r.2[5] - r.2[3]])
+                        .map(|r| vec![(r.2[4] - r.2[3]) * scale, (r.2[5] - r.2[3]) * scale])
                         .collect(),
-                    format!("Tornado: range of {} over each parameter's range", m.name()),
-                    format!("{} − base ({})", m.name(), m.unit()),
+                    format!(
+                        "Tornado: range of the {} over each parameter's range",
+                        m.words()
+                    ),
+                    format!("{} − base ({unit})", m.name()),
                 ),
                 Method::Morris => (
                     vec!["μ*".into(), "σ".into()],
-                    mrows.iter().map(|r| vec![r.2[0], r.2[2]]).collect(),
-                    format!("Morris μ* and σ of {}", m.name()),
-                    format!("{} per range ({})", m.name(), m.unit()),
-                ),
-                Method::Sobol => (
-                    vec![
-                        "S1".into(),
-                        "S1 upper 95 %".into(),
-                        "ST".into(),
-                        "ST upper 95 %".into(),
-                    ],
                     mrows
                         .iter()
-                        .map(|r| vec![r.2[0], r.2[2], r.2[3], r.2[5]])
+                        .map(|r| vec![r.2[0] * scale, r.2[2] * scale])
                         .collect(),
-                    format!("Sobol' indices of {}", m.name()),
+                    format!("Morris μ* and σ of the {}", m.words()),
+                    format!("{} per range ({unit})", m.name()),
+                ),
+                Method::Sobol => (
+                    vec!["S1".into(), "ST".into()],
+                    mrows.iter().map(|r| vec![r.2[0], r.2[3]]).collect(),
+                    format!("Sobol' indices of the {}", m.words()),
                     "index".into(),
                 ),
             };
@@ -365,7 +366,19 @@ pub fn add_indices_and_report(
         };
         let file = format!("bars-{mi}.svg");
         page.heading(3, m.name());
-        let Some(svg) = svg_or_none(chart.to_svg())? else {
+        let drawn = match spec.method {
+            // the point estimates as bars, their bootstrap 95 % intervals as error bars
+            Method::Sobol => IntervalBars {
+                chart,
+                intervals: mrows
+                    .iter()
+                    .map(|r| vec![(r.2[1], r.2[2]), (r.2[4], r.2[5])])
+                    .collect(),
+            }
+            .to_svg(),
+            _ => chart.to_svg(),
+        };
+        let Some(svg) = svg_or_none(drawn)? else {
             page.text(format!(
                 "No chart: no index of {} is defined (see the notes above).",
                 m.name()
@@ -376,7 +389,7 @@ pub fn add_indices_and_report(
             &svg,
             Some(&file),
             match spec.method {
-                Method::Sobol => "Bars: point estimates and the upper ends of their 95 % bootstrap intervals (the lower ends are in the table).",
+                Method::Sobol => "Bars: point estimates; error bars: their 95 % bootstrap percentile intervals (the table gives both ends).",
                 Method::Oat => "Change of the metric from its base value at the lowest and highest metric over each parameter's levels.",
                 Method::Morris => "μ* (importance) and σ (nonlinearity or interaction).",
             },
@@ -390,7 +403,7 @@ pub fn add_indices_and_report(
         let n = spec.samples;
         for (i, p) in spec.params.iter().enumerate() {
             let mut plot = LinePlot::new(
-                format!("Radius as {} varies", p.path),
+                format!("Radius as {} varies", paths::label(&p.path)),
                 "time (s)",
                 "radius (µm)",
             );
@@ -403,7 +416,7 @@ pub fn add_indices_and_report(
                     .map(|c| c.1.iter().map(|(t, r)| (*t, r * 1e6)).collect())
                     .unwrap_or_default();
                 let v = res.rows.get(idx).map_or(f64::NAN, |r| r.values[i]);
-                plot = plot.with(Series::new(format!("{} = {}", p.path, sig(v, 3)), pts));
+                plot = plot.with(Series::new(paths::with_value(&p.path, &sig(v, 3)), pts));
             }
             let file = format!("courses-{i}.svg");
             let Some(svg) = svg_or_none(plot.to_svg())? else {
