@@ -4,8 +4,8 @@
 
 use super::rank::TIE_RELATIVE_UNCERTAINTY;
 use super::tables::{
-    fmt_min, ranking_table, runs_table, schedule_table, scores_csv, scores_table, ties_table,
-    ties_text, timing_csv,
+    fmt_min, ranking_table, round_off_zero, runs_table, schedule_table, scores_csv, scores_table,
+    ties_table, ties_text, timing_csv, ROUND_OFF_ZERO,
 };
 use super::{Evaluation, RunOutcome};
 use crate::error::Error;
@@ -217,6 +217,14 @@ pub fn add_report(
         page.table(&t);
     }
     page.table(&scores);
+    if ev
+        .runs
+        .iter()
+        .flat_map(|r| &r.scores)
+        .any(|s| round_off_zero(s.value, s.limit))
+    {
+        page.text(ROUND_OFF_ZERO.1);
+    }
     // one group per schedule under the primary law (the phantom's own): a legend of every
     // schedule × law would bury the bars; the other laws are in the tables above
     let primary_runs: Vec<&RunOutcome> = ev.runs.iter().filter(|r| r.law == ev.laws[0]).collect();

@@ -2,7 +2,7 @@
 //! `scores.csv` at full precision), the ranking and the ties, the phantom runs, `timing.csv`,
 //! and the short text summary.
 
-use super::rank::{ranking, ties};
+use super::rank::{ranking, ties, TIE_RELATIVE_UNCERTAINTY};
 use super::Evaluation;
 use crate::algorithm::schedule::gas_text;
 use crate::error::Error;
@@ -108,8 +108,22 @@ pub fn scores_csv(ev: &Evaluation) -> Result<String, Error> {
     String::from_utf8(bytes).map_err(|e| Error::Solver(format!("scores.csv: {e}")))
 }
 
+/// What the report's score table prints for a value of zero up to the round-off
+/// ([`TIE_RELATIVE_UNCERTAINTY`] of the limit: nuclei that never grow leave 10⁻¹⁰ µm²/s of
+/// dA/dt), and the sentence under the table that says so.
+pub const ROUND_OFF_ZERO: (&str, &str) = (
+    "≈ 0",
+    "≈ 0: zero within the runs' round-off (below 10⁻⁶ of the limit; `scores.csv` has the value).",
+);
+
+/// A value zero up to the round-off: nonzero and within [`TIE_RELATIVE_UNCERTAINTY`] of `limit`.
+pub fn round_off_zero(value: f64, limit: f64) -> bool {
+    value != 0.0 && value.abs() <= TIE_RELATIVE_UNCERTAINTY * limit.abs()
+}
+
 /// The scores, one row per run and criterion, rounded for reading (the report's table;
-/// `scores.csv` has them at full precision, [`scores_csv`]).
+/// `scores.csv` has them at full precision, [`scores_csv`]); a value of zero up to the round-off
+/// reads [`ROUND_OFF_ZERO`].
 pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
     let mut t = Table::new(
         "Criteria per schedule",
@@ -133,7 +147,11 @@ pub fn scores_table(ev: &Evaluation) -> Result<Table, Error> {
                 Cell::text(r.law),
                 Cell::text(&s.label),
                 Cell::text(s.unit),
-                Cell::sig(s.value, 4),
+                if round_off_zero(s.value, s.limit) {
+                    Cell::text(ROUND_OFF_ZERO.0)
+                } else {
+                    Cell::sig(s.value, 4)
+                },
                 Cell::sig(s.limit, 4),
                 Cell::sig(s.margin, 4),
                 Cell::fixed(s.ratio(), 3),
@@ -310,4 +328,20 @@ pub fn summary_text(ev: &Evaluation) -> String {
     }
     s.push_str(&ties_text(ev));
     s
+}
+
+#[cfg(test)]
+mod round_off_tests {
+    use super::*;
+
+    /// The demo's bulk-modulus runs, whose nuclei never grow: dA/dt 2.752e-10 µm²/s against a
+    /// limit of 80 and volume·time 1.948e-12 mm³·min against 0.5 read ≈ 0; an exact 0 stays 0,
+    /// and a small real value (a peak volume growth of 1e-4 mm³ against 0.009) keeps its digits.
+    #[test]
+    fn round_off_reads_as_zero() {
+        assert!(round_off_zero(2.752e-10, 80.0));
+        assert!(round_off_zero(1.948e-12, 0.5));
+        assert!(!round_off_zero(0.0, 80.0));
+        assert!(!round_off_zero(1e-4, 0.009));
+    }
 }
