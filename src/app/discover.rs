@@ -114,9 +114,9 @@ pub fn summary_text(d: &Discovery) -> String {
     }
     for a in &d.added {
         s.push_str(&format!(
-            "added {} (F-test p = {}): {}\n",
+            "added {} (F-test p {}): {}\n",
             a.effect,
-            sig(a.p_value, 3),
+            crate::discover::report::p_text(a.p_value),
             a.parameters
                 .iter()
                 .map(|e| format!(

@@ -44,7 +44,12 @@ pub fn run(req: &SynthRequest) -> Result<usize, Error> {
         .map(|e| EffectSetting::parse(e))
         .collect::<Result<Vec<_>, _>>()?;
     let text = synthesize(&experiments, &effects, req.noise_sd, req.every, req.seed)?;
-    let rows = text.lines().count().saturating_sub(1);
+    // the data rows: every line but the header and the comment lines (the settings, the marker)
+    let rows = text
+        .lines()
+        .filter(|l| !l.starts_with('#'))
+        .count()
+        .saturating_sub(1);
     // checked again just before the file is put in place (it may have appeared meanwhile)
     write_new_file(
         &req.out,

@@ -270,8 +270,9 @@ pub fn diagnose(
     }
 }
 
+/// A length in µm to 3 significant digits.
 fn um(x: f64) -> String {
-    format!("{:.3} µm", x * 1e6)
+    format!("{} µm", crate::fit::report::sig(x * 1e6, 3))
 }
 
 fn words(
@@ -291,7 +292,14 @@ fn words(
     let adjusted = holm(&family);
     let (adj_phases, rest) = adjusted.split_at(phases.len());
     let (adj_trends, adj_runs) = rest.split_at(trends.len());
-    let holm_note = |p: f64, q: f64| format!("p = {p:.2e}, Holm-adjusted over {m} tests {q:.2e}");
+    let holm_note = |p: f64, q: f64| {
+        use super::report::p_text;
+        format!(
+            "p {}, Holm-adjusted over {m} tests p {}",
+            p_text(p),
+            p_text(q)
+        )
+    };
     let mut out: Vec<(f64, String)> = Vec::new();
     for (g, &q) in phases.iter().zip(adj_phases).filter(|(_, q)| **q < 0.01) {
         let kind = g.label.as_str();

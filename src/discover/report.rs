@@ -6,7 +6,8 @@ use super::search::{CandidateOutcome, Discovery};
 use crate::error::Error;
 use crate::fit::data::{Experiments, Measurements};
 use crate::fit::report::{
-    add_overlays, aicc_absent, estimate_stats, estimates_table, finite_estimate, finite_result, sig,
+    add_overlays, aicc_absent, data_info, estimate_stats, estimates_table_with_truth,
+    exponent_floats, finite_estimate, finite_result, sig, DataInfo, DataOut,
 };
 use crate::report::html::Page;
 use crate::report::output::OutputSet;
@@ -25,12 +26,18 @@ struct DiscoverFile {
     ssr_after: f64,
     rmse_before_m: f64,
     rmse_after_m: f64,
+    weighted_rmse_before_m: f64,
+    weighted_rmse_after_m: f64,
     numerical_error_rms_m: f64,
     measurement_sd_from_file: bool,
     alpha: f64,
     observations: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    data: Option<DataOut>,
     added: Vec<AddedOut>,
     round: Vec<RoundOut>,
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    bubble_weight: Vec<BubbleWeight>,
 }
 
 #[derive(Serialize)]
@@ -54,6 +61,12 @@ struct AddedOut {
     #[serde(skip_serializing_if = "Option::is_none")]
     ci95_all: Option<Vec<[f64; 2]>>,
     alternatives: Vec<String>,
+    /// F-test degrees of freedom [numerator, denominator].
+    #[serde(skip_serializing_if = "Option::is_none")]
+    f_dof: Option<[usize; 2]>,
+    /// True values by parameter (synthetic data whose model the final model contains).
+    #[serde(skip_serializing_if = "BTreeMap::is_empty")]
+    true_values: BTreeMap<String, f64>,
     #[serde(skip_serializing_if = "BTreeMap::is_empty")]
     absent: BTreeMap<&'static str, String>,
 }
@@ -81,6 +94,10 @@ struct CandOut {
     delta_aicc: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     rmse_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    weighted_rmse_m: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    f_den_dof: Option<usize>,
     parameters: Vec<String>,
     values: Vec<f64>,
     error: String,
@@ -148,8 +165,139 @@ fn stat_text(v: &Stat, fmt: impl Fn(f64) -> String) -> String {
     }
 }
 
+/// Smallest p-value printed as a number: below it a double-precision p-value says nothing
+/// more (1 − p is 1 to machine precision, ~1.1e-16, and the F distribution's tail is only as
+/// good as the Gaussian error model far out in it), so it is printed as "< 1e-16".
+pub const P_FLOOR: f64 = 1e-16;
+
+/// A p-value with its relation, for a sentence: "= 0.434", "= 6.55e-31"… or "< 1e-16".
+pub fn p_text(p: f64) -> String {
+    if p < P_FLOOR {
+        "< 1e-16".into()
+    } else {
+        format!("= {}", sig(p, 3))
+    }
+}
+
+/// A p-value for a table cell: "0.434", "2.27e-32"… or "< 1e-16".
+pub fn p_cell(p: f64) -> String {
+    if p < P_FLOOR {
+        "< 1e-16".into()
+    } else {
+        sig(p, 3)
+    }
+}
+
+/// What the F and p cells say for a candidate whose refit is worse than the current model
+/// (ΔSSR < 0): the F statistic is not a test of anything then.
+pub const FITS_WORSE: &str = "—, fits worse than the current model";
+
+/// A candidate's fitted parameter for the round table: `name = value` with 3 significant
+/// digits; `name → 0 (at its null)` for a log-space parameter with null 0 that ran below a
+/// millionth of the smallest value its scan tried (the effect switched off, not a small
+/// effect); `name = value (at the bound)` for one at a bound of its range.
+pub fn candidate_param_text(
+    e: &crate::fit::lsq::Estimate,
+    p: Option<&super::EffectParam>,
+) -> String {
+    let at_null = p.is_some_and(|p| {
+        let least = p
+            .scan
+            .iter()
+            .copied()
+            .filter(|x| *x > 0.0)
+            .fold(f64::INFINITY, f64::min);
+        p.null == 0.0 && e.log && least.is_finite() && e.value.abs() < 1e-6 * least
+    });
+    if at_null {
+        format!("{} → 0 (at its null)", e.name)
+    } else if e.at_bound {
+        format!("{} = {} (at the bound)", e.name, sig(e.value, 3))
+    } else {
+        format!("{} = {}", e.name, sig(e.value, 3))
+    }
+}
+
+/// Weighted RMSE, m: √(Σ wᵢrᵢ² / Σ wᵢ) from a weighted SSR Σ wᵢrᵢ² and the weights (the
+/// residuals' RMS with each row counted by its weight 1/(sd² + e²), in the radii's unit).
+pub fn weighted_rmse(ssr: f64, weights: &[f64]) -> f64 {
+    (ssr / weights.iter().sum::<f64>()).sqrt()
+}
+
+/// One bubble's measurement sd, numerical error e and weight 1/(sd² + e²) in the tests.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct BubbleWeight {
+    /// Experiment.
+    pub experiment: String,
+    /// Bubble.
+    pub bubble: usize,
+    /// Its observations.
+    pub observations: usize,
+    /// Measurement sd, m (the least and the largest over its rows).
+    pub sd_m: [f64; 2],
+    /// Its numerical error e, m (the RMS of the Richardson estimate over its rows).
+    pub numerical_error_m: f64,
+    /// Weight 1/(sd² + e²), m⁻² (the least and the largest over its rows).
+    pub weight_per_m2: [f64; 2],
+    /// Its rows' share of the total weight.
+    pub weight_share: f64,
+}
+
+/// [`BubbleWeight`] of every measured bubble, in measurement order.
+pub fn bubble_weights(d: &Discovery, data: &Measurements) -> Vec<BubbleWeight> {
+    let total: f64 = d.weights.iter().sum();
+    let mut k = 0;
+    let mut out = Vec::new();
+    for s in &data.series {
+        let n = s.points.len();
+        let range = |v: &[f64]| {
+            [
+                v.iter().copied().fold(f64::INFINITY, f64::min),
+                v.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+            ]
+        };
+        let w = &d.weights[k..k + n];
+        out.push(BubbleWeight {
+            experiment: s.experiment.clone(),
+            bubble: s.bubble,
+            observations: n,
+            sd_m: range(&d.measurement_sd[k..k + n]),
+            numerical_error_m: d
+                .numerical
+                .per_observation
+                .get(k)
+                .copied()
+                .unwrap_or(f64::NAN),
+            weight_per_m2: range(w),
+            weight_share: w.iter().sum::<f64>() / total,
+        });
+        k += n;
+    }
+    out
+}
+
+/// `a` or, when the range is not one value, `a–b` (each with `digits` significant digits).
+fn range_text(r: [f64; 2], scale: f64, digits: usize) -> String {
+    let (a, b) = (sig(r[0] * scale, digits), sig(r[1] * scale, digits));
+    if a == b {
+        a
+    } else {
+        format!("{a}–{b}")
+    }
+}
+
 /// `discover.toml` text.
 pub fn discover_toml(d: &Discovery) -> Result<String, Error> {
+    discover_toml_with(d, None, &[])
+}
+
+/// `discover.toml` text with the `[data]` table and true values ([`data_info`]) and the
+/// bubbles' weights.
+fn discover_toml_with(
+    d: &Discovery,
+    info: Option<&DataInfo>,
+    bubbles: &[BubbleWeight],
+) -> Result<String, Error> {
     for (what, v) in [
         ("the baseline's weighted SSR", d.baseline.ssr),
         ("the final model's weighted SSR", d.final_fit.ssr),
@@ -218,10 +366,20 @@ pub fn discover_toml(d: &Discovery) -> Result<String, Error> {
             values: a.parameters.iter().map(|e| e.value).collect(),
             ci95_all,
             alternatives: a.alternatives.iter().map(|x| x.0.clone()).collect(),
+            f_dof: added_test(d, &a.effect).map(|t| [t.df_num, t.df_den]),
+            true_values: a
+                .parameters
+                .iter()
+                .filter_map(|e| {
+                    info.and_then(|i| i.truth.get(&e.name))
+                        .map(|v| (e.name.clone(), *v))
+                })
+                .collect(),
             absent,
         });
     }
     let mut round = Vec::new();
+    let _ = bubbles;
     for r in &d.rounds {
         let mut candidate = Vec::new();
         for o in &r.outcomes {
@@ -253,6 +411,8 @@ pub fn discover_toml(d: &Discovery) -> Result<String, Error> {
                 p_value,
                 delta_aicc,
                 rmse_m,
+                weighted_rmse_m: Some(weighted_rmse(o.ssr, &d.weights)).filter(|x| x.is_finite()),
+                f_den_dof: (o.error.is_none()).then_some(o.f_test.df_den),
                 parameters: o.estimates.iter().map(|e| e.name.clone()).collect(),
                 values: if values.iter().all(|v| v.is_finite()) {
                     values
@@ -277,14 +437,35 @@ pub fn discover_toml(d: &Discovery) -> Result<String, Error> {
         ssr_after: d.final_fit.ssr,
         rmse_before_m: d.baseline.rmse,
         rmse_after_m: d.final_fit.rmse,
+        weighted_rmse_before_m: weighted_rmse(d.baseline.ssr, &d.weights),
+        weighted_rmse_after_m: weighted_rmse(d.final_fit.ssr, &d.weights),
         numerical_error_rms_m: d.numerical.rms,
         measurement_sd_from_file: d.sd_given,
         alpha: d.options.alpha,
         observations: n,
+        data: info.map(|i| i.toml.clone()),
         added,
         round,
+        bubble_weight: bubbles.to_vec(),
     };
-    toml::to_string(&file).map_err(|e| Error::Solver(format!("discover.toml: {e}")))
+    toml::to_string(&file)
+        .map(|t| exponent_floats(&t))
+        .map_err(|e| Error::Solver(format!("discover.toml: {e}")))
+}
+
+/// The F-test of an added effect: its outcome in the round that added it.
+fn added_test<'a>(d: &'a Discovery, effect: &str) -> Option<&'a crate::fit::stats::FTest> {
+    d.rounds
+        .iter()
+        .filter(|r| r.accepted.as_deref() == Some(effect))
+        .flat_map(|r| r.outcomes.iter())
+        .find(|o| o.name == effect)
+        .map(|o| &o.f_test)
+}
+
+/// "F(ν₁, ν₂) = F" with the test's degrees of freedom.
+fn f_text(t: &crate::fit::stats::FTest) -> String {
+    format!("F({}, {}) = {}", t.df_num, t.df_den, sig(t.f, 4))
 }
 
 /// A diagnostic number for a table, or "not defined" when it is not a finite number (the
@@ -293,6 +474,15 @@ pub fn discover_toml(d: &Discovery) -> Result<String, Error> {
 fn diag(v: f64, digits: usize) -> Cell {
     if v.is_finite() {
         Cell::text(sig(v, digits))
+    } else {
+        Cell::text("not defined")
+    }
+}
+
+/// A diagnostic p-value for a table: [`p_cell`], or "not defined" when it is not a number.
+fn diag_p(p: f64) -> Cell {
+    if p.is_finite() {
+        Cell::text(p_cell(p))
     } else {
         Cell::text("not defined")
     }
@@ -327,7 +517,7 @@ fn diagnostics_section(page: &mut Page, title: &str, d: &Diagnostics) -> Result<
             Cell::text(g.n.to_string()),
             diag(g.mean * 1e6, 3),
             diag(g.se * 1e6, 3),
-            diag(g.p_value, 3),
+            diag_p(g.p_value),
         ])
         .map_err(Error::Solver)?;
     }
@@ -348,7 +538,7 @@ fn diagnostics_section(page: &mut Page, title: &str, d: &Diagnostics) -> Result<
             } else {
                 Cell::text("not defined")
             },
-            diag(tr.p_value, 3),
+            diag_p(tr.p_value),
         ])
         .map_err(Error::Solver)?;
     }
@@ -373,7 +563,7 @@ fn diagnostics_section(page: &mut Page, title: &str, d: &Diagnostics) -> Result<
             } else {
                 Cell::text("not defined")
             },
-            diag(r.test.p_value, 3),
+            diag_p(r.test.p_value),
         ])
         .map_err(Error::Solver)?;
     }
@@ -391,9 +581,15 @@ pub fn discover_outputs(
     command: &str,
 ) -> Result<OutputSet, Error> {
     let mut set = OutputSet::new();
-    set.add("discover.toml", discover_toml(d)?);
+    let info = data_info(data, experiments, &d.final_fit.model);
+    let bubbles = bubble_weights(d, data);
+    set.add(
+        "discover.toml",
+        discover_toml_with(d, Some(&info), &bubbles)?,
+    );
     let mut page = Page::new("Discovering the effect the model is missing");
     page.pre(command.to_string());
+    page.text(info.paragraph.clone());
     page.section("Result");
     if d.effects.is_empty() {
         page.text("**No missing effect found among the candidates tried.**");
@@ -413,14 +609,19 @@ pub fn discover_outputs(
     );
     for (k, a, b) in [
         (
-            "RMSE (µm)",
+            "RMSE, unweighted (µm)",
             sig(d.baseline.rmse * 1e6, 4),
             sig(d.final_fit.rmse * 1e6, 4),
         ),
         (
+            "RMSE, weighted (µm)",
+            sig(weighted_rmse(d.baseline.ssr, &d.weights) * 1e6, 4),
+            sig(weighted_rmse(d.final_fit.ssr, &d.weights) * 1e6, 4),
+        ),
+        (
             "SSR (weighted)",
-            sig(d.baseline.ssr, 5),
-            sig(d.final_fit.ssr, 5),
+            sig(d.baseline.ssr, 4),
+            sig(d.final_fit.ssr, 4),
         ),
         (
             "AICc",
@@ -430,14 +631,14 @@ pub fn discover_outputs(
                 d.baseline.n,
                 d.baseline.p(),
             )
-            .unwrap_or_else(|| sig(d.baseline.aicc, 6)),
+            .unwrap_or_else(|| sig(d.baseline.aicc, 4)),
             aicc_absent(
                 d.final_fit.aicc,
                 d.final_fit.ssr,
                 d.final_fit.n,
                 d.final_fit.p(),
             )
-            .unwrap_or_else(|| sig(d.final_fit.aicc, 6)),
+            .unwrap_or_else(|| sig(d.final_fit.aicc, 4)),
         ),
         (
             "free parameters",
@@ -461,11 +662,37 @@ pub fn discover_outputs(
         )
     };
     page.text(format!(
-        "How an effect is accepted: each round every candidate is refitted on top of the current model; the extra sum-of-squares F-test (nested least-squares models, independent Gaussian errors) compares it with the current model. The best is added only if p < α/m (Bonferroni over the m candidates tried in that round, α = {}) and it lowers the RMSE by more than the simulation's numerical error, {} µm (the Richardson estimate of a first-order scheme: twice the RMS change of the simulated radii when the grid step and every step limit are halved). Every test weights an observation by 1/(sd² + e²), with sd {} and e its bubble's numerical error, so grid error is never read as physics. The 95 % intervals are sandwich (HC1) intervals: covariance (JᵀJ)⁻¹(Σ rᵢ²JᵢᵀJᵢ)(JᵀJ)⁻¹·n/(n − p) on the weighted residuals rᵢ and Jacobian rows Jᵢ (MacKinnon & White 1985), Student t with n − p degrees of freedom, and the delta method for parameters fitted in log space (exponentiated, so asymmetric): the weights carry a numerical error the data may not contain. ΔAICc is the candidate's AICc (K = p + 1) less the current model's, from each fit's own SSR.",
+        "How an effect is accepted: each round every candidate is refitted on top of the current model; the extra sum-of-squares F-test (nested least-squares models, independent Gaussian errors) compares it with the current model. The best is added only if p < α/m (Bonferroni over the m candidates tried in that round, α = {}) and it lowers the unweighted RMSE by more than the simulation's numerical error, {} µm (the Richardson estimate of a first-order scheme: twice the RMS change of the simulated radii when the grid step and every step limit are halved). Every test weights an observation by 1/(sd² + e²), with sd {} and e its bubble's numerical error, so grid error is never read as physics. The 95 % intervals are sandwich (HC1) intervals: covariance (JᵀJ)⁻¹(Σ rᵢ²JᵢᵀJᵢ)(JᵀJ)⁻¹·n/(n − p) on the weighted residuals rᵢ and Jacobian rows Jᵢ (MacKinnon & White 1985), Student t with n − p degrees of freedom, and the delta method for parameters fitted in log space (exponentiated, so asymmetric): the weights carry a numerical error the data may not contain. ΔAICc is the candidate's AICc (K = p + 1) less the current model's, from each fit's own SSR.",
         d.options.alpha,
         sig(d.numerical.rms * 1e6, 3),
         sd_text
     ));
+    let mut t = Table::new(
+        "Weights of the tests, by bubble",
+        vec![
+            Column::plain("experiment"),
+            Column::plain("bubble"),
+            Column::plain("n"),
+            Column::new("sd", "µm"),
+            Column::new("numerical error e", "µm"),
+            Column::new("weight 1/(sd² + e²)", "µm⁻²"),
+            Column::new("share of the total weight", "%"),
+        ],
+    );
+    for b in &bubbles {
+        t.push(vec![
+            Cell::text(&b.experiment),
+            Cell::text(b.bubble.to_string()),
+            Cell::text(b.observations.to_string()),
+            Cell::text(range_text(b.sd_m, 1e6, 3)),
+            Cell::text(sig(b.numerical_error_m * 1e6, 3)),
+            Cell::text(range_text(b.weight_per_m2, 1e-12, 3)),
+            Cell::text(sig(b.weight_share * 100.0, 3)),
+        ])
+        .map_err(Error::Solver)?;
+    }
+    page.table(&t);
+    page.text("Two RMSEs are given. The unweighted RMSE, √(Σ rᵢ²/n), counts every row alike; it is the one the numerical-error rule compares. The weighted RMSE, √(Σ wᵢrᵢ²/Σ wᵢ) with the weights above, is the RMS residual the F-tests, ΔSSR and ΔAICc see (Σ wᵢrᵢ² is the weighted SSR). They can disagree: a bubble with a large numerical error e weighs little, so a candidate that fits the heavily weighted bubbles better and a lightly weighted one much worse lowers the weighted SSR (a large F) while raising the unweighted RMSE.");
     for a in &d.added {
         page.heading(3, format!("Added: {}", a.effect));
         let fin = |v: f64, why: &str| -> Stat {
@@ -475,10 +702,17 @@ pub fn discover_outputs(
                 Err(why.to_string())
             }
         };
+        let test = added_test(d, &a.effect);
         page.text(format!(
-            "F = {}, p = {}, ΔSSR = {}, ΔAICc = {}. Parameters in the final model:",
-            stat_text(&fin(a.f, "not a finite number"), |x| sig(x, 4)),
-            stat_text(&fin(a.p_value, "not a finite number"), |x| sig(x, 3)),
+            "{}, p {}, ΔSSR = {}, ΔAICc = {}. Parameters in the final model:",
+            match (test, fin(a.f, "not a finite number")) {
+                (Some(t), Ok(_)) => f_text(t),
+                (_, f) => format!("F = {}", stat_text(&f, |x| sig(x, 4))),
+            },
+            match fin(a.p_value, "not a finite number") {
+                Ok(p) => p_text(p),
+                Err(m) => format!("not given ({m})"),
+            },
             stat_text(&fin(a.delta_ssr, "not a finite number"), |x| sig(x, 4)),
             stat_text(
                 &fin(
@@ -488,17 +722,19 @@ pub fn discover_outputs(
                 |x| sig(x, 4)
             ),
         ));
-        page.table(&estimates_table(
+        page.table(&estimates_table_with_truth(
             &format!("{} parameters", a.effect),
             &a.parameters,
             d.final_fit.inference.singular,
+            &info.truth,
         )?);
     }
     if !d.final_fit.inference.estimates.is_empty() {
-        page.table(&estimates_table(
+        page.table(&estimates_table_with_truth(
             "Every free parameter of the final model",
             &d.final_fit.inference.estimates,
             d.final_fit.inference.singular,
+            &info.truth,
         )?);
     }
     page.section("Candidates, round by round");
@@ -523,12 +759,13 @@ pub fn discover_outputs(
             ),
             vec![
                 Column::plain("candidate"),
-                Column::plain("df"),
+                Column::plain("df (ν₁, ν₂)"),
                 Column::plain("ΔSSR"),
                 Column::plain("F"),
                 Column::plain("p"),
                 Column::plain("ΔAICc"),
-                Column::new("RMSE", "µm"),
+                Column::new("RMSE, unweighted", "µm"),
+                Column::new("RMSE, weighted", "µm"),
                 Column::plain("fitted parameters"),
             ],
         );
@@ -540,24 +777,46 @@ pub fn discover_outputs(
                 None => o
                     .estimates
                     .iter()
-                    .map(|e| format!("{} = {}", e.name, sig(e.value, 3)))
+                    .enumerate()
+                    .map(|(i, e)| candidate_param_text(e, o.params.get(i)))
                     .collect::<Vec<_>>()
                     .join("; "),
             };
+            let worse = o.error.is_none() && o.delta_ssr < 0.0;
             let st = cand_stats(o, d.baseline.n);
             let short = |v: &Stat, fmt: &dyn Fn(f64) -> String| match v {
                 Ok(x) => fmt(*x),
                 Err(m) if o.error.is_some() => format!("— ({m})"),
                 Err(m) => format!("not given ({m})"),
             };
+            let wrmse: Stat = if o.error.is_some() {
+                Err("not fitted".into())
+            } else {
+                Some(weighted_rmse(o.ssr, &d.weights))
+                    .filter(|x| x.is_finite())
+                    .ok_or_else(|| "not a finite number".to_string())
+            };
             t.push(vec![
                 Cell::text(&o.name),
-                Cell::text(o.dof.to_string()),
+                Cell::text(if o.error.is_some() {
+                    o.dof.to_string()
+                } else {
+                    format!("{}, {}", o.f_test.df_num, o.f_test.df_den)
+                }),
                 Cell::text(short(&st.delta_ssr, &|x| sig(x, 4))),
-                Cell::text(short(&st.f, &|x| sig(x, 4))),
-                Cell::text(short(&st.p_value, &|x| sig(x, 3))),
+                Cell::text(if worse {
+                    FITS_WORSE.to_string()
+                } else {
+                    short(&st.f, &|x| sig(x, 4))
+                }),
+                Cell::text(if worse {
+                    "—".to_string()
+                } else {
+                    short(&st.p_value, &p_cell)
+                }),
                 Cell::text(short(&st.delta_aicc, &|x| sig(x, 4))),
                 Cell::text(short(&st.rmse, &|x| sig(x * 1e6, 4))),
+                Cell::text(short(&wrmse, &|x| sig(x * 1e6, 4))),
                 Cell::text(params),
             ])
             .map_err(Error::Solver)?;
@@ -587,4 +846,75 @@ pub fn discover_outputs(
     set.add("report.md", page.to_markdown().map_err(Error::Solver)?);
     set.add("report.html", page.to_html().map_err(Error::Solver)?);
     Ok(set)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::discover::EffectParam;
+    use crate::fit::lsq::Estimate;
+    use crate::fit::paths::ParamSpec;
+
+    fn est(name: &str, value: f64, log: bool, at_bound: bool) -> Estimate {
+        Estimate {
+            name: name.into(),
+            value,
+            std_error: 1.0,
+            ci95: [0.0, 1.0],
+            log,
+            at_bound,
+            clipped: false,
+        }
+    }
+
+    /// p-values below 1e-16 are a bound, above it 3 significant digits: the committed example's
+    /// 2.309e-161 and 1.30e-17 print "< 1e-16", its 0.434 and 2.27e-32's neighbour 6.55e-4 print
+    /// their digits (reference: the numbers of reports/discover/report.md before this change).
+    #[test]
+    fn p_values_below_1e_16_print_as_a_bound() {
+        assert_eq!(p_text(2.308896500918035e-161), "< 1e-16");
+        assert_eq!(p_cell(1.2989377126215483e-17), "< 1e-16");
+        assert_eq!(p_text(0.4336), "= 0.434");
+        assert_eq!(p_cell(6.55e-4), "6.55e-4");
+        assert_eq!(p_cell(1e-16), "1.00e-16");
+    }
+
+    /// A candidate's estimate that ran to its null 0 (the committed round 2: a bulk modulus of
+    /// 2.24e-239 against a scan from 1e12) prints "→ 0 (at its null)"; a small real value above
+    /// a millionth of the scan (perfusion 2.47e-7 against a scan from 1e-5) prints its digits;
+    /// one at a bound of its range says so.
+    #[test]
+    fn estimates_at_their_null_or_a_bound_are_named_not_printed_as_digits() {
+        let param = |lo: f64| EffectParam {
+            spec: ParamSpec::positive("x", 1.0),
+            null: 0.0,
+            scan: vec![lo, lo * 10.0],
+        };
+        let k = est("bulk", 2.238606641606635e-239, true, false);
+        assert_eq!(
+            candidate_param_text(&k, Some(&param(1e12))),
+            "bulk → 0 (at its null)"
+        );
+        let k = est("perfusion.rate_per_s", 2.47e-7, true, false);
+        assert_eq!(
+            candidate_param_text(&k, Some(&param(1e-5))),
+            "perfusion.rate_per_s = 2.47e-7"
+        );
+        let k = est("fixed", 2788.0, true, true);
+        assert_eq!(
+            candidate_param_text(&k, Some(&param(1e2))),
+            "fixed = 2788 (at the bound)"
+        );
+        // without the candidate's parameters nothing is claimed about the null
+        let k = est("bulk", 2.24e-239, true, false);
+        assert_eq!(candidate_param_text(&k, None), "bulk = 2.24e-239");
+    }
+
+    /// The weighted RMSE √(Σ wr²/Σ w), by hand: residuals 2 and 1 with weights 1 and 3 give
+    /// SSR 4 + 3 = 7 and √(7/4) = 1.3229; equal weights give the unweighted RMSE √(5/2).
+    #[test]
+    fn weighted_rmse_by_hand() {
+        assert!((weighted_rmse(7.0, &[1.0, 3.0]) - 1.3228756555322954).abs() < 1e-15);
+        assert!((weighted_rmse(2.0 * 5.0, &[2.0, 2.0]) - (5.0f64 / 2.0).sqrt()).abs() < 1e-15);
+    }
 }

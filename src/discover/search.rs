@@ -77,6 +77,10 @@ pub struct CandidateOutcome {
     pub rmse: f64,
     /// Why it could not be fitted, if it could not.
     pub error: Option<String>,
+    /// The candidate's parameters as prepared (null value, scan, bounds), one per estimate in
+    /// the same order (empty when it could not be fitted): the report tells an estimate that
+    /// ran to its null from a small effect by them.
+    pub params: Vec<super::EffectParam>,
     /// The refitted model (kept for the accepted one).
     pub fitted: Option<Box<Fitted>>,
 }
@@ -236,6 +240,7 @@ fn try_candidate(
         delta_aicc: f64::NAN,
         rmse: f64::NAN,
         error: Some(m),
+        params: Vec::new(),
         fitted: None,
     };
     let mut docs = current.model.docs.clone();
@@ -348,6 +353,7 @@ fn try_candidate(
         delta_aicc,
         rmse: f.rmse,
         error: None,
+        params: prepared.params.clone(),
         fitted: Some(Box::new(f)),
     }
 }
@@ -581,15 +587,17 @@ pub fn discover_with(
         let gain = current.rmse - b.rmse;
         let significant = b.f_test.p_value < threshold;
         let above_numerics = gain > numerical.rms;
+        // 3 significant digits, as the report prints every statistic (p below 1e-16 as a bound)
+        let sig = crate::fit::report::sig;
         round.verdict = format!(
-            "best: {} (p = {:.3e} {} α/m = {:.3e}; RMSE gain {:.4} µm {} numerical error {:.4} µm)",
+            "best: {} (p {} {} α/m = {}; RMSE gain {} µm {} numerical error {} µm)",
             b.name,
-            b.f_test.p_value,
+            super::report::p_text(b.f_test.p_value),
             if significant { "<" } else { "≥" },
-            threshold,
-            gain * 1e6,
+            sig(threshold, 3),
+            sig(gain * 1e6, 3),
             if above_numerics { ">" } else { "≤" },
-            numerical.rms * 1e6
+            sig(numerical.rms * 1e6, 3)
         );
         if significant && above_numerics {
             let fitted = b.fitted.clone().expect("a fitted candidate keeps its fit");

@@ -4,7 +4,8 @@
 //! `measurements.csv`: header `experiment,bubble,time_s,radius_m` and optionally `sd_m` (the
 //! measurement standard deviation of that row), any column order, any row order. `bubble` is
 //! the 0-based index of the bubble in the experiment's phantom (the numbering of
-//! `simulate`'s `bubbles.csv`).
+//! `simulate`'s `bubbles.csv`). Lines starting with `#` are comments; a file `synth` wrote
+//! carries its settings in one ([`SYNTHETIC_TAG`], read into [`Measurements::provenance`]).
 //!
 //! `experiments.toml` (paths relative to the file):
 //! ```toml
@@ -56,6 +57,131 @@ pub struct Measurements {
     pub file: PathBuf,
     /// Series in (experiment, bubble) order.
     pub series: Vec<BubbleSeries>,
+    /// Where the data came from: `Some` when the file holds a [`SYNTHETIC_TAG`] comment line
+    /// (written by `synth`), `None` for measured data (a file without one).
+    pub provenance: Option<Provenance>,
+}
+
+/// The start of the comment line `synth` writes above the header of its CSV:
+/// `# synthetic: decophantom synth --effect NAME=V[,V2] … --noise-sd SD --every S --seed N;
+/// experiments fnv1a-64 HASH` (the CSV reader skips `#` lines, so the rows read the same).
+pub const SYNTHETIC_TAG: &str = "# synthetic: ";
+
+/// The settings a synthetic file was made with, read back from its [`SYNTHETIC_TAG`] line.
+#[derive(Debug, Clone, PartialEq)]
+pub struct SynthSettings {
+    /// The effects switched on (`--effect`), in order; empty for the baseline model itself.
+    pub effects: Vec<super::synth::EffectSetting>,
+    /// Noise sd, m (`--noise-sd`).
+    pub noise_sd: f64,
+    /// Sampling interval, s (`--every`).
+    pub every: f64,
+    /// Seed of the noise (`--seed`).
+    pub seed: u64,
+    /// FNV-1a 64 of the experiments the data were made from
+    /// ([`super::synth::experiments_hash`]), if recorded.
+    pub experiments_hash: Option<u64>,
+}
+
+/// A file's [`SYNTHETIC_TAG`] line, as read.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Provenance {
+    /// 1-based line of the tag.
+    pub line: usize,
+    /// The generator's command as written after the tag (up to any `;`).
+    pub command: String,
+    /// The settings, or why they could not be read from the line (an edited line): the data
+    /// are then still said to be synthetic, without settings or true values.
+    pub settings: Result<SynthSettings, String>,
+    /// Whether the file ends with `synth`'s end marker and its hash still matches the lines
+    /// above it (false: edited since, or text that never went through `synth --out`).
+    pub unchanged: bool,
+}
+
+/// Read the [`SYNTHETIC_TAG`] line of a measurements text, if any.
+pub fn read_provenance(text: &str) -> Option<Provenance> {
+    let tagged: Vec<(usize, &str)> = text
+        .lines()
+        .enumerate()
+        .filter_map(|(i, l)| l.strip_prefix(SYNTHETIC_TAG).map(|r| (i + 1, r.trim())))
+        .collect();
+    let &(line, rest) = tagged.first()?;
+    let (command, tail) = match rest.split_once(';') {
+        Some((c, t)) => (c.trim(), t.trim()),
+        None => (rest, ""),
+    };
+    let settings = if tagged.len() > 1 {
+        Err(format!(
+            "{} '{}' lines (lines {}); a file synth writes has one",
+            tagged.len(),
+            SYNTHETIC_TAG.trim(),
+            tagged
+                .iter()
+                .map(|t| t.0.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))
+    } else {
+        parse_synth_settings(command, tail)
+    };
+    Some(Provenance {
+        line,
+        command: command.to_string(),
+        settings,
+        unchanged: crate::report::output::written_unchanged(text, "synth"),
+    })
+}
+
+/// The settings in a [`SYNTHETIC_TAG`] line: `command` (`decophantom synth --effect … --seed N`)
+/// and `tail` (`experiments fnv1a-64 HASH`, or empty).
+fn parse_synth_settings(command: &str, tail: &str) -> Result<SynthSettings, String> {
+    let mut words = command.split_whitespace();
+    if (words.next(), words.next()) != (Some("decophantom"), Some("synth")) {
+        return Err(format!(
+            "'{command}' does not start with 'decophantom synth'"
+        ));
+    }
+    let (mut effects, mut noise_sd, mut every, mut seed) = (Vec::new(), None, None, None);
+    while let Some(flag) = words.next() {
+        let value = words
+            .next()
+            .ok_or_else(|| format!("'{flag}' has no value"))?;
+        let number = |v: &str| {
+            v.parse::<f64>()
+                .ok()
+                .filter(|x| x.is_finite())
+                .ok_or_else(|| format!("{flag} '{v}' is not a finite number"))
+        };
+        match flag {
+            "--effect" => effects
+                .push(super::synth::EffectSetting::parse(value).map_err(|e| e.message.clone())?),
+            "--noise-sd" => noise_sd = Some(number(value)?),
+            "--every" => every = Some(number(value)?),
+            "--seed" => {
+                seed = Some(
+                    value
+                        .parse::<u64>()
+                        .map_err(|_| format!("--seed '{value}' is not a seed"))?,
+                )
+            }
+            other => return Err(format!("unknown option '{other}'")),
+        }
+    }
+    let experiments_hash = match tail.strip_prefix("experiments fnv1a-64 ") {
+        Some(h) => Some(
+            u64::from_str_radix(h.trim(), 16)
+                .map_err(|_| format!("'{h}' is not a 64-bit hexadecimal hash"))?,
+        ),
+        None if tail.is_empty() => None,
+        None => return Err(format!("'{tail}' is not 'experiments fnv1a-64 HASH'")),
+    };
+    Ok(SynthSettings {
+        effects,
+        noise_sd: noise_sd.ok_or("no --noise-sd")?,
+        every: every.ok_or("no --every")?,
+        seed: seed.ok_or("no --seed")?,
+        experiments_hash,
+    })
 }
 
 impl Measurements {
@@ -312,6 +438,7 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
     Ok(Measurements {
         file: path.to_path_buf(),
         series,
+        provenance: read_provenance(text),
     })
 }
 
@@ -691,5 +818,74 @@ mod tests {
         // 1/sd², computed by hand: 1/(2e-6)² = 2.5e11, 1/(4e-6)² = 6.25e10
         let w = m.weights();
         assert!((w[0] / 2.5e11 - 1.0).abs() < 1e-12 && (w[1] / 6.25e10 - 1.0).abs() < 1e-12);
+    }
+
+    /// The `# synthetic:` line: a file with it reads the same rows as without it (the CSV
+    /// reader skips `#` lines) and exposes the settings written there; a file without it is
+    /// measured data (`provenance` None); an unreadable line still marks the data synthetic,
+    /// with the reason; the end marker of `synth` is checked (`unchanged`). Reference values:
+    /// the numbers written into the line by hand.
+    #[test]
+    fn the_synthetic_line_is_read_and_the_rows_stay_the_same() {
+        let path = Path::new("m.csv");
+        let rows = "experiment,bubble,time_s,radius_m,sd_m\na,0,0,1e-4,2e-6\na,0,5,1.1e-4,2e-6\n";
+        let tag = "# synthetic: decophantom synth --effect surface-area-law=30,2 --effect perfusion=2e-3 --noise-sd 2e-6 --every 5 --seed 7; experiments fnv1a-64 00000000000000ff\n";
+        let plain = parse_measurements(rows, path).unwrap();
+        assert_eq!(plain.provenance, None);
+        let body = format!("{tag}{rows}");
+        let text = format!(
+            "{body}{}",
+            crate::report::output::marker_line(
+                "synth",
+                &body,
+                crate::report::output::CommentStyle::Hash
+            )
+        );
+        let m = parse_measurements(&text, path).unwrap();
+        let values = |m: &Measurements| -> Vec<(f64, f64, Option<f64>)> {
+            m.series
+                .iter()
+                .flat_map(|s| s.points.iter().map(|p| (p.time, p.radius, p.sd)))
+                .collect()
+        };
+        assert_eq!(values(&m), values(&plain));
+        let p = m.provenance.clone().unwrap();
+        assert_eq!(p.line, 1);
+        assert!(p.unchanged);
+        assert_eq!(
+            p.command,
+            "decophantom synth --effect surface-area-law=30,2 --effect perfusion=2e-3 --noise-sd 2e-6 --every 5 --seed 7"
+        );
+        let st = p.settings.unwrap();
+        assert_eq!(st.effects.len(), 2);
+        assert_eq!(
+            (st.effects[0].name.as_str(), st.effects[0].values.clone()),
+            ("surface-area-law", vec![30.0, 2.0])
+        );
+        assert_eq!(
+            (st.effects[1].name.as_str(), st.effects[1].values.clone()),
+            ("perfusion", vec![2e-3])
+        );
+        assert_eq!(
+            (st.noise_sd, st.every, st.seed, st.experiments_hash),
+            (2e-6, 5.0, 7, Some(0xff))
+        );
+        // a row edited after synth wrote the file: still read, no longer unchanged
+        let edited = text.replacen("1.1e-4", "1.2e-4", 1);
+        let p = parse_measurements(&edited, path)
+            .unwrap()
+            .provenance
+            .unwrap();
+        assert!(!p.unchanged && p.settings.is_ok());
+        // an unreadable line: the data are synthetic, the settings are not given, and why
+        let bad = format!("# synthetic: decophantom synth --noise-sd lots --seed 1\n{rows}");
+        let p = parse_measurements(&bad, path).unwrap().provenance.unwrap();
+        assert!(p.settings.unwrap_err().contains("--noise-sd 'lots'"));
+        let twice = format!("{tag}{tag}{rows}");
+        let p = parse_measurements(&twice, path)
+            .unwrap()
+            .provenance
+            .unwrap();
+        assert!(p.settings.unwrap_err().contains("lines 1, 2"));
     }
 }

@@ -93,17 +93,30 @@ fn stat_cell(v: &Result<f64, String>) -> Cell {
 /// Table of estimates with standard errors and 95 % intervals (`singular`: the fit's Jacobian
 /// was singular, so neither is given).
 pub fn estimates_table(title: &str, est: &[Estimate], singular: bool) -> Result<Table, Error> {
-    let mut t = Table::new(
-        title,
-        vec![
-            Column::plain("parameter"),
-            Column::plain("estimate"),
-            Column::plain("std. error"),
-            Column::plain("95 % interval"),
-            Column::plain("fitted in"),
-            Column::plain("note"),
-        ],
-    );
+    estimates_table_with_truth(title, est, singular, &BTreeMap::new())
+}
+
+/// [`estimates_table`] with a "true value" column after the estimate when `truth` (true values
+/// of synthetic data by parameter name, [`DataInfo::truth`]) names any of the estimates; an
+/// estimate it does not name gets an empty cell.
+pub fn estimates_table_with_truth(
+    title: &str,
+    est: &[Estimate],
+    singular: bool,
+    truth: &BTreeMap<String, f64>,
+) -> Result<Table, Error> {
+    let with_truth = est.iter().any(|e| truth.contains_key(&e.name));
+    let mut cols = vec![Column::plain("parameter"), Column::plain("estimate")];
+    if with_truth {
+        cols.push(Column::plain("true value (synth)"));
+    }
+    cols.extend([
+        Column::plain("std. error"),
+        Column::plain("95 % interval"),
+        Column::plain("fitted in"),
+        Column::plain("note"),
+    ]);
+    let mut t = Table::new(title, cols);
     for e in est {
         finite_estimate(e)?;
         let (se, ci) = estimate_stats(e, singular);
@@ -114,9 +127,15 @@ pub fn estimates_table(title: &str, est: &[Estimate], singular: bool) -> Result<
         if e.clipped && ci.is_ok() {
             notes.push("interval clipped to the bounds given");
         }
-        t.push(vec![
-            Cell::text(&e.name),
-            cell(e.value),
+        let mut row = vec![Cell::text(&e.name), cell(e.value)];
+        if with_truth {
+            row.push(
+                truth
+                    .get(&e.name)
+                    .map_or(Cell::Empty, |v| Cell::text(crate::error::num(*v))),
+            );
+        }
+        row.extend([
             stat_cell(&se),
             match &ci {
                 Ok(c) => Cell::text(format!("[{}, {}]", sig(c[0], 4), sig(c[1], 4))),
@@ -124,10 +143,232 @@ pub fn estimates_table(title: &str, est: &[Estimate], singular: bool) -> Result<
             },
             Cell::text(if e.log { "log space" } else { "linear" }),
             Cell::text(notes.join("; ")),
-        ])
-        .map_err(Error::Solver)?;
+        ]);
+        t.push(row).map_err(Error::Solver)?;
     }
     Ok(t)
+}
+
+/// TOML text with every float outside strings whose size is below 1e-4 or from 1e16 on
+/// rewritten in exponent form (`2.308896500918035e-161` rather than 160 zeros and then the
+/// digits; `2.6826799216733474e-5` rather than `0.000026826799216733474`): the `toml` crate
+/// writes every float in positional notation. The digits are Rust's shortest round-trip ones,
+/// so every value reads back bit for bit; the text is returned unchanged if the rewrite would
+/// not read back to the same document.
+pub fn exponent_floats(text: &str) -> String {
+    let b = text.as_bytes();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    let mut last = 0;
+    while i < b.len() {
+        match b[i] {
+            // strings are skipped whole: triple-quoted, basic (with escapes) and literal
+            q @ (b'"' | b'\'') => {
+                let close: &[u8] = if q == b'"' { b"\"\"\"" } else { b"'''" };
+                if b[i..].starts_with(close) {
+                    i += 3;
+                    while i < b.len() && !b[i..].starts_with(close) {
+                        i += if q == b'"' && b[i] == b'\\' { 2 } else { 1 };
+                    }
+                    i += 3;
+                } else {
+                    i += 1;
+                    while i < b.len() && b[i] != q && b[i] != b'\n' {
+                        i += if q == b'"' && b[i] == b'\\' { 2 } else { 1 };
+                    }
+                    i += 1;
+                }
+            }
+            b'#' => {
+                while i < b.len() && b[i] != b'\n' {
+                    i += 1;
+                }
+            }
+            c if (c.is_ascii_digit() || c == b'-' || c == b'+')
+                && (i == 0 || matches!(b[i - 1], b' ' | b'=' | b'[' | b',' | b'\n')) =>
+            {
+                let start = i;
+                while i < b.len()
+                    && matches!(b[i], b'0'..=b'9' | b'.' | b'-' | b'+' | b'e' | b'E' | b'_')
+                {
+                    i += 1;
+                }
+                let tok = &text[start..i];
+                let ends_value = i == b.len() || matches!(b[i], b'\n' | b',' | b']' | b' ');
+                if ends_value && tok.contains('.') && !tok.contains(['e', 'E', '_']) {
+                    if let Ok(v) = tok.parse::<f64>() {
+                        if v != 0.0 && !(1e-4..1e16).contains(&v.abs()) {
+                            out.push_str(&text[last..start]);
+                            out.push_str(&format!("{v:e}"));
+                            last = i;
+                        }
+                    }
+                }
+            }
+            _ => i += 1,
+        }
+    }
+    out.push_str(&text[last.min(text.len())..]);
+    let same = match (text.parse::<toml::Table>(), out.parse::<toml::Table>()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if same {
+        out
+    } else {
+        text.to_string()
+    }
+}
+
+/// The `[data]` table of `fit.toml` and `discover.toml`: where the data came from.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DataOut {
+    /// `measured` or `synthetic`.
+    pub source: &'static str,
+    /// The measurements file.
+    pub file: String,
+    /// The generator's command (synthetic data).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub generator: Option<String>,
+    /// The effects switched on, as `NAME=V[,V2]` (synthetic data; empty: the baseline model).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub effects: Option<Vec<String>>,
+    /// Noise sd, m.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub noise_sd_m: Option<f64>,
+    /// Sampling interval, s.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub every_s: Option<f64>,
+    /// Seed of the noise (left out past the largest TOML integer; the generator has it).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub seed: Option<i64>,
+    /// Whether the file still ends with synth's matching end marker.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub unchanged_since_written: Option<bool>,
+    /// Why the generator's settings could not be read from the file.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub settings_unreadable: Option<String>,
+    /// Why no true value is given (synthetic data with readable settings).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub true_values_absent: Option<String>,
+}
+
+/// Where the data of a report came from ([`data_info`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct DataInfo {
+    /// The report's "Data" paragraph (Markdown).
+    pub paragraph: String,
+    /// The `[data]` table.
+    pub toml: DataOut,
+    /// True values by parameter name: the values `synth` set at the paths of the fitted
+    /// model's parameters, when that model contains the one `synth` ran exactly
+    /// ([`crate::fit::synth::true_values`]); empty otherwise.
+    pub truth: BTreeMap<String, f64>,
+}
+
+/// The provenance of `data` for a report of `model` fitted to it: measured (no `# synthetic:`
+/// line), or synthetic with the generator's effect(s), noise, interval and seed, and the true
+/// values of the model's parameters where they are exact.
+pub fn data_info(
+    data: &Measurements,
+    experiments: &Experiments,
+    model: &super::model::Model,
+) -> DataInfo {
+    let file = data.file.display().to_string();
+    let mut out = DataOut {
+        source: "measured",
+        file: file.clone(),
+        generator: None,
+        effects: None,
+        noise_sd_m: None,
+        every_s: None,
+        seed: None,
+        unchanged_since_written: None,
+        settings_unreadable: None,
+        true_values_absent: None,
+    };
+    let mut truth = BTreeMap::new();
+    let Some(p) = &data.provenance else {
+        return DataInfo {
+            paragraph: format!("**Data**: measured radii, read from `{file}` (it holds no `# synthetic:` line, which `decophantom synth` writes into the data it makes)."),
+            toml: out,
+            truth,
+        };
+    };
+    out.source = "synthetic";
+    out.generator = Some(p.command.clone());
+    out.unchanged_since_written = Some(p.unchanged);
+    let mut text = String::new();
+    match &p.settings {
+        Err(m) => {
+            text.push_str(&format!("**Data**: synthetic, not measured: `{file}` says at line {} that it was generated (`{}`), but its settings cannot be read ({m}), so no generator settings or true values are given.", p.line, p.command));
+            out.settings_unreadable = Some(m.clone());
+        }
+        Ok(st) => {
+            let effects: Vec<String> = st
+                .effects
+                .iter()
+                .map(|e| {
+                    if e.values.is_empty() {
+                        e.name.clone()
+                    } else {
+                        let v: Vec<String> =
+                            e.values.iter().map(|v| crate::error::num(*v)).collect();
+                        format!("{}={}", e.name, v.join(","))
+                    }
+                })
+                .collect();
+            text.push_str(&format!(
+                "**Data**: synthetic, not measured: generated by `{}` (line {} of `{file}`): {}, Gaussian noise of sd {} µm on every radius, sampled every {} s, noise seed {}.",
+                p.command,
+                p.line,
+                if effects.is_empty() {
+                    "no effect switched on (the baseline model itself)".to_string()
+                } else {
+                    format!(
+                        "effect{} {} switched on",
+                        if effects.len() > 1 { "s" } else { "" },
+                        effects.iter().map(|e| format!("`{e}`")).collect::<Vec<_>>().join(", ")
+                    )
+                },
+                sig(st.noise_sd * 1e6, 3),
+                crate::error::num(st.every),
+                st.seed
+            ));
+            out.effects = Some(effects);
+            out.noise_sd_m = Some(st.noise_sd);
+            out.every_s = Some(st.every);
+            out.seed = i64::try_from(st.seed).ok();
+            match super::synth::true_values(experiments, st, model) {
+                Ok(v) => {
+                    for (s, t) in model.free.iter().zip(v) {
+                        if let Some(t) = t {
+                            truth.insert(s.path.clone(), t);
+                        }
+                    }
+                    if truth.is_empty() {
+                        let why = "no fitted parameter is one the effects set".to_string();
+                        text.push_str(&format!(" No true value is given: {why}."));
+                        out.true_values_absent = Some(why);
+                    } else {
+                        text.push_str(" The parameter tables give the true value (the value synth set) beside each estimate of a parameter the effects set: the fitted model with those values is the model synth ran.");
+                    }
+                }
+                Err(why) => {
+                    text.push_str(&format!(" No true value is given: {why}."));
+                    out.true_values_absent = Some(why);
+                }
+            }
+        }
+    }
+    if !p.unchanged {
+        text.push_str(" The file does not end with synth's end marker matching the lines above it (edited since it was written, or not written by `synth --out`): the rows may not be those these settings make.");
+    }
+    DataInfo {
+        paragraph: text,
+        toml: out,
+        truth,
+    }
 }
 
 /// An estimate that is not a finite number is a failure of the fit (exit 3), never written.
@@ -419,12 +660,16 @@ struct FitFile<'a> {
     absent: BTreeMap<&'static str, String>,
     parameter: Vec<ParamOut>,
     growth: &'a [GrowthRow],
+    data: DataOut,
 }
 
 #[derive(Serialize)]
 struct ParamOut {
     name: String,
     value: f64,
+    /// The value synth set (synthetic data whose model the fit contains exactly).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    true_value: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
     std_error: Option<f64>,
     #[serde(skip_serializing_if = "Option::is_none")]
@@ -499,6 +744,7 @@ pub fn fit_toml(
     data: &Measurements,
     growth: &[GrowthRow],
 ) -> Result<String, Error> {
+    let info = data_info(data, experiments, &f.model);
     let st = fit_stats(f)?;
     let mut absent = BTreeMap::new();
     let mut keep = |key: &'static str, v: &Result<f64, String>| match v {
@@ -534,6 +780,7 @@ pub fn fit_toml(
             ParamOut {
                 name: e.name.clone(),
                 value: e.value,
+                true_value: info.truth.get(&e.name).copied(),
                 std_error: se.ok(),
                 ci95: ci.as_ref().ok().copied(),
                 bounds: spec.lower.zip(spec.upper).map(|(a, b)| [a, b]),
@@ -563,8 +810,11 @@ pub fn fit_toml(
         absent,
         parameter,
         growth,
+        data: info.toml.clone(),
     };
-    toml::to_string(&file).map_err(|e| Error::Solver(format!("fit.toml: {e}")))
+    toml::to_string(&file)
+        .map(|t| exponent_floats(&t))
+        .map_err(|e| Error::Solver(format!("fit.toml: {e}")))
 }
 
 /// Build the whole `fit` output.
@@ -590,12 +840,15 @@ pub fn fit_outputs(
         f.dof()
     ));
     page.pre(command.to_string());
+    let info = data_info(data, experiments, &f.model);
+    page.text(info.paragraph.clone());
     let st = fit_stats(f)?;
     page.section("Estimates");
-    page.table(&estimates_table(
+    page.table(&estimates_table_with_truth(
         "Estimates",
         &f.inference.estimates,
         f.inference.singular,
+        &info.truth,
     )?);
     if f.inference.singular {
         page.text("**The Jacobian is singular**: some parameter (or combination) is not determined by these data; no standard error, interval or correlation is given.");
@@ -647,17 +900,17 @@ pub fn fit_outputs(
     for (k, v) in [
         ("observations n", f.n.to_string()),
         ("free parameters p", f.p().to_string()),
-        ("SSR (weighted)", sig(f.ssr, 5)),
+        ("SSR (weighted)", sig(f.ssr, 4)),
         (
             "residual variance s² = SSR/(n − p)",
             st.residual_variance
                 .as_ref()
-                .map_or_else(|m| m.clone(), |v| sig(*v, 5)),
+                .map_or_else(|m| m.clone(), |v| sig(*v, 4)),
         ),
         ("RMSE (unweighted)", format!("{} µm", sig(f.rmse * 1e6, 4))),
         (
             "AICc",
-            st.aicc.as_ref().map_or_else(|m| m.clone(), |v| sig(*v, 6)),
+            st.aicc.as_ref().map_or_else(|m| m.clone(), |v| sig(*v, 4)),
         ),
         (
             "converged",
@@ -728,5 +981,46 @@ mod tests {
         let mut bad = est(0.1, [0.0, 1.0]);
         bad.value = f64::NAN;
         assert!(matches!(finite_estimate(&bad), Err(Error::Solver(_))));
+    }
+
+    /// Floats below 1e-4 (and from 1e16) are written in exponent form with their shortest
+    /// round-trip digits, so they read back to the same bits; strings holding such numbers and
+    /// keys with digits are left alone; ordinary sizes keep positional notation. Reference:
+    /// the values put in, and the text the `toml` crate writes for them.
+    #[test]
+    fn tiny_floats_are_written_in_exponent_form() {
+        #[derive(Serialize)]
+        struct T {
+            p_value: f64,
+            ci95: [f64; 2],
+            big: f64,
+            note: String,
+            value: f64,
+        }
+        let t = T {
+            p_value: 2.308896500918035e-161,
+            ci95: [2.6826799216733474e-5, -3.5e-9],
+            big: 6.225223095758606e16,
+            note: "p = 0.00000000000012 stays".into(),
+            value: 29.49538853203191,
+        };
+        let raw = toml::to_string(&t).unwrap();
+        assert!(raw.contains("0.0000000000000000"), "{raw}");
+        let out = exponent_floats(&raw);
+        assert!(out.contains("p_value = 2.308896500918035e-161\n"), "{out}");
+        assert!(
+            out.contains("ci95 = [2.6826799216733474e-5, -3.5e-9]"),
+            "{out}"
+        );
+        assert!(out.contains("big = 6.225223095758606e16\n"), "{out}");
+        assert!(
+            out.contains("note = \"p = 0.00000000000012 stays\""),
+            "{out}"
+        );
+        assert!(out.contains("value = 29.49538853203191\n"), "{out}");
+        let back: toml::Table = out.parse().unwrap();
+        assert_eq!(back["p_value"].as_float(), Some(2.308896500918035e-161));
+        assert_eq!(back["big"].as_float(), Some(6.225223095758606e16));
+        assert_eq!(back, raw.parse::<toml::Table>().unwrap());
     }
 }

@@ -58,6 +58,17 @@ impl EffectSetting {
 /// values, and a value the phantom reader does not accept at its setting (each effect's values
 /// are written into every phantom and read back by the phantom reader, so its ranges apply).
 pub fn model_with(experiments: &Experiments, effects: &[EffectSetting]) -> Result<Model, Error> {
+    model_and_paths(experiments, effects).map(|(m, _)| m)
+}
+
+/// [`model_with`] and every phantom path the effects set with the value set there, in order
+/// (a candidate's parameter paths, as `discover` names its estimates; a phantom-path effect's
+/// own path).
+pub fn model_and_paths(
+    experiments: &Experiments,
+    effects: &[EffectSetting],
+) -> Result<(Model, Vec<(String, f64)>), Error> {
+    let mut set_values: Vec<(String, f64)> = Vec::new();
     let mut docs: Vec<toml::Table> = experiments.list.iter().map(|e| e.phantom.clone()).collect();
     let bad = |m: String| {
         Error::Input(
@@ -109,11 +120,13 @@ pub fn model_with(experiments: &Experiments, effects: &[EffectSetting]) -> Resul
                 for (p, v) in prepared.params.iter().zip(&e.values) {
                     set_shared(&mut docs, &p.spec.path, *v).map_err(bad)?;
                     paths_set.push(p.spec.path.clone());
+                    set_values.push((p.spec.path.clone(), *v));
                 }
             }
             None if e.name.contains('.') && e.values.len() == 1 => {
                 set_shared(&mut docs, &e.name, e.values[0]).map_err(bad)?;
                 paths_set.push(e.name.clone());
+                set_values.push((e.name.clone(), e.values[0]));
             }
             None => {
                 let names: Vec<String> = discover::all_candidates(&discover::Phantoms {
@@ -157,11 +170,124 @@ pub fn model_with(experiments: &Experiments, effects: &[EffectSetting]) -> Resul
             }
         }
     }
-    Ok(Model {
-        docs,
-        free: Vec::new(),
-        evaluations: None,
-    })
+    Ok((
+        Model {
+            docs,
+            free: Vec::new(),
+            evaluations: None,
+        },
+        set_values,
+    ))
+}
+
+/// FNV-1a 64 of the experiments synthetic data are made from: each experiment's name, bubble
+/// count, profile and phantom document (not the paths they were read from). Recorded in the
+/// [`super::data::SYNTHETIC_TAG`] line, so a report gives true values only for the
+/// experiments the data were made from.
+pub fn experiments_hash(experiments: &Experiments) -> u64 {
+    let mut s = String::new();
+    for e in &experiments.list {
+        s.push_str(&format!(
+            "experiment {:?} bubbles {}\nprofile {:?}\nphantom {}\n",
+            e.name,
+            e.bubbles,
+            e.profile,
+            toml::to_string(&e.phantom).unwrap_or_else(|_| format!("{:?}", e.phantom))
+        ));
+    }
+    crate::phantom::checkpoint::fnv1a(s.as_bytes())
+}
+
+/// The [`super::data::SYNTHETIC_TAG`] line `synth` writes above its CSV's header (with its
+/// line break): the command that makes the same rows from the same experiments, and the
+/// experiments' [`experiments_hash`]. Every number is written in round-trip notation.
+pub fn provenance_line(
+    experiments: &Experiments,
+    effects: &[EffectSetting],
+    noise_sd: f64,
+    every: f64,
+    seed: u64,
+) -> String {
+    use crate::error::num;
+    let mut s = format!("{}decophantom synth", super::data::SYNTHETIC_TAG);
+    for e in effects {
+        s.push_str(" --effect ");
+        s.push_str(&e.name);
+        if !e.values.is_empty() {
+            let v: Vec<String> = e.values.iter().map(|v| num(*v)).collect();
+            s.push('=');
+            s.push_str(&v.join(","));
+        }
+    }
+    s.push_str(&format!(
+        " --noise-sd {} --every {} --seed {seed}; experiments fnv1a-64 {:016x}\n",
+        num(noise_sd),
+        num(every),
+        experiments_hash(experiments)
+    ));
+    s
+}
+
+/// The true value of each free parameter of `model` (fitted to data `synth` made with
+/// `settings` from `experiments`): `Some` for a parameter at a path the effects set (the value
+/// set there), `None` for one they did not set. Given only when it is exact: the experiments
+/// are those the data were made from (their [`experiments_hash`]), and the model with every
+/// parameter set by the effects at its true value (every other at its value in the model's
+/// phantoms) is the model `synth` ran, document for document — else the reason (an effect the
+/// model lacks, a parameter of another meaning at the same path, other experiments), and no
+/// value is given at all.
+pub fn true_values(
+    experiments: &Experiments,
+    settings: &super::data::SynthSettings,
+    model: &Model,
+) -> Result<Vec<Option<f64>>, String> {
+    match settings.experiments_hash {
+        Some(h) if h == experiments_hash(experiments) => {}
+        Some(_) => return Err("the experiments differ from those the data were made from".into()),
+        None => return Err("the data do not record the experiments they were made from".into()),
+    }
+    let (synth, set) = model_and_paths(experiments, &settings.effects)
+        .map_err(|e| format!("the effects cannot be set on these experiments: {e}"))?;
+    let mut fitted = model.docs.clone();
+    let mut truth = synth.docs;
+    let mut out = Vec::with_capacity(model.free.len());
+    let scale = |p: &str| p.starts_with(super::paths::SCALE_PREFIX);
+    for s in &model.free {
+        match set.iter().find(|(p, _)| *p == s.path) {
+            Some((_, v)) => {
+                set_shared(&mut fitted, &s.path, *v)?;
+                // a plain path written again at its value (the same representation on both
+                // sides); a scale the effects applied is already in synth's documents
+                if !scale(&s.path) {
+                    set_shared(&mut truth, &s.path, *v)?;
+                }
+                out.push(Some(*v));
+            }
+            None => {
+                // not set by the effects: at its value in the model's phantoms on both sides
+                let v = if scale(&s.path) {
+                    1.0
+                } else {
+                    fitted
+                        .iter()
+                        .find_map(|d| super::paths::get(d, &s.path))
+                        .ok_or_else(|| {
+                            format!("{} is at its default, not in the phantoms", s.path)
+                        })?
+                };
+                set_shared(&mut fitted, &s.path, v)?;
+                set_shared(&mut truth, &s.path, v)?;
+                out.push(None);
+            }
+        }
+    }
+    if fitted != truth {
+        return Err(
+            "with its parameters at the values synth used, the fitted model is not the model the data were made from (an effect it lacks, or a parameter of another meaning at the same path)"
+                .into(),
+        );
+    }
+    Ok(out)
 }
 
 /// Most rows `synth` writes: 10⁶ (about 50 MB of CSV; a fit simulates every experiment for
@@ -169,7 +295,8 @@ pub fn model_with(experiments: &Experiments, effects: &[EffectSetting]) -> Resul
 /// series). Checked before any simulation from each profile's duration.
 pub const MAX_ROWS: usize = 1_000_000;
 
-/// Synthesise `measurements.csv` text: every bubble of every experiment sampled at 0, `every`,
+/// Synthesise `measurements.csv` text, its first line the settings ([`provenance_line`]):
+/// every bubble of every experiment sampled at 0, `every`,
 /// 2·`every`, … s while it exists, with N(0, `noise_sd`²) added (clamped at 0) and `sd_m` =
 /// `noise_sd` in every row. The CSV is written by the `csv` crate (a name holding a comma, a
 /// quote or `#` is quoted) and read back by `fit`'s own reader before it is returned, so what
@@ -237,9 +364,11 @@ pub fn synthesize(
     let runs = model.run(experiments, &[])?;
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(seed);
     let mut normal = move || super::stats::standard_normal(&mut rng);
-    let mut w = csv::WriterBuilder::new()
-        .comment(Some(b'#'))
-        .from_writer(Vec::new());
+    let mut w = csv::WriterBuilder::new().comment(Some(b'#')).from_writer(
+        provenance_line(experiments, effects, noise_sd, every, seed)
+            .as_bytes()
+            .to_vec(),
+    );
     let csv_err = |e: csv::Error| Error::Solver(format!("synth: writing the CSV: {e}"));
     w.write_record(["experiment", "bubble", "time_s", "radius_m", "sd_m"])
         .map_err(csv_err)?;

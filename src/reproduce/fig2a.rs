@@ -226,12 +226,16 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
             format!("continuity-largest:mu{}", mi + 1),
             "'adopting the Continuity of Displacement form leads to the opposite extreme of much higher final radii due to its persistent negative sign' (§2.1.2)",
             format!(
-                "μ = {} Pa: continuity of displacement gives the largest final radius at {} R0 ({} without a root); R_B/R_B(Ω = 0) = {} at R0 = 1 mm (smallest gain {})",
+                "μ = {} Pa: continuity of displacement gives the largest final radius at {} R0{}; its R_B is {} of Ω = 0's at R0 = 1 mm (the smallest gain over R0: {})",
                 s3(*mu),
                 if cod_largest { "every" } else { "not every" },
-                no_root,
-                s3(gain_large),
-                s3(worst_gain)
+                if no_root == 0 {
+                    String::new()
+                } else {
+                    format!(" ({no_root} R0 without an equilibrium)")
+                },
+                gain_pct(gain_large),
+                gain_pct(worst_gain)
             ),
             agree,
             if much {
@@ -298,4 +302,10 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         page,
         verdicts,
     })
+}
+
+/// A ratio as the gain it is, in %: 1.00178 → "+0.178 %" (a ratio rounded to 1.00 hides it).
+fn gain_pct(ratio: f64) -> String {
+    let p = (ratio - 1.0) * 100.0;
+    format!("{}{} %", if p >= 0.0 { "+" } else { "" }, s3(p))
 }
