@@ -9,6 +9,7 @@ use super::{add_verdicts, discrepancies, report_err, s3, Agreement, FigureOutput
 use super::{grade, halve_steps, Part, Settings, Verdict};
 use crate::error::{Error, InputError};
 use crate::fit::paths;
+use crate::fit::report::sig;
 use crate::report::html::Page;
 use crate::report::output::OutputSet;
 use crate::report::plot::BarChart;
@@ -96,8 +97,9 @@ fn study(
     })
 }
 
-/// One OAT row per parameter: (symbol, [R_max lo, R_max hi, range, normalised], [t_max …]).
-type OatRow = (&'static str, [f64; 4], [f64; 4]);
+/// One OAT row per parameter: (symbol, [R_max at the lowest level, at the highest, range over
+/// the levels, normalised sensitivity, change highest − lowest], [t_max …]).
+type OatRow = (&'static str, [f64; 5], [f64; 5]);
 
 fn oat_rows(res: &Results) -> Vec<OatRow> {
     let (_, rows) = indices(res);
@@ -106,7 +108,7 @@ fn oat_rows(res: &Results) -> Vec<OatRow> {
         .iter()
         .enumerate()
         .map(|(i, (sym, p))| {
-            let get = |m: usize| -> [f64; 4] {
+            let get = |m: usize| -> [f64; 5] {
                 let lo = res.rows[1 + i * n].metrics[m];
                 let hi = res.rows[i * n + n].metrics[m];
                 let r = rows
@@ -119,7 +121,7 @@ fn oat_rows(res: &Results) -> Vec<OatRow> {
                     r.get(5).copied().unwrap_or(f64::NAN),
                     r.get(6).copied().unwrap_or(f64::NAN),
                 );
-                [lo, hi, max - min, norm]
+                [lo, hi, max - min, norm, hi - lo]
             };
             (*sym, get(0), get(1))
         })
@@ -128,10 +130,14 @@ fn oat_rows(res: &Results) -> Vec<OatRow> {
 
 /// The numerical error of every number of the OAT rows `full`: the Richardson estimate of a
 /// first-order scheme, twice the change when every step limit is halved (`half`: the same
-/// study with [`halve_steps`]).
+/// study with [`halve_steps`]). A change, range or sensitivity gets the estimate of its own
+/// value (the difference computed at both step sizes), not the sum of its two ends' errors:
+/// both ends run with the same step limits through nearly the same history, so most of their
+/// discretisation error is common and cancels in the difference; the sum is only a worst-case
+/// bound that assumes opposite errors.
 fn numerical_errors(full: &[OatRow], half: &[OatRow]) -> Vec<OatRow> {
-    let e = |a: &[f64; 4], b: &[f64; 4]| -> [f64; 4] {
-        [0, 1, 2, 3].map(|k| {
+    let e = |a: &[f64; 5], b: &[f64; 5]| -> [f64; 5] {
+        [0, 1, 2, 3, 4].map(|k| {
             let d = (a[k] - b[k]).abs();
             if k == 3 {
                 // a normalised sensitivity's sign is not the point: its size is
@@ -148,7 +154,7 @@ fn numerical_errors(full: &[OatRow], half: &[OatRow]) -> Vec<OatRow> {
 }
 
 /// The note of a ranking with a part within the numerical error.
-const UNRESOLVED: &str = "a part is within the numerical error (the ± figures: the difference to be judged is smaller than the change of the metrics when every step limit is halved, twice over); ";
+const UNRESOLVED: &str = "a part is within the numerical error (the ± figures: twice the change of each range or sensitivity itself when every step limit is halved; a comparison counts only where the two values, each less or plus its error, separate); ";
 
 /// A ranking verdict's note: `base`, after [`UNRESOLVED`] where a part is within the
 /// numerical error.
@@ -186,16 +192,66 @@ fn part_largest(v: &[(&'static str, f64, f64)], want: &str) -> Part {
     }
 }
 
-/// Sign of hi − lo with a dead band: `band` absolute (t_max: 1 s, below the 2 s frame interval)
-/// or, when `band` is 0, 1e-6 of the value.
-fn direction(lo: f64, hi: f64, band: f64) -> i8 {
-    let d = hi - lo;
-    let band = if band > 0.0 {
-        band
-    } else {
-        1e-6 * lo.abs().max(hi.abs())
+/// One parameter's Sobol' indices: (symbol, [S1, lo, hi, ST, lo, hi]).
+type SobolRow = (&'static str, [f64; 6]);
+
+/// The candidates for the largest of `v` (symbol, estimate, interval low, high): every
+/// parameter whose interval reaches above no other's lower bound is out. One candidate: the
+/// ranking is resolved; several: it is unresolved between them. An undefined bound excludes
+/// nothing and is never excluded.
+fn sobol_first(v: &[(&'static str, f64, f64, f64)]) -> Vec<&'static str> {
+    v.iter()
+        .filter(|p| !v.iter().any(|q| q.0 != p.0 && q.2 > p.3))
+        .map(|p| p.0)
+        .collect()
+}
+
+/// The ranking of one metric's total indices, as text.
+fn sobol_ranking_text(
+    metric: &str,
+    v: &[(&'static str, f64, f64, f64)],
+    first: &[&'static str],
+    n: usize,
+) -> String {
+    let show = |s: &str| {
+        v.iter().find(|x| x.0 == s).map_or(String::new(), |x| {
+            format!("{} {} [{}, {}]", x.0, s3(x.1), s3(x.2), s3(x.3))
+        })
     };
-    if !d.is_finite() || d.abs() <= band {
+    match first {
+        [one] => {
+            let rest = v
+                .iter()
+                .filter(|x| x.0 != *one)
+                .map(|x| x.3)
+                .fold(f64::NEG_INFINITY, f64::max);
+            format!(
+                "{metric}: {one} first, resolved (ST {}, above every other's interval, the highest of which ends at {})",
+                show(one),
+                s3(rest)
+            )
+        }
+        _ => format!(
+            "{metric}: unresolved at N = {n} between {} (their ST intervals overlap)",
+            {
+                let all: Vec<String> = first.iter().map(|s| show(s)).collect();
+                match all.split_last() {
+                    Some((last, rest)) if !rest.is_empty() => {
+                        format!("{} and {last}", rest.join(", "))
+                    }
+                    _ => all.join(""),
+                }
+            }
+        ),
+    }
+}
+
+/// The direction of a change `d` (highest level − lowest) with numerical error `err` (the
+/// error of the change itself, [`numerical_errors`]): its sign where |d| exceeds the error (and a
+/// float-noise floor of 1e-9 of `scale`), 0 (unresolved) otherwise or where the error is unknown.
+fn direction(d: f64, err: f64, scale: f64) -> i8 {
+    let floor = 1e-9 * scale.abs();
+    if !d.is_finite() || !err.is_finite() || !(d.abs() > err.max(floor)) {
         0
     } else if d > 0.0 {
         1
@@ -204,11 +260,27 @@ fn direction(lo: f64, hi: f64, band: f64) -> i8 {
     }
 }
 
+/// Significant digits enough to show the difference of `lo` and `hi` (at least 3).
+fn digits(lo: f64, hi: f64) -> usize {
+    let d = (hi - lo).abs();
+    let m = lo.abs().max(hi.abs());
+    if !(d > 0.0) || !m.is_finite() {
+        return 3;
+    }
+    ((m / d).log10().ceil() as i64 + 2).clamp(3, 10) as usize
+}
+
+/// `lo → hi` with enough digits to show their difference.
+fn ends(lo: f64, hi: f64) -> String {
+    let n = digits(lo, hi);
+    format!("{} → {}", sig(lo, n), sig(hi, n))
+}
+
 fn arrow(d: i8) -> &'static str {
     match d {
         1 => "up",
         -1 => "down",
-        _ => "no change",
+        _ => "within the numerical error",
     }
 }
 
@@ -232,44 +304,53 @@ fn direction_verdicts(rows: &[OatRow], errs: &[OatRow], label: &str, key: &str) 
         let (unit, scale) = if m == 0 { ("µm", 1e6) } else { ("s", 1.0) };
         for (r, e) in rows.iter().zip(errs) {
             let (v, e) = if m == 0 { (r.1, e.1) } else { (r.2, e.2) };
-            // the change's numerical error: the two ends' errors added
-            let numerical = e[0] + e[1];
-            let d = direction(v[0], v[1], if m == 0 { 0.0 } else { 1.0 });
-            let part = if d != 0 && (v[1] - v[0]).abs() <= numerical {
+            // the change and its own numerical error (see numerical_errors)
+            let (change, err) = (v[4], e[4]);
+            let d = direction(change, err, v[0].abs().max(v[1].abs()));
+            let part = if d == 0 {
                 wrong.push(format!(
-                    "{}: {} by {} {unit}, within the numerical error {} {unit}",
+                    "{}: a change of {} ± {} {unit}, within its numerical error (unresolved)",
                     r.0,
-                    arrow(d),
-                    s3((v[1] - v[0]).abs() * scale),
-                    s3(numerical * scale)
+                    s3(change * scale),
+                    s3(err * scale)
                 ));
                 Part::Unresolved
             } else if d == paper_direction(r.0, m) {
                 Part::Agrees
             } else {
-                if d == 0 {
-                    wrong.push(format!("{}: no change beyond {}", r.0, if m == 0 { "1e-6 of R_max" } else { "1 s (frames every 2 s)" }));
-                } else {
-                    wrong.push(format!("{}: the opposite direction", r.0));
-                }
+                wrong.push(format!("{}: the opposite direction", r.0));
                 Part::Disagrees
             };
             parts.push(part);
-            texts.push(format!(
-                "{} {} ({} → {} {unit}, numerical error of the change {} {unit})",
-                r.0,
-                arrow(d),
-                s3(v[0] * scale),
-                s3(v[1] * scale),
-                s3(numerical * scale)
-            ));
+            texts.push(if d == 0 {
+                format!(
+                    "{} within the numerical error (a change of {} ± {} {unit}: {} {unit})",
+                    r.0,
+                    s3(change * scale),
+                    s3(err * scale),
+                    ends(v[0] * scale, v[1] * scale),
+                )
+            } else {
+                format!(
+                    "{} {} by {} ± {} {unit} ({} {unit})",
+                    r.0,
+                    arrow(d),
+                    s3(change.abs() * scale),
+                    s3(err * scale),
+                    ends(v[0] * scale, v[1] * scale),
+                )
+            });
         }
         let agree = parts.iter().filter(|p| **p == Part::Agrees).count();
         let a = grade(&parts);
         out.push(Verdict::new(
             format!("{key}:{mname}-directions"),
             claim,
-            format!("{label}: {agree} of 5 as the paper. {}", texts.join("; ")),
+            format!(
+                "{label}: {agree} of 5 as the paper, {} unresolved (change from the lowest to the highest level ± its numerical error). {}",
+                parts.iter().filter(|p| **p == Part::Unresolved).count(),
+                texts.join("; ")
+            ),
             a,
             if a == Agreement::Yes {
                 String::new()
@@ -441,13 +522,15 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
                 Column::plain("range"),
                 Column::new("R_max at low", "µm"),
                 Column::new("R_max at high", "µm"),
+                Column::new("change of R_max ± numerical error", "µm"),
                 Column::plain("normalised sensitivity of R_max"),
                 Column::new("t_max at low", "s"),
                 Column::new("t_max at high", "s"),
+                Column::new("change of t_max ± numerical error", "s"),
                 Column::plain("normalised sensitivity of t_max"),
             ],
         );
-        for ((sym, p), r) in parameters().iter().zip(&rows) {
+        for (((sym, p), r), e) in parameters().iter().zip(&rows).zip(&errs) {
             let range = if *sym == "D" {
                 format!("{}–{} m²/s (log)", s3(p.lo * D_MODAL), s3(p.hi * D_MODAL))
             } else {
@@ -456,12 +539,14 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
             t.push(vec![
                 Cell::text(*sym),
                 Cell::text(range),
-                Cell::text(s3(r.1[0] * 1e6)),
-                Cell::text(s3(r.1[1] * 1e6)),
-                Cell::text(s3(r.1[3])),
-                Cell::text(s3(r.2[0])),
-                Cell::text(s3(r.2[1])),
-                Cell::text(s3(r.2[3])),
+                Cell::text(sig(r.1[0] * 1e6, digits(r.1[0], r.1[1]))),
+                Cell::text(sig(r.1[1] * 1e6, digits(r.1[0], r.1[1]))),
+                Cell::text(format!("{} ± {}", s3(r.1[4] * 1e6), s3(e.1[4] * 1e6))),
+                Cell::text(format!("{} ± {}", s3(r.1[3]), s3(e.1[3]))),
+                Cell::text(sig(r.2[0], digits(r.2[0], r.2[1]))),
+                Cell::text(sig(r.2[1], digits(r.2[0], r.2[1]))),
+                Cell::text(format!("{} ± {}", s3(r.2[4]), s3(e.2[4]))),
+                Cell::text(format!("{} ± {}", s3(r.2[3]), s3(e.2[3]))),
             ])
             .map_err(report_err)?;
         }
@@ -492,9 +577,10 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         ],
     );
     let syms = parameters();
-    let mut top = Vec::new();
+    // per metric: (metric, [(symbol, [S1, lo, hi, ST, lo, hi])])
+    let mut sobol: Vec<(&str, Vec<SobolRow>)> = Vec::new();
     for m in ["r_max", "t_max"] {
-        let mut best = ("", f64::NEG_INFINITY);
+        let mut v = Vec::new();
         for r in srows.iter().filter(|r| r.0 == m) {
             let sym = syms.iter().find(|s| s.1.path == r.1).map_or("?", |s| s.0);
             sobol_t
@@ -505,31 +591,59 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
                     Cell::text(format!("{} [{}, {}]", s3(r.2[3]), s3(r.2[4]), s3(r.2[5]))),
                 ])
                 .map_err(report_err)?;
-            if r.2[3] > best.1 {
-                best = (sym, r.2[3]);
+            let mut x = [f64::NAN; 6];
+            for (k, y) in x.iter_mut().enumerate() {
+                *y = r.2.get(k).copied().unwrap_or(f64::NAN);
             }
+            v.push((sym, x));
         }
-        top.push((m, best));
+        sobol.push((m, v));
     }
+    let (mut parts, mut texts) = (Vec::new(), Vec::new());
+    for (m, v) in &sobol {
+        let totals: Vec<(&'static str, f64, f64, f64)> =
+            v.iter().map(|(s, x)| (*s, x[3], x[4], x[5])).collect();
+        let first = sobol_first(&totals);
+        parts.push(if first == ["D"] {
+            Part::Agrees
+        } else if first.contains(&"D") {
+            Part::Unresolved
+        } else {
+            Part::Disagrees
+        });
+        texts.push(sobol_ranking_text(
+            if *m == "r_max" { "R_max" } else { "t_max" },
+            &totals,
+            &first,
+            n_sobol,
+        ));
+    }
+    let sobol_grade = grade(&parts);
     verdicts.push(Verdict::new(
         "sobol:most-influential",
         "abstract: 'A sensitivity analysis indicated that the diffusion coefficient was the most influential material parameter' (one at a time, §2.3.1)",
         format!(
-            "Sobol' over all five at once (μ uniform on 0–4 MPa, D log-uniform): the largest total index of R_max is {}'s ({}), of t_max {}'s ({}); N = {n_sobol}, wide intervals (an index above 1 is estimator noise)",
-            top[0].1 .0,
-            s3(top[0].1 .1),
-            top[1].1 .0,
-            s3(top[1].1 .1)
+            "Sobol' over all five at once (μ uniform on 0–4 MPa, D log-uniform), the largest total index ST with its 95 % bootstrap interval, a ranking claimed only where the intervals separate: {}",
+            texts.join("; ")
         ),
-        if top.iter().all(|t| t.1 .0 == "D") {
-            Agreement::Yes
-        } else if top.iter().any(|t| t.1 .0 == "D") {
-            Agreement::Partly
-        } else {
-            Agreement::No
+        sobol_grade,
+        match sobol_grade {
+            Agreement::Yes => String::new(),
+            _ => {
+                let mut w = Vec::new();
+                if parts.contains(&Part::Disagrees) {
+                    w.push("where the ranking is resolved another parameter leads: over Table 1's μ range (0–4 MPa) most gels are stiff enough to stop diffusive growth, so μ decides whether the bubble grows at all; a one-at-a-time analysis at one base point cannot see that");
+                }
+                if parts.contains(&Part::Unresolved) {
+                    w.push("where the intervals overlap (D among the candidates for first) the ranking is unresolved at this N and counts neither way");
+                }
+                w.join("; ")
+            }
         },
-        if top.iter().all(|t| t.1 .0 == "D") { "" } else { "over Table 1's μ range (0–4 MPa) most gels are stiff enough to stop diffusive growth, so μ decides whether the bubble grows at all; a one-at-a-time analysis at one base point cannot see that" },
     ));
+    let sobol_summary = texts.join("; ");
+    // the generic sensitivity report's files, its bars the point estimates with their 95 %
+    // intervals as error bars
     let set = outputs(&res, Shard::WHOLE, "decophantom reproduce fig3 (sobol)")?;
     nested.push(("sobol", set.clone()));
     files.nest("sobol", set);
@@ -626,6 +740,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     add_verdicts(&mut page, &verdicts);
     page.section("One at a time");
     page.text("Both analyses vary each parameter over its range at the levels below with the others at their base values; 'normalised sensitivity' is (metric at the highest level − at the lowest)/(highest − lowest) × base value / metric at base. The second analysis moves only μ's base to 20 kPa, the stiffness at which the bubble can still grow by diffusion.");
+    page.text("Numerical error: each analysis is run again with every step limit halved, and the numerical error of a number is twice its change (the Richardson estimate of a first-order scheme). A change between two levels, a range and a sensitivity each get the estimate of their own value, computed as that difference at both step sizes, not the sum of the two ends' errors: both ends run with the same step limits through nearly the same history, so most of their discretisation error is common and cancels in the difference (the sum would be a worst-case bound assuming opposite errors). This one definition is used by every ± figure and every 'within the numerical error' of this page. A direction counts only where the change exceeds its error; a change within it is unresolved (neither agreeing nor disagreeing with the paper). t_max is the time of the recorded step at which R is largest (the steps are adaptive, not a fixed frame interval), so it has no dead band of its own beyond this error. The ends are printed with enough digits to show the change judged.");
     for t in &tables {
         page.table(t);
     }
@@ -652,7 +767,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         }
     }
     page.section("Sobol' indices over all five (not in the paper)");
-    page.text("Saltelli's A, B, A_B^i design over the five ranges at once (γ, L_N2, L_O2 and μ uniform, D log-uniform), first-order S1 and total ST with 95 % bootstrap intervals (500 resamples); μ's base is irrelevant here. To afford the runs the global analysis uses the coarse grid h = 80 µm (the bubble is a sub-grid object; the one-at-a-time directions at μ = 20 kPa are the same on it, `tests/integration/reproduce.rs`). The output is heavy-tailed: over μ uniform on 0–4 MPa only the few runs with a soft gel grow, so the variance-based estimators converge slowly, the intervals are wide and an index can come out above 1 (the total variance is estimated from 2N runs): read the ranking (μ first for both metrics, D second for t_max), not the digits. Every run is in `sobol/sensitivity.csv`.");
+    page.text(format!("Saltelli's A, B, A_B^i design over the five ranges at once (γ, L_N2, L_O2 and μ uniform, D log-uniform), first-order S1 and total ST with 95 % bootstrap intervals (500 resamples); μ's base is irrelevant here. To afford the runs the global analysis uses the coarse grid h = 80 µm (the bubble is a sub-grid object; the one-at-a-time directions at μ = 20 kPa are the same on it, `tests/integration/reproduce.rs`). The output is heavy-tailed: over μ uniform on 0–4 MPa only the few runs with a soft gel grow, so the variance-based estimators converge slowly, the intervals are wide and an index can come out above 1, and S1 above ST (the total variance is estimated from 2N runs): a parameter is ranked first only where the 95 % interval of its total index lies above every other's, otherwise the ranking is unresolved at this N. {sobol_summary}. Every run is in `sobol/sensitivity.csv`; the bars are the point estimates, the error bars their 95 % intervals."));
     page.table(&sobol_t);
     for (dir, set) in &nested {
         if *dir != "sobol" {
@@ -665,7 +780,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
                 page.figure(
                     &svg,
                     Some(&format!("sobol/{f}")),
-                    format!("Sobol' indices of {m}."),
+                    format!("Sobol' indices of {m}: bars the point estimates, error bars the 95 % bootstrap intervals (N = {n_sobol})."),
                 )
                 .map_err(report_err)?;
             }
@@ -727,22 +842,108 @@ mod tests {
         assert_eq!(grade(&[Unresolved, Unresolved]), Agreement::NotComparable);
         assert_eq!(grade(&[Agrees, Unresolved]), Agreement::Partly);
         assert_eq!(grade(&[Agrees, Disagrees]), Agreement::Partly);
+        // an unresolved part counts neither way
+        assert_eq!(grade(&[Disagrees, Unresolved]), Agreement::No);
+        assert_eq!(grade(&[Agrees, Unresolved, Disagrees]), Agreement::Partly);
     }
 
     /// Twice the change with the steps halved, each number on its own; a sensitivity's error is
-    /// that of its size.
+    /// that of its size; a change's error is that of the change itself, not its ends' errors
+    /// added.
     #[test]
     fn numerical_errors_are_twice_the_change_with_halved_steps() {
-        let full = [("D", [1.0, 2.0, 1.0, -0.5], [10.0, 20.0, 10.0, 0.3])];
-        let half = [("D", [1.5, 2.0, 0.5, 0.4], [11.0, 18.0, 7.0, -0.1])];
+        // R_max: both ends move by +0.5 with the steps halved (a common error): each end's
+        // error is 1.0, the sum 2.0, but the change hi − lo is 1.0 at both step sizes: error 0
+        let full = [(
+            "D",
+            [1.0, 2.0, 1.0, -0.5, 1.0],
+            [10.0, 20.0, 10.0, 0.3, 10.0],
+        )];
+        let half = [("D", [1.5, 2.5, 0.5, 0.4, 1.0], [11.0, 18.0, 7.0, -0.1, 7.0])];
         let e = numerical_errors(&full, &half);
         assert_eq!(e[0].0, "D");
-        let close = |got: [f64; 4], want: [f64; 4]| {
+        let close = |got: [f64; 5], want: [f64; 5]| {
             for (a, b) in got.iter().zip(want) {
                 assert!((a - b).abs() < 1e-12, "{got:?} {want:?}");
             }
         };
-        close(e[0].1, [1.0, 0.0, 1.0, 0.2]);
-        close(e[0].2, [2.0, 4.0, 6.0, 0.4]);
+        close(e[0].1, [1.0, 1.0, 1.0, 0.2, 0.0]);
+        // t_max: ends 2 and 4, change 10 → 7: 6 (less than the ends' sum, 6 here too by chance
+        // of opposite moves: 11 − 10 = +1, 18 − 20 = −2 → |(−2) − (+1)| = 3, twice = 6)
+        close(e[0].2, [2.0, 4.0, 6.0, 0.4, 6.0]);
+    }
+
+    /// A direction counts only where the change exceeds its own error; within it (or with no
+    /// error estimate) it is 0, unresolved — the paper's modal γ: R_max 40.5538 → 40.5465 µm,
+    /// a change of −0.00722 ± 1.80e-4 µm is resolved (down); t_max +0.891 ± 2.02 s is not.
+    #[test]
+    fn a_direction_is_resolved_only_beyond_the_error_of_the_change() {
+        assert_eq!(direction(-0.00722e-6, 1.80e-10, 40.55e-6), -1);
+        assert_eq!(direction(0.891, 2.02, 225.0), 0);
+        assert_eq!(direction(3.11, 2.42, 260.0), 1);
+        assert_eq!(direction(1.0, f64::NAN, 10.0), 0);
+        // a zero error estimate: the change counts unless it is float noise
+        assert_eq!(direction(0.5, 0.0, 225.0), 1);
+        assert_eq!(direction(1e-12, 0.0, 225.0), 0);
+        // and a change within the error is graded unresolved, not a disagreement
+        let part = |d: i8, want: i8| {
+            if d == 0 {
+                Part::Unresolved
+            } else if d == want {
+                Part::Agrees
+            } else {
+                Part::Disagrees
+            }
+        };
+        assert_eq!(part(direction(0.891, 2.02, 225.0), -1), Part::Unresolved);
+    }
+
+    /// The ends are printed with enough digits to show the change judged.
+    #[test]
+    fn the_ends_show_their_difference() {
+        assert_eq!(ends(40.5538, 40.5465), "40.5538 → 40.5465");
+        let (a, b) = (40.554, 40.547);
+        let t = ends(a, b);
+        let (l, r) = t.split_once(" → ").unwrap();
+        assert_ne!(l, r);
+        assert!((l.parse::<f64>().unwrap() - r.parse::<f64>().unwrap() - 0.007).abs() < 1e-9);
+        // a large change keeps three digits
+        assert_eq!(ends(155.0, 40.3), "155 → 40.3");
+        assert_eq!(digits(1.0, 1.0), 3);
+    }
+
+    /// The Sobol' ranking is claimed only where the total indices' intervals separate: the
+    /// reports' R_max (μ [0.731, 2.06] above D [0.00427, 0.0508] and L_N2 up to 0.0718) is
+    /// resolved; t_max (μ [0.650, 4.44], D [0.494, 1.85]) is not.
+    #[test]
+    fn a_sobol_ranking_needs_separate_intervals() {
+        let r_max = [
+            ("γ", 1.89e-6, 4.57e-7, 5.94e-6),
+            ("L_N2", 0.0312, 2.85e-5, 0.0718),
+            ("L_O2", 3.6e-4, 1.93e-6, 8.25e-4),
+            ("μ", 1.14, 0.731, 2.06),
+            ("D", 0.0247, 0.00427, 0.0508),
+        ];
+        let t_max = [
+            ("γ", 9.48e-5, 1.4e-5, 2.88e-4),
+            ("L_N2", 0.0292, 0.0108, 0.0493),
+            ("L_O2", 4.53e-4, 8.88e-5, 7.69e-4),
+            ("μ", 1.80, 0.650, 4.44),
+            ("D", 1.16, 0.494, 1.85),
+        ];
+        assert_eq!(sobol_first(&r_max), vec!["μ"]);
+        assert_eq!(sobol_first(&t_max), vec!["μ", "D"]);
+        assert!(sobol_ranking_text("t_max", &t_max, &["μ", "D"], 64).contains("unresolved"));
+        // D resolved first when its interval clears μ's
+        let mut d_first = t_max;
+        d_first[4] = ("D", 3.0, 2.5, 3.5);
+        d_first[3] = ("μ", 1.0, 0.5, 2.0);
+        assert_eq!(sobol_first(&d_first), vec!["D"]);
+        // an undefined interval is never excluded and excludes nothing
+        let nan = [("μ", 1.0, 0.9, 1.1), ("D", f64::NAN, f64::NAN, f64::NAN)];
+        assert_eq!(sobol_first(&nan), vec!["μ", "D"]);
+        // the verdict on the reports' numbers: R_max resolved against D, t_max unresolved: no
+        // (only the resolved part speaks)
+        assert_eq!(grade(&[Part::Disagrees, Part::Unresolved]), Agreement::No);
     }
 }

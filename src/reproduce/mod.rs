@@ -233,7 +233,7 @@ fn index(done: &[Reproduced], settings: &Settings, command: &str) -> Result<Stri
     let mut s = String::from("# The paper's figures, reproduced\n\n");
     s.push_str("Walsh et al. (2017) *A combined three-dimensional in vitro–in silico approach to modelling bubble dynamics in decompression sickness*, J. R. Soc. Interface 14: 20170653. Each folder holds one figure: its data (CSV), panels (SVG), and a section (README.md, also report.html) with the paper's claim quoted, our number, whether they agree and, where they do not, the most likely reason; the equations, parameters and every setting used.\n\n");
     s.push_str(&format!(
-        "Written by `{command}`{}. Wall times are in `timing.csv` (not tracked: they change from run to run).\n\n",
+        "Written by `{command}`{}. Wall times are in `timing.csv`, written beside this file by each run (the repository does not keep it: it changes from run to run).\n\n",
         if settings.quick {
             " with --quick (reduced grids and designs)"
         } else {
@@ -283,15 +283,17 @@ pub enum Part {
     Unresolved,
 }
 
-/// A claim of several parts: yes if every part agrees, no if every one disagrees, not
-/// comparable if no part is resolved, partly otherwise.
+/// A claim of several parts, judged on its resolved parts only: yes if every part agrees, not
+/// comparable if no part is resolved, no if no part agrees (and one at least disagrees), partly
+/// if some agree and the others disagree or are unresolved. An unresolved part counts neither
+/// way: it cannot turn a disagreement into 'partly' nor an agreement into 'no'.
 pub fn grade(parts: &[Part]) -> Agreement {
     if parts.iter().all(|p| *p == Part::Agrees) {
         Agreement::Yes
-    } else if parts.iter().all(|p| *p == Part::Disagrees) {
-        Agreement::No
     } else if parts.iter().all(|p| *p == Part::Unresolved) {
         Agreement::NotComparable
+    } else if !parts.contains(&Part::Agrees) {
+        Agreement::No
     } else {
         Agreement::Partly
     }

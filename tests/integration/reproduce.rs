@@ -260,6 +260,225 @@ fn reproduce_fig2a_and_fig3_quick_against_an_independent_solve_and_the_paper() {
     }
     assert_eq!(verdict("fig3", "mu20k:R_max-directions"), Agreement::Yes);
     assert_eq!(verdict("fig3", "modal:R_max-directions"), Agreement::Partly);
+
+    // ---- Fig. 3 Sobol': the verdict follows only the rankings the intervals resolve,
+    // recomputed here from indices.csv: a parameter can be first unless another's lower ST
+    // bound is above its upper bound; D alone → agrees, D out → disagrees, else unresolved
+    let idx = csv_rows(&std::fs::read_to_string(out.join("fig3/sobol/indices.csv")).unwrap());
+    let f = |r: &HashMap<String, String>, k: &str| r[k].parse::<f64>().unwrap_or(f64::NAN);
+    let mut parts = Vec::new();
+    for m in ["r_max", "t_max"] {
+        let rows: Vec<_> = idx.iter().filter(|r| r["metric"] == m).collect();
+        assert_eq!(rows.len(), 5);
+        let can_lead: Vec<&str> = rows
+            .iter()
+            .filter(|p| {
+                !rows
+                    .iter()
+                    .any(|q| q["parameter"] != p["parameter"] && f(q, "st_lo95") > f(p, "st_hi95"))
+            })
+            .map(|p| p["parameter"].as_str())
+            .collect();
+        let d = "scale:gases.*.diffusivity";
+        parts.push(if can_lead == [d] {
+            1
+        } else if can_lead.contains(&d) {
+            0
+        } else {
+            -1
+        });
+    }
+    let want = if parts.iter().all(|p| *p == 1) {
+        Agreement::Yes
+    } else if parts.iter().all(|p| *p == 0) {
+        Agreement::NotComparable
+    } else if !parts.contains(&1) {
+        Agreement::No
+    } else {
+        Agreement::Partly
+    };
+    assert_eq!(verdict("fig3", "sobol:most-influential"), want, "{parts:?}");
+    // the bars are point estimates with error bars (plotters' three 2-px black lines each),
+    // not the upper bounds drawn as bars
+    let bars = std::fs::read_to_string(out.join("fig3/sobol/bars-0.svg")).unwrap();
+    assert!(!bars.contains("upper 95"), "upper bounds drawn as bars");
+    let error_bar_lines = bars
+        .split("<line")
+        .filter(|l| l.contains("stroke=\"#000000\" stroke-width=\"2\""))
+        .count();
+    assert!(error_bar_lines >= 3, "no error bars in bars-0.svg");
+    let fig3 = std::fs::read_to_string(out.join("fig3/README.md")).unwrap();
+    assert!(!fig3.contains("frames every 2 s") && !fig3.contains("D second for t_max"));
+}
+
+/// Fig. 5 (--quick): every verdict that judges a change does so by one rule, recomputed here
+/// from the data files: a run's numerical error is twice the change of its mean with every step
+/// limit halved, and a change over a series' levels counts only above twice the largest error of
+/// its levels; a change within it is unresolved, neither agreeing nor disagreeing.
+#[test]
+fn reproduce_fig5_quick_judges_every_change_by_its_numerical_error() {
+    let dir = tempdir("reproduce-fig5");
+    let out = dir.join("paper");
+    let done = reproduce(
+        &select("fig5").unwrap(),
+        &Settings { quick: true },
+        &out,
+        "test",
+        &|_, _, _| {},
+    )
+    .unwrap();
+    let verdict = |key: &str| -> Agreement {
+        done[0]
+            .verdicts
+            .iter()
+            .find(|v| v.key == key)
+            .unwrap_or_else(|| panic!("no verdict {key}"))
+            .agrees
+    };
+    let num = |r: &HashMap<String, String>, k: &str| r[k].parse::<f64>().unwrap();
+    // the run means from every bubble of every run
+    let bubbles = csv_rows(&std::fs::read_to_string(out.join("fig5/fig5.csv")).unwrap());
+    // ((hours, psi/s), [(plateau µm, half-life min) per bubble])
+    type Run = ((f64, f64), Vec<(f64, f64)>);
+    let mut runs: Vec<Run> = Vec::new();
+    for b in &bubbles {
+        let key = (
+            num(b, "time_at_depth_h"),
+            num(b, "decompression_rate_psi_s"),
+        );
+        let v = (num(b, "plateau_m") * 1e6, num(b, "half_life_s") / 60.0);
+        match runs.iter_mut().find(|r| r.0 == key) {
+            Some(r) => r.1.push(v),
+            None => runs.push((key, vec![v])),
+        }
+    }
+    let mean = |v: &[(f64, f64)]| {
+        let n = v.len() as f64;
+        (
+            v.iter().map(|x| x.0).sum::<f64>() / n,
+            v.iter().map(|x| x.1).sum::<f64>() / n,
+        )
+    };
+    // the halved-step means, and the errors recomputed from them
+    let fine =
+        csv_rows(&std::fs::read_to_string(out.join("fig5/fig5-numerical-errors.csv")).unwrap());
+    assert_eq!(
+        fine.len(),
+        runs.len(),
+        "every run repeated with the steps halved"
+    );
+    let error = |key: (f64, f64)| -> (f64, f64) {
+        let r = fine
+            .iter()
+            .find(|r| {
+                (
+                    num(r, "time_at_depth_h"),
+                    num(r, "decompression_rate_psi_s"),
+                ) == key
+            })
+            .unwrap();
+        let c = mean(&runs.iter().find(|x| x.0 == key).unwrap().1);
+        let e = (
+            2.0 * (c.0 - num(r, "plateau_mean_halved_steps_m") * 1e6).abs(),
+            2.0 * (c.1 - num(r, "half_life_mean_halved_steps_s") / 60.0).abs(),
+        );
+        assert!((e.0 - num(r, "plateau_error_m") * 1e6).abs() < 1e-6 * (1.0 + e.0));
+        assert!((e.1 - num(r, "half_life_error_s") / 60.0).abs() < 1e-6 * (1.0 + e.1));
+        e
+    };
+    // (change, bound) of a series: hours at 5 psi/s or rates after 4 h; pick 0 plateau, 1 half-life
+    let series = |by_rate: bool, pick: usize| -> (f64, f64) {
+        let sel: Vec<_> = runs
+            .iter()
+            .filter(|r| {
+                if by_rate {
+                    r.0 .0 == 4.0
+                } else {
+                    r.0 .1 == 5.0
+                }
+            })
+            .collect();
+        let v: Vec<f64> = sel
+            .iter()
+            .map(|r| {
+                if pick == 0 {
+                    mean(&r.1).0
+                } else {
+                    mean(&r.1).1
+                }
+            })
+            .collect();
+        let e: Vec<f64> = sel
+            .iter()
+            .map(|r| {
+                if pick == 0 {
+                    error(r.0).0
+                } else {
+                    error(r.0).1
+                }
+            })
+            .collect();
+        let change = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+            - v.iter().cloned().fold(f64::INFINITY, f64::min);
+        (change, 2.0 * e.iter().cloned().fold(0.0, f64::max))
+    };
+    let (p_h, p_r, t_h, t_r) = (
+        series(false, 0),
+        series(true, 0),
+        series(false, 1),
+        series(true, 1),
+    );
+    let resolved = |c: (f64, f64)| c.0 > c.1;
+    let compare = |a: (f64, f64), b: (f64, f64)| -> i8 {
+        if a.0 - a.1 > b.0 + b.1 {
+            1
+        } else if b.0 - b.1 > a.0 + a.1 {
+            -1
+        } else {
+            0
+        }
+    };
+    let graded = |parts: &[i8]| -> Agreement {
+        if parts.iter().all(|p| *p == 1) {
+            Agreement::Yes
+        } else if parts.iter().all(|p| *p == 0) {
+            Agreement::NotComparable
+        } else if !parts.contains(&1) {
+            Agreement::No
+        } else {
+            Agreement::Partly
+        }
+    };
+    assert_eq!(
+        verdict("time-at-depth-dominates"),
+        graded(&[compare(p_h, p_r), compare(t_h, t_r)]),
+        "{p_h:?} {p_r:?} {t_h:?} {t_r:?}"
+    );
+    // 'no trend': a resolved change is a trend (disagrees), an unresolved one counts neither way
+    let no_trend = |c: (f64, f64)| if resolved(c) { -1 } else { 0 };
+    assert_eq!(
+        verdict("no-trend-with-rate"),
+        graded(&[no_trend(p_r), no_trend(t_r), no_trend(t_h)])
+    );
+    let rises = {
+        let at = |h: f64| mean(&runs.iter().find(|r| r.0 == (h, 5.0)).unwrap().1).0;
+        at(4.0) > at(0.5)
+    };
+    let rise_part = match (resolved(p_h), rises) {
+        (true, true) => 1,
+        (true, false) => -1,
+        _ => 0,
+    };
+    assert_eq!(
+        verdict("half-life-flat-plateau-rises"),
+        graded(&[no_trend(t_h), rise_part])
+    );
+    if !resolved(t_h) {
+        assert_eq!(
+            verdict("half-life-vs-time-linear"),
+            Agreement::NotComparable
+        );
+    }
 }
 
 #[test]
