@@ -291,6 +291,8 @@ impl Table {
             match &r[j] {
                 Cell::Number(..) => any = true,
                 Cell::Empty => {}
+                // an approximate number ("≈ 0": zero within the round-off) aligns as a number
+                Cell::Text(t) if t.starts_with('≈') => any = true,
                 Cell::Text(_) => return false,
             }
         }
