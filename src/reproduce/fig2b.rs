@@ -57,6 +57,9 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         plot = plot.with(Series::new(format!("γ/(μR0) = {}", s3(g)), pts));
     }
     progress("fig2b", 1, 1);
+    // log y: the curves span three decades (0.02–20 at Γ = 0.01–10); on a linear axis set by
+    // Γ = 10 the others and the peak at (Γ − 1)^(−1/3) for 1 < Γ < 2 are flattened to its floor
+    plot.log_y = true;
     let svg = plot.to_svg().map_err(report_err)?;
     let mut files = OutputSet::new();
     files.add("fig2b.csv", csv);
