@@ -61,6 +61,17 @@ pub struct Phantoms<'a> {
     pub vapour_pa: f64,
 }
 
+impl<'a> Phantoms<'a> {
+    /// The candidates' setting for these phantom documents of `experiments` (their profiles'
+    /// largest vapour).
+    pub fn of(experiments: &crate::fit::data::Experiments, docs: &'a [toml::Table]) -> Self {
+        Phantoms {
+            docs,
+            vapour_pa: experiments.vapour_pa(),
+        }
+    }
+}
+
 /// Builds the candidates of one registry entry for given phantoms (an entry may expand to
 /// several variants, e.g. one per elasticity law or one per open face).
 pub type Build = fn(&Phantoms) -> Vec<Box<dyn CandidateEffect>>;

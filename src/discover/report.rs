@@ -173,9 +173,9 @@ pub const P_FLOOR: f64 = 1e-16;
 /// A p-value with its relation, for a sentence: "= 0.434", "= 6.55e-31"… or "< 1e-16".
 pub fn p_text(p: f64) -> String {
     if p < P_FLOOR {
-        "< 1e-16".into()
+        p_cell(p)
     } else {
-        format!("= {}", sig(p, 3))
+        format!("= {}", p_cell(p))
     }
 }
 

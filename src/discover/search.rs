@@ -358,18 +358,10 @@ fn try_candidate(
     }
 }
 
-/// The candidates are built for these phantom documents and the experiments' profiles.
-fn phantoms<'a>(experiments: &Experiments, docs: &'a [toml::Table]) -> Phantoms<'a> {
-    Phantoms {
-        docs,
-        vapour_pa: experiments.vapour_pa(),
-    }
-}
-
 /// The names of the candidates for the experiments' own phantoms.
 fn candidate_names(experiments: &Experiments) -> Vec<String> {
     let docs: Vec<toml::Table> = experiments.list.iter().map(|e| e.phantom.clone()).collect();
-    all_candidates(&phantoms(experiments, &docs))
+    all_candidates(&Phantoms::of(experiments, &docs))
         .iter()
         .map(|c| c.name())
         .collect()
@@ -433,7 +425,7 @@ pub fn check_only(experiments: &Experiments, only: &[String]) -> Result<(), Inpu
 /// those selected): its model must leave two residual degrees of freedom.
 fn largest_candidate(experiments: &Experiments, only: &[String]) -> usize {
     let docs: Vec<toml::Table> = experiments.list.iter().map(|e| e.phantom.clone()).collect();
-    all_candidates(&phantoms(experiments, &docs))
+    all_candidates(&Phantoms::of(experiments, &docs))
         .iter()
         .filter(|c| only.is_empty() || only.iter().any(|o| c.name().starts_with(o.as_str())))
         .filter_map(|c| {
@@ -529,11 +521,11 @@ pub fn discover_with(
     let mut discrete = 0usize;
     let mut added: Vec<(Added, Vec<String>)> = Vec::new();
     let mut rounds = Vec::new();
-    let total_guess = all_candidates(&phantoms(experiments, &current.model.docs)).len()
+    let total_guess = all_candidates(&Phantoms::of(experiments, &current.model.docs)).len()
         * (opts.max_effects.min(2) + 1);
     let done = std::sync::atomic::AtomicUsize::new(0);
     while effects.len() < opts.max_effects {
-        let cands: Vec<_> = all_candidates(&phantoms(experiments, &current.model.docs))
+        let cands: Vec<_> = all_candidates(&Phantoms::of(experiments, &current.model.docs))
             .into_iter()
             .filter(|c| {
                 let name = c.name();

@@ -89,13 +89,7 @@ pub fn model_and_paths(
     let mut set_by: Vec<(String, String)> = Vec::new();
     for e in effects {
         let mut paths_set: Vec<String> = Vec::new();
-        match discover::find(
-            &discover::Phantoms {
-                docs: &docs,
-                vapour_pa: experiments.vapour_pa(),
-            },
-            &e.name,
-        ) {
+        match discover::find(&discover::Phantoms::of(experiments, &docs), &e.name) {
             Some(c) => {
                 let prepared = c.prepare(&mut docs).map_err(bad)?.ok_or_else(|| {
                     bad(format!(
@@ -129,13 +123,11 @@ pub fn model_and_paths(
                 set_values.push((e.name.clone(), e.values[0]));
             }
             None => {
-                let names: Vec<String> = discover::all_candidates(&discover::Phantoms {
-                    docs: &docs,
-                    vapour_pa: experiments.vapour_pa(),
-                })
-                .iter()
-                .map(|c| c.name())
-                .collect();
+                let names: Vec<String> =
+                    discover::all_candidates(&discover::Phantoms::of(experiments, &docs))
+                        .iter()
+                        .map(|c| c.name())
+                        .collect();
                 return Err(bad(format!(
                     "unknown effect '{}'; known: {} (or a phantom path such as gases.n2.diffusivity=2e-9)",
                     e.name,
