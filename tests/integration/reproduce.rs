@@ -311,10 +311,12 @@ fn reproduce_fig2a_and_fig3_quick_against_an_independent_solve_and_the_paper() {
     assert!(!fig3.contains("frames every 2 s") && !fig3.contains("D second for t_max"));
 }
 
-/// Fig. 5 (--quick): every verdict that judges a change does so by one rule, recomputed here
-/// from the data files: a run's numerical error is twice the change of its mean with every step
-/// limit halved, and a change over a series' levels counts only above twice the largest error of
-/// its levels; a change within it is unresolved, neither agreeing nor disagreeing.
+/// Fig. 5 (--quick): every verdict that judges a change or a curvature does so by one rule (Fig.
+/// 3's), recomputed here from the data files: a number's numerical error is twice its change
+/// with every step limit halved, so a change over a series' levels (largest − smallest mean)
+/// counts only above twice the change of the same difference in the halved-step means, and a
+/// curvature only where the largest deviation from the least-squares line exceeds twice the
+/// change of that level's deviation; within it, neither agreeing nor disagreeing.
 #[test]
 fn reproduce_fig5_quick_judges_every_change_by_its_numerical_error() {
     let dir = tempdir("reproduce-fig5");
@@ -386,9 +388,10 @@ fn reproduce_fig5_quick_judges_every_change_by_its_numerical_error() {
         assert!((e.1 - num(r, "half_life_error_s") / 60.0).abs() < 1e-6 * (1.0 + e.1));
         e
     };
-    // (change, bound) of a series: hours at 5 psi/s or rates after 4 h; pick 0 plateau, 1 half-life
-    let series = |by_rate: bool, pick: usize| -> (f64, f64) {
-        let sel: Vec<_> = runs
+    // a series' levels (x, default mean, halved-step mean), sorted by x: hours at 5 psi/s or
+    // rates after 4 h; pick 0 plateau, 1 half-life
+    let levels = |by_rate: bool, pick: usize| -> Vec<(f64, f64, f64)> {
+        let mut l: Vec<(f64, f64, f64)> = runs
             .iter()
             .filter(|r| {
                 if by_rate {
@@ -397,30 +400,56 @@ fn reproduce_fig5_quick_judges_every_change_by_its_numerical_error() {
                     r.0 .1 == 5.0
                 }
             })
-            .collect();
-        let v: Vec<f64> = sel
-            .iter()
             .map(|r| {
-                if pick == 0 {
-                    mean(&r.1).0
+                let (m, e) = (mean(&r.1), error(r.0));
+                let (v, e) = if pick == 0 { (m.0, e.0) } else { (m.1, e.1) };
+                // the halved-step mean from the default mean and its error's sign, read back
+                // from the file
+                let f = fine
+                    .iter()
+                    .find(|x| {
+                        (
+                            num(x, "time_at_depth_h"),
+                            num(x, "decompression_rate_psi_s"),
+                        ) == r.0
+                    })
+                    .unwrap();
+                let vf = if pick == 0 {
+                    num(f, "plateau_mean_halved_steps_m") * 1e6
                 } else {
-                    mean(&r.1).1
-                }
+                    num(f, "half_life_mean_halved_steps_s") / 60.0
+                };
+                assert!((2.0 * (v - vf).abs() - e).abs() < 1e-6 * (1.0 + e));
+                (if by_rate { r.0 .1 } else { r.0 .0 }, v, vf)
             })
             .collect();
-        let e: Vec<f64> = sel
-            .iter()
-            .map(|r| {
-                if pick == 0 {
-                    error(r.0).0
-                } else {
-                    error(r.0).1
-                }
-            })
-            .collect();
-        let change = v.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
-            - v.iter().cloned().fold(f64::INFINITY, f64::min);
-        (change, 2.0 * e.iter().cloned().fold(0.0, f64::max))
+        l.sort_by(|a, b| a.0.total_cmp(&b.0));
+        l
+    };
+    // (change, its numerical error) of a series
+    let series = |by_rate: bool, pick: usize| -> (f64, f64) {
+        let l = levels(by_rate, pick);
+        let hi = l.iter().max_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+        let lo = l.iter().min_by(|a, b| a.1.total_cmp(&b.1)).unwrap();
+        let change = hi.1 - lo.1;
+        (change, 2.0 * ((hi.2 - lo.2) - change).abs())
+    };
+    // (largest deviation from the least-squares line, its numerical error) of a series
+    let bend = |by_rate: bool, pick: usize| -> (f64, f64) {
+        let l = levels(by_rate, pick);
+        let dev = |y: &dyn Fn(&(f64, f64, f64)) -> f64| -> Vec<f64> {
+            let n = l.len() as f64;
+            let mx = l.iter().map(|p| p.0).sum::<f64>() / n;
+            let my = l.iter().map(y).sum::<f64>() / n;
+            let b = l.iter().map(|p| (p.0 - mx) * (y(p) - my)).sum::<f64>()
+                / l.iter().map(|p| (p.0 - mx).powi(2)).sum::<f64>();
+            l.iter().map(|p| y(p) - (my + b * (p.0 - mx))).collect()
+        };
+        let (d, df) = (dev(&|p| p.1), dev(&|p| p.2));
+        let i = (0..d.len())
+            .max_by(|a, b| d[*a].abs().total_cmp(&d[*b].abs()))
+            .unwrap();
+        (d[i].abs(), 2.0 * (df[i] - d[i]).abs())
     };
     let (p_h, p_r, t_h, t_r) = (
         series(false, 0),
@@ -473,12 +502,25 @@ fn reproduce_fig5_quick_judges_every_change_by_its_numerical_error() {
         verdict("half-life-flat-plateau-rises"),
         graded(&[no_trend(t_h), rise_part])
     );
-    if !resolved(t_h) {
-        assert_eq!(
-            verdict("half-life-vs-time-linear"),
+    let (pt_bend, ht_bend) = (bend(false, 0), bend(false, 1));
+    assert_eq!(
+        verdict("plateau-vs-time-nonlinear"),
+        if resolved(pt_bend) {
+            Agreement::Yes
+        } else {
             Agreement::NotComparable
-        );
-    }
+        },
+        "{pt_bend:?}"
+    );
+    assert_eq!(
+        verdict("half-life-vs-time-linear"),
+        match (resolved(t_h), resolved(ht_bend)) {
+            (false, _) => Agreement::NotComparable,
+            (true, false) => Agreement::Yes,
+            (true, true) => Agreement::No,
+        },
+        "{t_h:?} {ht_bend:?}"
+    );
 }
 
 #[test]
