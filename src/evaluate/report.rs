@@ -32,6 +32,10 @@ fn plot_err(e: impl std::fmt::Display) -> Error {
     Error::Solver(format!("plot: {e}"))
 }
 
+/// What the all-schedule bubble plots say when no schedule's run had a bubble.
+const NO_BUBBLES: &str =
+    "No bubble in any run: no nucleus activated and none was placed, so there is nothing to draw.";
+
 /// What the `peak-area-growth-rate` criterion with `window = "after-surfacing"` takes the
 /// peak of: from `surfaced_s` on, at the midpoint of each pair of recorded frames, the largest
 /// dA/dt of a single bubble, (time s, m²/s).
@@ -313,7 +317,7 @@ pub fn add_report(
         page,
         set,
         "volume.svg",
-        vol.to_svg().map_err(plot_err)?,
+        vol.to_svg_or_message(NO_BUBBLES).map_err(plot_err)?,
         "Total volume of all bubbles in the phantom for each schedule.",
     )?;
     for (c, cand) in ev.candidates.iter().enumerate() {
@@ -332,7 +336,8 @@ pub fn add_report(
             page,
             set,
             &format!("radius-{}.svg", c + 1),
-            rad.to_svg().map_err(plot_err)?,
+            rad.to_svg_or_message(crate::run::files::NO_BUBBLE)
+                .map_err(plot_err)?,
             &format!("Radius of each bubble under {}.", cand.label),
         )?;
     }
@@ -340,14 +345,14 @@ pub fn add_report(
         page,
         set,
         "area.svg",
-        area.to_svg().map_err(plot_err)?,
+        area.to_svg_or_message(NO_BUBBLES).map_err(plot_err)?,
         "Total surface area of all bubbles.",
     )?;
     add_svg(
         page,
         set,
         "area-rate.svg",
-        rate.to_svg().map_err(plot_err)?,
+        rate.to_svg_or_message(NO_BUBBLES).map_err(plot_err)?,
         "From the moment each schedule surfaces (time 0 here): at each interval between recorded frames, the largest surface-area growth rate dA/dt of a single bubble. The `peak-area-growth-rate` criterion with `window = \"after-surfacing\"` scores the peak of this curve; the Boyle expansion of the ascent, before surfacing, is left out as it is by the criterion.",
     )?;
     add_svg(

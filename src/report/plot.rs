@@ -385,6 +385,53 @@ pub(crate) fn title_area<DB: DrawingBackend>(
     Ok((below, height))
 }
 
+/// A plot that has nothing to draw, as an SVG of [`DEFAULT_SIZE`]: its title and, in the middle,
+/// why (e.g. a run in which no bubble ever formed). Written where a figure is promised, so that
+/// a degenerate but valid run still gives every file, each saying what it holds.
+pub fn message_svg(title: &str, message: &str) -> Result<String, PlotError> {
+    let draw_err = |e: String| PlotError::Draw {
+        title: title.to_string(),
+        message: e,
+    };
+    let (w, h) = DEFAULT_SIZE;
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(|e| draw_err(e.to_string()))?;
+        let (below, _) = title_area(&root, title).map_err(|e| draw_err(e.to_string()))?;
+        let (bw, bh) = below.dim_in_pixel();
+        let per_line = ((bw as f64 - 72.0) / text_px(1, DESC_SIZE)).floor() as usize;
+        let lines = wrap(message, per_line.max(8));
+        let line_h = (DESC_SIZE / 1.24 * 1.25).ceil() as i32;
+        let top = bh as i32 / 2 - line_h * lines.len() as i32 / 2;
+        let style = TextStyle::from((FONT, DESC_SIZE).into_font())
+            .pos(Pos::new(HPos::Center, VPos::Top))
+            .color(&BLACK);
+        for (k, line) in lines.iter().enumerate() {
+            below
+                .draw(&Text::new(
+                    line.clone(),
+                    (bw as i32 / 2, top + k as i32 * line_h),
+                    style.clone(),
+                ))
+                .map_err(|e| draw_err(e.to_string()))?;
+        }
+        root.present().map_err(|e| draw_err(e.to_string()))?;
+    }
+    Ok(svg)
+}
+
+impl LinePlot {
+    /// [`LinePlot::to_svg`], or, when there is nothing finite to draw, [`message_svg`] with the
+    /// plot's title and `message` (why it is empty).
+    pub fn to_svg_or_message(&self, message: &str) -> Result<String, PlotError> {
+        match self.to_svg() {
+            Err(PlotError::NoData(_)) => message_svg(&self.title, message),
+            r => r,
+        }
+    }
+}
+
 /// How one series looks: colour, dash pattern, marker.
 #[derive(Debug, Clone, Copy)]
 struct LineLook {

@@ -10,6 +10,10 @@ use crate::phantom::sim::{Frame, StepScheme, StepWall};
 use crate::report::output::OutputSet;
 use serde::Serialize;
 
+/// What a run's per-bubble plots say when no bubble ever existed in it (a nucleation model
+/// whose nuclei never activated, or none placed): the run is valid, its plots are empty.
+pub const NO_BUBBLE: &str = "No bubble in this run: no nucleus activated and none was placed, so there is no radius or volume to draw (summary.toml and bubbles.csv say the same).";
+
 /// `bubbles.csv`: `time_s,bubble,radius_m,volume_m3,area_m2` then `n_<gas>_mol` per gas; one row per
 /// active bubble per recorded frame.
 pub fn bubbles_csv(frames: &[Frame], gases: &[Gas]) -> String {
@@ -199,13 +203,13 @@ pub fn add_run_files(
     set.add(
         format!("{prefix}radius.svg"),
         radius_plot(&run.frames, &format!("Bubble radius: {title}"))
-            .to_svg()
+            .to_svg_or_message(NO_BUBBLE)
             .map_err(plot_err)?,
     );
     set.add(
         format!("{prefix}volume.svg"),
         volume_plot(&run.frames, &format!("Bubble volume: {title}"))
-            .to_svg()
+            .to_svg_or_message(NO_BUBBLE)
             .map_err(plot_err)?,
     );
     Ok(())

@@ -666,3 +666,76 @@ fn trace_steps_writes_every_step_with_its_scheme_and_limit() {
     assert!(simulate(&profile, &phantom, &plain).status.success());
     assert!(!plain.join("steps.csv").exists());
 }
+
+/// A valid run in which no bubble ever exists (a nucleation model whose nuclei do not activate
+/// on a shallow 20 psi dive: the reviewer's case, which ended in exit 3 on "no finite data to
+/// draw") completes with exit 0 and writes every promised file, the plots saying why they are
+/// empty; `evaluate` (its own per-bubble and area-rate plots) too.
+#[test]
+fn a_run_in_which_no_bubble_forms_writes_every_file_and_says_so() {
+    let dir = tempdir("no-bubble");
+    let phantom = write(
+        &dir,
+        "nuclei.toml",
+        r#"
+[geometry]
+shape = "box"
+size_m = [3.2e-3, 3.2e-3, 3.2e-3]
+grid_step_m = 400e-6
+[gases.n2]
+diffusivity = 2.5e-9
+ostwald = 0.014
+[gases.o2]
+diffusivity = 2.5e-9
+ostwald = 0.027
+[nucleation]
+model = "critical-radius"
+number_density_per_m3 = 1e10
+slope_per_m = 5e6
+seed = 1
+"#,
+    );
+    let profile = write(
+        &dir,
+        "shallow.toml",
+        "time_unit = \"s\"\npressure_unit = \"psi-gauge\"\ngas = \"air\"\npoints = [[0, 20], [10, 0], [60, 0]]\n",
+    );
+    let out = dir.join("run");
+    let o = simulate(&profile, &phantom, &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert!(o.status.success(), "{err}");
+    let summary = std::fs::read_to_string(out.join("summary.toml")).unwrap();
+    assert!(summary.contains("final_radius_m = []"), "{summary}");
+    for f in ["radius.svg", "volume.svg"] {
+        let svg = std::fs::read_to_string(out.join(f)).unwrap();
+        assert!(svg.starts_with("<svg"), "{f}");
+        if f == "radius.svg" {
+            assert!(svg.contains("No bubble in this run"), "{f}");
+        }
+    }
+    let schedule = write(
+        &dir,
+        "dive.csv",
+        "time_min,depth_m,gas\n0,0,air\n1,20,\n5,20,\n7,0,\n",
+    );
+    let ev = dir.join("ev");
+    let o = Command::new(bin())
+        .args(["evaluate", "--quiet", "--schedule"])
+        .arg(&schedule)
+        .arg("--criteria")
+        .arg(root().join("algorithms/criteria/default.toml"))
+        .arg("--phantom")
+        .arg(&phantom)
+        .arg("--out")
+        .arg(&ev)
+        .output()
+        .unwrap();
+    assert!(
+        o.status.code() == Some(0) || o.status.code() == Some(1),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let radius = std::fs::read_to_string(ev.join("radius-1.svg")).unwrap();
+    assert!(radius.contains("No bubble in this run"));
+    assert!(!dir.join("ev.partial").exists());
+}
