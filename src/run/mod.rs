@@ -18,7 +18,7 @@ use crate::error::Error;
 use crate::phantom::checkpoint::{self, Checkpoint, Checkpointer};
 use crate::phantom::params::PhantomParams;
 use crate::phantom::sim::{
-    Frame, Observer, Recorder, RunSummary, Simulation, StepRecord, StepWall,
+    BubbleFrame, Frame, Observer, Recorder, RunSummary, Simulation, StepRecord, StepWall,
 };
 use crate::profile::{load, LoadOptions, PressureHistory};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -213,6 +213,7 @@ pub fn simulate_checkpointed(
             crate::error::num(p.bubble_fixed_gases)
         ));
     }
+    notes.extend(shut_throughout(&frames, params.min_radius));
     Ok(SimRun {
         summary,
         frames,
@@ -224,6 +225,51 @@ pub fn simulate_checkpointed(
         phases,
         gel_by_scheme,
     })
+}
+
+/// A note naming the bubbles that never exchanged gas because they stayed at or below R_min,
+/// where the skin is impermeable (§2.1.4), in every recorded frame with their gas unchanged: a
+/// result the reader must not take for "this dive forms no bubbles" (R_min defaults to the grid
+/// step h, so a coarse grid shuts sub-grid bubbles for good). `None` if every bubble opened.
+pub fn shut_throughout(frames: &[Frame], min_radius: f64) -> Option<String> {
+    let first = frames.first()?;
+    let shut: Vec<&BubbleFrame> = first
+        .bubbles
+        .iter()
+        .filter(|b0| {
+            frames.iter().all(|f| {
+                f.bubbles
+                    .iter()
+                    .find(|b| b.id == b0.id)
+                    .is_none_or(|b| b.radius <= min_radius && b.moles == b0.moles)
+            })
+        })
+        .collect();
+    if shut.is_empty() {
+        return None;
+    }
+    let which = if shut.len() == first.bubbles.len() {
+        "no bubble exchanged gas".to_string()
+    } else {
+        format!(
+            "bubble{} {} never exchanged gas",
+            if shut.len() > 1 { "s" } else { "" },
+            shut.iter()
+                .map(|b| b.id.to_string())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )
+    };
+    let r0 = shut
+        .iter()
+        .map(|b| b.initial_radius)
+        .fold(f64::INFINITY, f64::min);
+    Some(format!(
+        "{which}: {} stayed at or below R_min = {} µm throughout, where a nucleus is impermeable (§2.1.4; nuclei.min_radius_m, whose default is the grid step h). To let a bubble of R0 = {} µm exchange gas, set nuclei.min_radius_m below it",
+        if shut.len() > 1 { "they" } else { "it" },
+        crate::report::table::sig_text(min_radius * 1e6, 4, true),
+        crate::report::table::sig_text(r0 * 1e6, 4, true),
+    ))
 }
 
 /// The phantom's parameters for a run of `profile`, as every command runs it: the bubbles'
@@ -270,4 +316,67 @@ pub fn load_profile_or_schedule(
             .map_err(|m| Error::Input(crate::error::InputError::new(m).in_file(path)));
     }
     Ok(load(path, opts)?)
+}
+
+#[cfg(test)]
+mod shut_tests {
+    use super::*;
+
+    fn frame(t: f64, bubbles: &[(usize, f64, f64)]) -> Frame {
+        Frame {
+            time: t,
+            ambient: 101_325.0,
+            bubbles: bubbles
+                .iter()
+                .map(|&(id, radius, moles)| BubbleFrame {
+                    id,
+                    radius,
+                    initial_radius: 60e-6,
+                    volume: 0.0,
+                    area: 0.0,
+                    moles: vec![moles],
+                    gel_tension: 0.0,
+                    position: [0.0; 3],
+                })
+                .collect(),
+            max_supersaturation: f64::NAN,
+            grid_moles: Vec::new(),
+        }
+    }
+
+    /// A bubble that stayed at or below R_min with its gas unchanged is named; one that grew
+    /// past R_min, or whose gas changed (it exchanged between frames), is not.
+    #[test]
+    fn bubbles_shut_throughout_are_named() {
+        let r_min = 400e-6;
+        // bubble 0 shut throughout (Boyle swelling at constant content), 1 opened, 2 took gas
+        let frames = [
+            frame(
+                0.0,
+                &[(0, 60e-6, 1e-9), (1, 300e-6, 1e-9), (2, 60e-6, 1e-9)],
+            ),
+            frame(
+                10.0,
+                &[(0, 80e-6, 1e-9), (1, 450e-6, 2e-9), (2, 61e-6, 1.1e-9)],
+            ),
+        ];
+        let n = shut_throughout(&frames, r_min).unwrap();
+        assert!(n.starts_with("bubble 0 never exchanged gas"), "{n}");
+        assert!(
+            n.contains("R_min = 400.0 µm") && n.contains("R0 = 60.00 µm"),
+            "{n}"
+        );
+        // every bubble shut: said as such
+        let all = [
+            frame(0.0, &[(0, 60e-6, 1e-9)]),
+            frame(5.0, &[(0, 70e-6, 1e-9)]),
+        ];
+        assert!(shut_throughout(&all, r_min)
+            .unwrap()
+            .starts_with("no bubble exchanged gas"));
+        // every bubble opened, or no bubble at all: no note
+        assert!(shut_throughout(&frames, 50e-6).is_none());
+        assert!(shut_throughout(&[frame(0.0, &[])], r_min).is_none());
+        assert!(shut_throughout(&[], r_min).is_none());
+    }
 }
