@@ -13,7 +13,9 @@
 
 use std::ops::Range;
 
-use plotters::coord::ranged1d::ValueFormatter;
+use plotters::coord::combinators::LogCoord;
+use plotters::coord::ranged1d::{DefaultFormatting, KeyPointHint, ValueFormatter};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::element::DashedPathElement;
 use plotters::prelude::*;
@@ -298,19 +300,19 @@ impl LinePlot {
                 }
                 (false, true) => {
                     let chart = b
-                        .build_cartesian_2d(xr.clone(), (lo..hi).log_scale())
+                        .build_cartesian_2d(xr.clone(), log_axis(lo..hi))
                         .map_err(|e| draw_err(e.to_string()))?;
                     lines.draw(chart, xr).map_err(draw_err)?;
                 }
                 (true, false) => {
                     let chart = b
-                        .build_cartesian_2d(xr.clone().log_scale(), yr)
+                        .build_cartesian_2d(log_axis(xr.clone()), yr)
                         .map_err(|e| draw_err(e.to_string()))?;
                     lines.draw(chart, xr).map_err(draw_err)?;
                 }
                 (true, true) => {
                     let chart = b
-                        .build_cartesian_2d(xr.clone().log_scale(), (lo..hi).log_scale())
+                        .build_cartesian_2d(log_axis(xr.clone()), log_axis(lo..hi))
                         .map_err(|e| draw_err(e.to_string()))?;
                     lines.draw(chart, xr).map_err(draw_err)?;
                 }
@@ -912,6 +914,16 @@ pub struct IntervalBars {
 impl IntervalBars {
     /// Render to an SVG document.
     pub fn to_svg(&self) -> Result<String, PlotError> {
+        self.svg(false)
+    }
+
+    /// Render to an SVG document with a logarithmic y axis ([`BarChart::to_log_svg`]); an
+    /// interval's lower end at or below the axis bottom is drawn from the bottom.
+    pub fn to_log_svg(&self) -> Result<String, PlotError> {
+        self.svg(true)
+    }
+
+    fn svg(&self, log: bool) -> Result<String, PlotError> {
         let shape_ok = self.intervals.len() == self.chart.values.len()
             && self
                 .intervals
@@ -924,17 +936,25 @@ impl IntervalBars {
                 message: "the intervals do not match the bars".into(),
             });
         }
-        self.chart.svg(Some(&self.intervals))
+        self.chart.svg(Some(&self.intervals), log)
     }
 }
 
 impl BarChart {
     /// Render to an SVG document.
     pub fn to_svg(&self) -> Result<String, PlotError> {
-        self.svg(None)
+        self.svg(None, false)
     }
 
-    fn svg(&self, intervals: Option<&[Vec<(f64, f64)>]>) -> Result<String, PlotError> {
+    /// Render to an SVG document with a logarithmic y axis, for sizes that span decades (e.g.
+    /// |sensitivities| of 1e-4 beside 1): every bar rises from the axis bottom to its value.
+    /// A value of exactly 0 has no place on a log axis: its bar is replaced by a "0" written
+    /// on the axis bottom at its place. A negative value is refused (plot its size).
+    pub fn to_log_svg(&self) -> Result<String, PlotError> {
+        self.svg(None, true)
+    }
+
+    fn svg(&self, intervals: Option<&[Vec<(f64, f64)>]>, log: bool) -> Result<String, PlotError> {
         let invalid = |m: String| PlotError::Invalid {
             title: self.title.clone(),
             message: m,
@@ -969,15 +989,30 @@ impl BarChart {
         if ys.is_empty() {
             return Err(PlotError::NoData(self.title.clone()));
         }
-        ys.push(0.0);
         if let Some((r, _)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
             ys.push(*r);
         }
         for iv in intervals.into_iter().flatten().flatten() {
             ys.extend([iv.0, iv.1].into_iter().filter(|v| v.is_finite()));
         }
-        let (lo, hi) = bounds(ys.into_iter()).expect("non-empty");
-        let yr = pad_linear((lo, hi), true);
+        let yr = if log {
+            // a bar's value must have a size; an interval may reach below 0 (drawn from the
+            // axis bottom)
+            if self.values.iter().flatten().any(|v| *v < 0.0) {
+                return Err(invalid(
+                    "a log axis cannot show a negative value: plot its size".into(),
+                ));
+            }
+            let (lo, hi) = bounds(ys.iter().copied().filter(|v| *v > 0.0))
+                .ok_or_else(|| PlotError::NoData(self.title.clone()))?;
+            // a decade more below where the smallest bar would be under half a decade tall
+            let (a, b) = decades((lo / 3.0, hi));
+            a..b
+        } else {
+            ys.push(0.0);
+            let (lo, hi) = bounds(ys.into_iter()).expect("non-empty");
+            pad_linear((lo, hi), true)
+        };
         let nc = self.categories.len();
         let ng = self.groups.len();
         let draw_err = |e: String| PlotError::Draw {
@@ -989,13 +1024,14 @@ impl BarChart {
         {
             let root = SVGBackend::with_string(&mut svg, (w, h)).into_drawing_area();
             root.fill(&WHITE).map_err(|e| draw_err(e.to_string()))?;
-            self.draw(&root, nc, ng, yr, intervals)
+            self.draw(&root, nc, ng, yr, intervals, log)
                 .map_err(|e| draw_err(format!("{e:?}")))?;
             root.present().map_err(|e| draw_err(e.to_string()))?;
         }
         Ok(svg)
     }
 
+    /// Place the legend and draw the chart on a linear or (`log`) logarithmic y axis `yr`.
     fn draw<DB: DrawingBackend>(
         &self,
         root: &DrawingArea<DB, Shift>,
@@ -1003,17 +1039,14 @@ impl BarChart {
         ng: usize,
         yr: Range<f64>,
         intervals: Option<&[Vec<(f64, f64)>]>,
+        log: bool,
     ) -> Result<(), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>> {
-        // a bar's interval, where it has a finite one
-        let interval = |c: usize, g: usize| {
-            intervals
-                .and_then(|iv| iv.get(c)?.get(g).copied())
-                .filter(|(a, b)| a.is_finite() && b.is_finite())
-        };
         let (below, _) = title_area(root, &self.title)?;
         // The legend's corner, from the bars in fractions of the plotting area (each bar
         // sampled across its width, so that no corner hides a bar's edge), and room above the
-        // bars when every corner covers some: the plotting area as the chart below lays it out
+        // bars when every corner covers some: the plotting area as the chart below lays it out.
+        // On a log axis the placement works on log10 of the values, where the axis is linear.
+        let to_axis = |v: f64| if log { v.log10() } else { v };
         let width = 0.8 / ng.max(1) as f64;
         let (aw, ah) = below.dim_in_pixel();
         let plot = (
@@ -1026,43 +1059,84 @@ impl BarChart {
             .map(String::as_str)
             .chain(self.reference.iter().map(|r| r.1.as_str()));
         let legend = legend_box_px(names.map(|n| n.chars().count()));
-        let bars_in = |yr: &Range<f64>| {
-            let y0 = yr.start.max(0.0).min(yr.end);
-            let fy = |v: f64| (v - yr.start) / (yr.end - yr.start);
+        let bars_in = |ar: &Range<f64>| {
+            let y0 = if log {
+                ar.start
+            } else {
+                ar.start.max(0.0).min(ar.end)
+            };
+            let fy = |v: f64| (v - ar.start) / (ar.end - ar.start);
+            let drawn = |v: &f64| v.is_finite() && (!log || *v > 0.0);
             let mut pts = Vec::new();
             for (c, row) in self.values.iter().enumerate() {
-                for (g, v) in row.iter().enumerate().filter(|(_, v)| v.is_finite()) {
+                for (g, v) in row.iter().enumerate().filter(|(_, v)| drawn(v)) {
+                    let v = to_axis(*v);
                     let left = c as f64 + 0.1 + g as f64 * width;
                     for k in 0..=4 {
                         let x = (left + width * 0.92 * k as f64 / 4.0) / nc as f64;
-                        densify(&[(x, fy(y0)), (x, fy(*v))], &mut pts);
+                        densify(&[(x, fy(y0)), (x, fy(v))], &mut pts);
                     }
                     densify(
                         &[
-                            (left / nc as f64, fy(*v)),
-                            ((left + width * 0.92) / nc as f64, fy(*v)),
+                            (left / nc as f64, fy(v)),
+                            ((left + width * 0.92) / nc as f64, fy(v)),
                         ],
                         &mut pts,
                     );
-                    if let Some((a, b)) = interval(c, g) {
+                    if let Some((a, b)) = bar_interval(intervals, c, g) {
                         let x = (left + width * 0.46) / nc as f64;
+                        let (a, b) = (to_axis(a.max(0.0)).max(ar.start), to_axis(b));
                         densify(&[(x, fy(a)), (x, fy(b))], &mut pts);
                     }
                 }
             }
-            if let Some((r, _)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
-                densify(&[(0.0, fy(*r)), (1.0, fy(*r))], &mut pts);
+            if let Some((r, _)) = self
+                .reference
+                .as_ref()
+                .filter(|r| r.0.is_finite() && (!log || r.0 > 0.0))
+            {
+                densify(&[(0.0, fy(to_axis(*r))), (1.0, fy(to_axis(*r)))], &mut pts);
             }
             pts
         };
-        let (corner, yr, _) = place_legend(yr, plot, legend, bars_in);
-        let y0 = yr.start.max(0.0).min(yr.end);
-        let mut chart = ChartBuilder::on(&below)
-            .margin(18)
+        let ar = to_axis(yr.start)..to_axis(yr.end);
+        let (corner, ar, _) = place_legend(ar, plot, legend, bars_in);
+        let mut b = ChartBuilder::on(&below);
+        b.margin(18)
             .margin_top(6)
             .x_label_area_size(90)
-            .y_label_area_size(110)
-            .build_cartesian_2d(0.0..nc as f64, yr.clone())?;
+            .y_label_area_size(110);
+        if log {
+            let yr = 10f64.powf(ar.start)..10f64.powf(ar.end);
+            let chart = b.build_cartesian_2d(0.0..nc as f64, log_axis(yr.clone()))?;
+            self.draw_on(root, chart, yr.start, intervals, corner, true)
+        } else {
+            let y0 = ar.start.max(0.0).min(ar.end);
+            let chart = b.build_cartesian_2d(0.0..nc as f64, ar)?;
+            self.draw_on(root, chart, y0, intervals, corner, false)
+        }
+    }
+
+    /// Draw the mesh, bars (from `y0`), error bars, reference line, category names and legend
+    /// on `chart`, whatever its y axis (`log`: logarithmic).
+    fn draw_on<'a, DB, Y>(
+        &self,
+        root: &DrawingArea<DB, Shift>,
+        mut chart: ChartContext<'a, DB, Cartesian2d<RangedCoordf64, Y>>,
+        y0: f64,
+        intervals: Option<&[Vec<(f64, f64)>]>,
+        corner: Corner,
+        log: bool,
+    ) -> Result<(), plotters::drawing::DrawingAreaErrorKind<DB::ErrorType>>
+    where
+        DB: DrawingBackend + 'a,
+        Y: Ranged<ValueType = f64> + ValueFormatter<f64>,
+    {
+        let (nc, ng) = (self.categories.len(), self.groups.len());
+        let width = 0.8 / ng.max(1) as f64;
+        let yr = chart.y_range();
+        // a bar with a place on the axis (a log axis has none for 0)
+        let drawn = |v: f64| v.is_finite() && (!log || v > 0.0);
         let tick = |v: &f64| fmt_tick_in(*v, yr.end - yr.start);
         chart
             .configure_mesh()
@@ -1079,7 +1153,7 @@ impl BarChart {
         for g in 0..ng {
             let color = PALETTE[g % PALETTE.len()];
             let bars: Vec<Rectangle<(f64, f64)>> = (0..nc)
-                .filter(|&c| self.values[c][g].is_finite())
+                .filter(|&c| drawn(self.values[c][g]))
                 .map(|c| {
                     let x = c as f64 + 0.1 + g as f64 * width;
                     Rectangle::new(
@@ -1095,6 +1169,21 @@ impl BarChart {
                     Rectangle::new([(x, y - 7), (x + 16, y + 7)], color.filled())
                 });
         }
+        if log {
+            // a value of exactly 0: a "0" on the axis bottom where its bar would stand
+            let style = TextStyle::from((FONT, TICK_SIZE).into_font())
+                .pos(Pos::new(HPos::Center, VPos::Bottom))
+                .color(&BLACK);
+            let zeros: Vec<_> = (0..nc)
+                .flat_map(|c| (0..ng).map(move |g| (c, g)))
+                .filter(|&(c, g)| self.values[c][g] == 0.0)
+                .map(|(c, g)| {
+                    let x = c as f64 + 0.1 + g as f64 * width + width * 0.46;
+                    Text::new("0", (x, y0), style.clone())
+                })
+                .collect();
+            chart.draw_series(zeros)?;
+        }
         if intervals.is_some() {
             let black = ShapeStyle {
                 color: BLACK.to_rgba(),
@@ -1103,13 +1192,13 @@ impl BarChart {
             };
             let bars: Vec<_> = (0..nc)
                 .flat_map(|c| (0..ng).map(move |g| (c, g)))
-                .filter(|&(c, g)| self.values[c][g].is_finite())
+                .filter(|&(c, g)| drawn(self.values[c][g]))
                 .filter_map(|(c, g)| {
-                    let (a, b) = interval(c, g)?;
+                    let (a, b) = bar_interval(intervals, c, g)?;
                     let x = c as f64 + 0.1 + g as f64 * width + width * 0.46;
                     Some(ErrorBar::new_vertical(
                         x,
-                        a,
+                        a.max(y0),
                         self.values[c][g],
                         b,
                         black,
@@ -1119,7 +1208,7 @@ impl BarChart {
                 .collect();
             chart.draw_series(bars)?;
         }
-        if let Some((r, name)) = self.reference.as_ref().filter(|r| r.0.is_finite()) {
+        if let Some((r, name)) = self.reference.as_ref().filter(|r| drawn(r.0)) {
             let st = ShapeStyle {
                 color: BLACK.to_rgba(),
                 filled: false,
@@ -1143,14 +1232,15 @@ impl BarChart {
         let style = TextStyle::from((FONT, TICK_SIZE).into_font())
             .pos(Pos::new(HPos::Center, VPos::Top))
             .color(&BLACK);
-        let bottom = chart.backend_coord(&(0.0, chart.y_range().start));
-        let slot_px = (chart.backend_coord(&(1.0, 0.0)).0 - chart.backend_coord(&(0.0, 0.0)).0)
+        let bottom = chart.backend_coord(&(0.0, yr.start));
+        let slot_px = (chart.backend_coord(&(1.0, yr.start)).0
+            - chart.backend_coord(&(0.0, yr.start)).0)
             .max(1) as usize;
         // The font-less width estimate: 0.7 em per character, em = size / 1.24².
         let char_px = 0.7 * TICK_SIZE / 1.24 / 1.24;
         let max_chars = ((slot_px as f64 / char_px) as usize).max(4);
         for (c, name) in self.categories.iter().enumerate() {
-            let (px, _) = chart.backend_coord(&(c as f64 + 0.5, 0.0));
+            let (px, _) = chart.backend_coord(&(c as f64 + 0.5, yr.start));
             for (k, line) in wrap(name, max_chars).iter().take(3).enumerate() {
                 root.draw(&Text::new(
                     line.clone(),
@@ -1168,6 +1258,54 @@ impl BarChart {
             .draw()?;
         Ok(())
     }
+}
+
+/// Bar (`c`, `g`)'s interval, where it has a finite one.
+fn bar_interval(intervals: Option<&[Vec<(f64, f64)>]>, c: usize, g: usize) -> Option<(f64, f64)> {
+    intervals
+        .and_then(|iv| iv.get(c)?.get(g).copied())
+        .filter(|(a, b)| a.is_finite() && b.is_finite())
+}
+
+/// A logarithmic axis whose ticks read distinctly. plotters' own log axis gives the next decade
+/// twice where it fits in the range (its last light tick of a decade, v·(1 + 10·9/10), is the
+/// next bold tick 10v: two "10" labels at one place, reports/paper/fig2a/fig2a-ratio-mu1.svg),
+/// and two ticks could also round to one label; [`distinct_ticks`] keeps the first of each.
+struct LogAxis {
+    inner: LogCoord<f64>,
+    span: f64,
+}
+
+/// A [`LogAxis`] over `r` (positive).
+fn log_axis(r: Range<f64>) -> LogAxis {
+    LogAxis {
+        span: r.end - r.start,
+        inner: r.log_scale().into(),
+    }
+}
+
+impl Ranged for LogAxis {
+    type FormatOption = DefaultFormatting;
+    type ValueType = f64;
+    fn map(&self, value: &f64, limit: (i32, i32)) -> i32 {
+        self.inner.map(value, limit)
+    }
+    fn key_points<H: KeyPointHint>(&self, hint: H) -> Vec<f64> {
+        distinct_ticks(self.inner.key_points(hint), self.span)
+    }
+    fn range(&self) -> Range<f64> {
+        self.inner.range()
+    }
+}
+
+/// `ticks` without those whose label (as the axis of `span` writes it, [`fmt_tick_in`])
+/// repeats an earlier tick's.
+fn distinct_ticks(ticks: Vec<f64>, span: f64) -> Vec<f64> {
+    let mut seen = std::collections::HashSet::new();
+    ticks
+        .into_iter()
+        .filter(|t| seen.insert(fmt_tick_in(*t, span)))
+        .collect()
 }
 
 /// Wrap text at spaces (or hard-break long words) into lines of at most `n` characters.
@@ -1323,6 +1461,127 @@ pub(crate) mod tests {
         assert_eq!(fmt_tick_in(0.2, 1.6), "0.2");
         // a small value on an axis of small values keeps its digits
         assert_eq!(fmt_tick_in(2e-15, 1e-14), "2e-15");
+    }
+
+    /// The labels of a log axis's ticks over `r`, as the axes here write them, for several
+    /// tick budgets (plotters asks with the mesh's label count and with its light lines').
+    fn log_labels(r: Range<f64>) -> Vec<Vec<String>> {
+        let axis = log_axis(r.clone());
+        [3usize, 5, 10, 20, 50]
+            .iter()
+            .map(|n| {
+                axis.key_points(*n)
+                    .iter()
+                    .map(|v| fmt_tick_in(*v, r.end - r.start))
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// No log axis writes one label twice: plotters' own gives the next decade twice over a
+    /// decade (its light tick 1·(1 + 9) and the bold 10: fig2a-ratio-mu1.svg had two "10"
+    /// at one place); the axes here keep the first of each label. Ranges as given and
+    /// widened to whole decades, as the line plots draw them.
+    #[test]
+    fn a_log_axis_writes_no_label_twice() {
+        // the cause, in plotters itself
+        let raw: LogCoord<f64> = (1.0..10.0 * (1.0 + 1e-12)).log_scale().into();
+        let tens = raw
+            .key_points(10usize)
+            .iter()
+            .filter(|v| fmt_tick(**v) == "10")
+            .count();
+        assert_eq!(
+            tens, 2,
+            "plotters no longer repeats the decade: simplify LogAxis"
+        );
+        for (lo, hi) in [
+            (8.0, 12.0),
+            (9.99, 10.01),
+            (1.0, 1000.0),
+            (1.0, 10.0),
+            (0.2, 7e5),
+        ] {
+            let (a, b) = decades((lo, hi));
+            for r in [lo..hi, a..b] {
+                for labels in log_labels(r.clone()) {
+                    let mut seen = std::collections::HashSet::new();
+                    for l in &labels {
+                        assert!(seen.insert(l.clone()), "{r:?}: '{l}' twice in {labels:?}");
+                    }
+                }
+            }
+        }
+        // and the decade itself is kept
+        let labels = log_labels(decades((1.2, 9.0)).0..decades((1.2, 9.0)).1);
+        assert!(labels[2].contains(&"10".to_string()), "{labels:?}");
+    }
+
+    /// The rendered plot: a log y axis over one decade (fig2a's ratio panels) writes "10" once.
+    #[test]
+    fn a_log_plot_writes_its_top_decade_once() {
+        let mut p = LinePlot::new("ratio", "R0 (m)", "R_B/R0");
+        p.log_x = true;
+        p.log_y = true;
+        let svg = p
+            .with(Series::new("a", vec![(1e-7, 1.2), (1e-3, 4.6)]))
+            .to_svg()
+            .unwrap();
+        let texts: Vec<&str> = svg
+            .split("<text")
+            .skip(1)
+            .map(|t| {
+                t.split('>')
+                    .nth(1)
+                    .unwrap_or("")
+                    .split('<')
+                    .next()
+                    .unwrap_or("")
+                    .trim()
+            })
+            .collect();
+        assert_eq!(texts.iter().filter(|t| **t == "10").count(), 1, "{texts:?}");
+    }
+
+    /// A log bar chart shows values five decades apart, each bar at least half a decade above
+    /// the axis bottom (the smallest, 1.1e-3, just above a decade's 1e-3, gets one more), and
+    /// writes "0" for a value of exactly 0 (no bar); a negative value is refused.
+    #[test]
+    fn a_log_bar_chart_shows_every_size() {
+        let chart = BarChart {
+            title: "sensitivities".into(),
+            x_label: "parameter".into(),
+            y_label: "|normalised sensitivity| (log)".into(),
+            categories: vec!["γ".into(), "L_N2".into(), "μ".into(), "D".into()],
+            groups: vec!["R_max".into(), "t_max".into()],
+            values: vec![
+                vec![3.56e-4, 0.0],
+                vec![0.00198, 0.0011],
+                vec![1.41, 0.287],
+                vec![0.0165, 0.294],
+            ],
+            reference: None,
+            size: (960, 480),
+        };
+        let svg = chart.to_log_svg().unwrap();
+        let bars: Vec<_> = svg_rects(&svg)
+            .into_iter()
+            .filter(|r| r.4.contains("stroke=\"none\"") && r.4.contains("opacity=\"1\""))
+            .filter(|r| r.2 < 100.0 && r.2 > 20.0)
+            .collect();
+        // seven bars (the 0 has none), the smallest still tens of px tall
+        assert_eq!(bars.len(), 7, "{bars:?}");
+        let shortest = bars.iter().map(|b| b.3).fold(f64::INFINITY, f64::min);
+        assert!(shortest > 20.0, "shortest bar {shortest} px");
+        let zeros = svg
+            .split("<text")
+            .skip(1)
+            .filter(|t| t.split('>').nth(1).unwrap_or("").split('<').next() == Some("\n0\n"))
+            .count();
+        assert_eq!(zeros, 1, "one value of 0, one mark");
+        let mut neg = chart.clone();
+        neg.values[0][0] = -3.56e-4;
+        assert!(matches!(neg.to_log_svg(), Err(PlotError::Invalid { .. })));
     }
 
     #[test]

@@ -5,14 +5,14 @@
 //! μ = 20 kPa (where the README's verification found the paper's directions), plus Sobol'
 //! indices over all five at once (the global analysis the paper did not do).
 
-use super::{add_verdicts, discrepancies, report_err, s3, Agreement, FigureOutput, Progress};
+use super::{add_verdicts, c, discrepancies, report_err, s3, Agreement, FigureOutput, Progress};
 use super::{grade, halve_steps, Part, Settings, Verdict};
 use crate::error::{Error, InputError};
 use crate::fit::paths;
 use crate::fit::report::sig;
 use crate::report::html::Page;
 use crate::report::output::OutputSet;
-use crate::report::plot::BarChart;
+use crate::report::plot::{BarChart, IntervalBars};
 use crate::report::table::{Cell, Column, Table};
 use crate::sweep::report::indices;
 use crate::sweep::run::{outputs, run_all, Results, Shard, Study};
@@ -65,6 +65,19 @@ fn study(
     coarse: bool,
     halved: bool,
 ) -> Result<Study, Error> {
+    study_around(method, samples, mu_base, coarse, halved, None)
+}
+
+/// [`study`], or with `local = Some(δ)` each parameter's range narrowed to its base·(1 ± δ)
+/// (linear levels): with [`Method::Oat`] and 2 samples, the runs of the local sensitivities.
+fn study_around(
+    method: Method,
+    samples: usize,
+    mu_base: f64,
+    coarse: bool,
+    halved: bool,
+    local: Option<f64>,
+) -> Result<Study, Error> {
     let path = Path::new("profiles/phantoms/fig3-modal.toml");
     let mut doc: toml::Table = PHANTOM
         .parse()
@@ -83,6 +96,13 @@ fn study(
         crate::profile::toml::parse(PROFILE, Path::new("profiles/sensitivity-30m.toml"))?.history;
     let mut params: Vec<Param> = parameters().into_iter().map(|x| x.1).collect();
     params[3].base = mu_base;
+    if let Some(d) = local {
+        for p in &mut params {
+            p.lo = p.base * (1.0 - d);
+            p.hi = p.base * (1.0 + d);
+            p.log = false;
+        }
+    }
     Ok(Study {
         spec: StudySpec {
             method,
@@ -153,14 +173,110 @@ fn numerical_errors(full: &[OatRow], half: &[OatRow]) -> Vec<OatRow> {
         .collect()
 }
 
+/// The relative step of the local sensitivities: each parameter at base·(1 ± δ). A central
+/// difference is second-order, so its truncation error shrinks as δ² (at δ = 0.1 about 1 % of
+/// the curvature term), while the change it divides (about 2δ|E| of the metric) must stay well
+/// above the runs' numerical error, which does not shrink with δ; 0.1 keeps both small, and
+/// the estimate is checked against δ/2 ([`Local::step`]).
+pub const DELTA: f64 = 0.1;
+
+/// The local normalised sensitivity (elasticity) d ln m/d ln x at the base, by the central
+/// difference of ln m over x·(1 ± δ): (ln m₊ − ln m₋)/(ln(1 + δ) − ln(1 − δ)). NaN unless
+/// both metrics are positive and finite.
+pub fn elasticity(m_lo: f64, m_hi: f64, delta: f64) -> f64 {
+    if !(m_lo > 0.0 && m_hi > 0.0 && m_lo.is_finite() && m_hi.is_finite()) {
+        return f64::NAN;
+    }
+    (m_hi.ln() - m_lo.ln()) / ((1.0 + delta).ln() - (1.0 - delta).ln())
+}
+
+/// One parameter's local elasticities: (symbol, [R_max, t_max], the metrics at the ends).
+type LocalRow = (&'static str, [f64; 2], [[f64; 2]; 2]);
+
+/// One parameter's elasticities [R_max, t_max] from a local study's runs ([`study_around`]:
+/// the base run, then base·(1 − δ) and base·(1 + δ) for each parameter in turn), with the
+/// metrics at the two ends [[R_max−, R_max+], [t_max−, t_max+]].
+fn local_rows(res: &Results, delta: f64) -> Vec<LocalRow> {
+    parameters()
+        .iter()
+        .enumerate()
+        .map(|(i, (sym, _))| {
+            let at = |k: usize, m: usize| {
+                res.rows
+                    .get(1 + 2 * i + k)
+                    .and_then(|r| r.metrics.get(m).copied())
+                    .unwrap_or(f64::NAN)
+            };
+            let ends = [[at(0, 0), at(1, 0)], [at(0, 1), at(1, 1)]];
+            let e = [0, 1].map(|m| elasticity(ends[m][0], ends[m][1], delta));
+            (*sym, e, ends)
+        })
+        .collect()
+}
+
+/// A parameter's local sensitivities of [R_max, t_max] at the base, with their errors.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Local {
+    /// The parameter's symbol.
+    pub sym: &'static str,
+    /// d ln m/d ln x at step δ ([`DELTA`]).
+    pub value: [f64; 2],
+    /// The numerical error: twice the change of `value` when every step limit is halved (the
+    /// rule of every other ± figure of Fig. 3).
+    pub numerical: [f64; 2],
+    /// The step error: |value − the same estimate at δ/2|.
+    pub step: [f64; 2],
+    /// The estimate at δ/2.
+    pub half_delta: [f64; 2],
+    /// The metrics at base·(1 − δ) and base·(1 + δ): [[R_max−, R_max+], [t_max−, t_max+]].
+    pub ends: [[f64; 2]; 2],
+}
+
+impl Local {
+    /// The error a comparison uses: the numerical and the step error added.
+    pub fn error(&self, m: usize) -> f64 {
+        self.numerical[m] + self.step[m]
+    }
+}
+
+/// The local sensitivities from the three local studies: at δ, at δ with every step limit
+/// halved, and at δ/2.
+fn locals(at: &Results, halved: &Results, half_delta: &Results, delta: f64) -> Vec<Local> {
+    let (a, h, d) = (
+        local_rows(at, delta),
+        local_rows(halved, delta),
+        local_rows(half_delta, 0.5 * delta),
+    );
+    a.iter()
+        .zip(&h)
+        .zip(&d)
+        .map(|((a, h), d)| Local {
+            sym: a.0,
+            value: a.1,
+            numerical: [0, 1].map(|m| 2.0 * (a.1[m] - h.1[m]).abs()),
+            step: [0, 1].map(|m| (a.1[m] - d.1[m]).abs()),
+            half_delta: d.1,
+            ends: a.2,
+        })
+        .collect()
+}
+
 /// The note of a ranking with a part within the numerical error.
 const UNRESOLVED: &str = "a part is within the numerical error (the ± figures: twice the change of each range or sensitivity itself when every step limit is halved; a comparison counts only where the two values, each less or plus its error, separate); ";
+
+/// The note of a local-sensitivity ranking with a part within the errors.
+const UNRESOLVED_LOCAL: &str = "a part is within the errors (the ± figures: the numerical error, twice the change of the local sensitivity when every step limit is halved, plus the step error, its difference from the estimate at δ/2; a comparison counts only where the two values, each less or plus its error, separate); ";
 
 /// A ranking verdict's note: `base`, after [`UNRESOLVED`] where a part is within the
 /// numerical error.
 fn note(parts: &[Part], base: &str) -> String {
+    note_with(UNRESOLVED, parts, base)
+}
+
+/// [`note`] with another prefix.
+fn note_with(prefix: &str, parts: &[Part], base: &str) -> String {
     if parts.contains(&Part::Unresolved) {
-        format!("{UNRESOLVED}{base}")
+        format!("{prefix}{base}")
     } else {
         base.to_string()
     }
@@ -372,7 +488,16 @@ fn why_directions(wrong: &[String], metric: usize, key: &str) -> String {
     s
 }
 
-fn ranking_verdicts(rows: &[OatRow], errs: &[OatRow], label: &str, key: &str) -> Vec<Verdict> {
+/// Which measure the sensitivity verdicts use, said in their rows.
+const MEASURE: &str = "Measure: the local elasticity |d ln m/d ln x| at the base (central difference over x·(1 ± 0.1), ± its numerical error plus its difference from the same estimate at x·(1 ± 0.05)). The paper calls Fig. 3c 'the sensitivity (Δ bubble metric/Δ parameter value)', a derivative, and sets it apart from the effect over the range ('its large impact is due to its wide physiological range'); a chord between the range's ends carries that range in (at μ's base the far end dominates it), so it is given beside as (Δm/Δx)(x_base/m_base), not judged. Normalised, as the units of the five parameters differ";
+
+fn ranking_verdicts(
+    rows: &[OatRow],
+    errs: &[OatRow],
+    local: &[Local],
+    label: &str,
+    key: &str,
+) -> Vec<Verdict> {
     // (symbol, value, numerical error) of entry k of metric m
     let values = |m: usize, k: usize, abs: bool| -> Vec<(&'static str, f64, f64)> {
         rows.iter()
@@ -384,7 +509,16 @@ fn ranking_verdicts(rows: &[OatRow], errs: &[OatRow], label: &str, key: &str) ->
             .collect()
     };
     let (ranges_r, ranges_t) = (values(0, 2, false), values(1, 2, false));
-    let (sens_rv, sens_tv) = (values(0, 3, true), values(1, 3, true));
+    // the range-end chords, shown beside
+    let (chord_r, chord_t) = (values(0, 3, true), values(1, 3, true));
+    // the local elasticities, which the sensitivity verdicts judge
+    let loc = |m: usize| -> Vec<(&'static str, f64, f64)> {
+        local
+            .iter()
+            .map(|l| (l.sym, l.value[m].abs(), l.error(m)))
+            .collect()
+    };
+    let (sens_rv, sens_tv) = (loc(0), loc(1));
     let (range_r, range_t) = (largest(&ranges_r), largest(&ranges_t));
     let (sens_r, sens_t) = (largest(&sens_rv), largest(&sens_tv));
     let range_parts = [part_largest(&ranges_r, "μ"), part_largest(&ranges_t, "D")];
@@ -422,6 +556,13 @@ fn ranking_verdicts(rows: &[OatRow], errs: &[OatRow], label: &str, key: &str) ->
             " (± the numerical error)"
         }
     };
+    let resolved_local = |p: &[Part; 2]| -> &'static str {
+        if p.contains(&Part::Unresolved) {
+            " (± the numerical plus the step error; a part within it counts as neither agreeing nor disagreeing)"
+        } else {
+            " (± the numerical plus the step error)"
+        }
+    };
     let range_ok = range_parts.iter().filter(|p| **p == Part::Agrees).count();
     let sens_ok = sens_parts.iter().filter(|p| **p == Part::Agrees).count();
     let mu_ok = mu_parts.iter().filter(|p| **p == Part::Agrees).count();
@@ -444,46 +585,113 @@ fn ranking_verdicts(rows: &[OatRow], errs: &[OatRow], label: &str, key: &str) ->
             format!("{key}:most-sensitive-d"),
             "'the parameter to which R_max and t_max are most sensitive is D' (§2.3.1, Fig. 3c); abstract: 'the diffusion coefficient was the most influential material parameter'",
             format!(
-                "{label}: largest |normalised sensitivity| of R_max: {sens_r} ({}), of t_max: {sens_t} ({}). |(ΔR_max/Δx)(x/R_max)|: {}; |(Δt_max/Δx)(x/t_max)|: {}{}",
+                "{label}: largest local |d ln m/d ln x| of R_max: {sens_r} ({}), of t_max: {sens_t} ({}). |d ln R_max/d ln x|: {}; |d ln t_max/d ln x|: {}{}. Beside it, the range-end chord |(Δm/Δx)(x/m)| (not judged): R_max {}; t_max {} (largest: {}, {}). {MEASURE}",
                 word(sens_parts[0]),
                 word(sens_parts[1]),
                 list(&sens_rv, 1.0),
                 list(&sens_tv, 1.0),
-                resolved(&sens_parts)
+                resolved_local(&sens_parts),
+                list(&chord_r, 1.0),
+                list(&chord_t, 1.0),
+                largest(&chord_r),
+                largest(&chord_t),
             ),
             grade(&sens_parts),
-            note(
+            note_with(
+                UNRESOLVED_LOCAL,
                 &sens_parts,
-            if sens_ok == 2 {
-                ""
-            } else if key == "modal" {
-                "at μ = 2 MPa growth is stopped and only μ moves R_max and t_max. (Normalised here as (Δmetric/Δx)·(x_base/metric_base) between the range's ends; the paper's Fig. 3c is 'Δ bubble metric/Δ parameter value', whose normalisation the text does not give)"
-            } else {
-                "R_max responds most to how much N2 the gel holds (L_N2 over a five-fold range), D most to how fast it is delivered (t_max). (Normalised here as (Δmetric/Δx)·(x_base/metric_base) between the range's ends; the paper's Fig. 3c is 'Δ bubble metric/Δ parameter value', whose normalisation the text does not give)"
-            },
+                &if sens_ok == 2 {
+                    String::new()
+                } else {
+                    why_sensitive(local, key)
+                },
             ),
         ),
         Verdict::new(
             format!("{key}:mu-insensitive"),
             "'R_max and t_max are relatively insensitive to μ … LN2, LO2 and γ all have a similar influence that is larger than that of μ' (§2.3.1)",
             format!(
-                "{label}: |normalised sensitivity| of μ below those of γ, L_N2 and L_O2: R_max {}, t_max {}",
+                "{label}: local |d ln m/d ln x| of μ below those of γ, L_N2 and L_O2: R_max {}, t_max {}. μ: R_max {}, t_max {}; the others' smallest: R_max {}, t_max {}. (By the range-end chord instead, not judged: μ R_max {}, t_max {}.) {MEASURE}",
                 word(mu_parts[0]),
-                word(mu_parts[1])
+                word(mu_parts[1]),
+                pm(&sens_rv, "μ"),
+                pm(&sens_tv, "μ"),
+                smallest_other(&sens_rv),
+                smallest_other(&sens_tv),
+                pm(&chord_r, "μ"),
+                pm(&chord_t, "μ"),
             ),
             grade(&mu_parts),
-            note(
+            note_with(
+                UNRESOLVED_LOCAL,
                 &mu_parts,
-            if mu_ok == 2 {
-                ""
-            } else if key == "modal" {
-                "with μ's base at 2 MPa, where it halts growth, μ's own normalised sensitivity is large and the others' nearly zero"
-            } else {
-                "t_max barely depends on γ, L_N2 and L_O2 either; their normalised sensitivities of t_max are as small as μ's"
-            },
+                &if mu_ok == 2 {
+                    String::new()
+                } else {
+                    why_mu(&mu_parts, key)
+                },
             ),
         ),
     ]
+}
+
+/// `sym`'s value ± error in `v` (symbol, value, error).
+fn pm(v: &[(&'static str, f64, f64)], sym: &str) -> String {
+    v.iter()
+        .find(|x| x.0 == sym)
+        .map_or(String::from("?"), |x| format!("{} ± {}", s3(x.1), s3(x.2)))
+}
+
+/// The smallest of γ, L_N2 and L_O2 in `v` (symbol, value, error), with its symbol.
+fn smallest_other(v: &[(&'static str, f64, f64)]) -> String {
+    v.iter()
+        .filter(|x| ["γ", "L_N2", "L_O2"].contains(&x.0) && x.1.is_finite())
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map_or(String::from("?"), |x| {
+            format!("{} {} ± {}", x.0, s3(x.1), s3(x.2))
+        })
+}
+
+/// Why the most-sensitive verdict is not a plain yes.
+fn why_sensitive(local: &[Local], key: &str) -> String {
+    let top = |m: usize| {
+        local
+            .iter()
+            .filter(|l| l.value[m].is_finite())
+            .max_by(|a, b| a.value[m].abs().total_cmp(&b.value[m].abs()))
+            .map_or("?", |l| l.sym)
+    };
+    let mut s = format!(
+        "locally R_max responds most to {} and t_max to {}",
+        top(0),
+        top(1)
+    );
+    if key == "modal" {
+        s.push_str("; at μ = 2 MPa growth is stopped: R_max is the Boyle/Laplace expansion of the ascent and t_max its end, so the parameters acting through diffusion barely move either");
+    } else if top(0) == "μ" {
+        s.push_str("; at 20 kPa the gel's stiffness still limits how far the bubble grows, which the range-end chord hides (its far end, at MPa moduli, stops growth)");
+    }
+    s
+}
+
+/// Why the μ-insensitive verdict is not a plain yes.
+fn why_mu(parts: &[Part; 2], key: &str) -> String {
+    let against: Vec<&str> = ["R_max", "t_max"]
+        .iter()
+        .zip(parts)
+        .filter(|(_, p)| **p == Part::Disagrees)
+        .map(|(m, _)| *m)
+        .collect();
+    if against.is_empty() {
+        return "within the errors the local sensitivities of γ, L_N2 and L_O2 are not above μ's"
+            .into();
+    }
+    let which = against.join(" and ");
+    if key == "modal" {
+        format!("at μ = 2 MPa the hyperelastic term holds the bubble: locally μ moves {which} more than one of γ, L_N2 and L_O2 does")
+    } else {
+        format!("at 20 kPa μ still limits growth: locally it moves {which} more than one of γ, L_N2 and L_O2 does; the range-end chord is small only because its far end, at MPa moduli, stops growth")
+    }
 }
 
 /// Surface tension's share of the bubble pressure at the surface, 2γ/R / (P_atm + 2γ/R).
@@ -492,13 +700,47 @@ pub fn tension_share(gamma: f64, r: f64) -> f64 {
     s / (crate::units::ATM_PA + s)
 }
 
+/// One base's results for the panels: (key, label, OAT rows, their numerical errors, local
+/// sensitivities).
+type BaseRows = (
+    &'static str,
+    &'static str,
+    Vec<OatRow>,
+    Vec<OatRow>,
+    Vec<Local>,
+);
+
+/// A caption's note of the bars of exactly 0 (a log axis has no place for them: the chart
+/// writes "0" where each would stand), or nothing.
+fn zeros_note(cats: &[String], vals: &[Vec<f64>], groups: &[&str]) -> String {
+    let zeros: Vec<String> = cats
+        .iter()
+        .zip(vals)
+        .flat_map(|(c, row)| {
+            row.iter()
+                .zip(groups)
+                .filter(|(v, _)| **v == 0.0)
+                .map(move |(_, g)| format!("{c} ({g})"))
+        })
+        .collect();
+    if zeros.is_empty() {
+        String::new()
+    } else {
+        format!(
+            " Exactly 0, so marked \"0\" on the axis instead of a bar: {}.",
+            zeros.join(", ")
+        )
+    }
+}
+
 /// Compute the figure.
 pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Error> {
     let (levels, n_sobol) = if settings.quick { (3, 4) } else { (5, 64) };
     let mut files = OutputSet::new();
     let mut verdicts = Vec::new();
     let mut tables = Vec::new();
-    let mut base_rows: Vec<(&str, &str, Vec<OatRow>)> = Vec::new();
+    let mut base_rows: Vec<BaseRows> = Vec::new();
+    let mut local_csv = String::from("base,parameter,metric,delta,metric_at_minus_delta,metric_at_plus_delta,elasticity,numerical_error,elasticity_at_half_delta,step_error,range_end_chord\n");
     let mut nested = Vec::new();
     for (key, label, mu, dir) in [
         ("modal", "modal values (μ = 2 MPa)", 2e6, "oat-modal"),
@@ -513,8 +755,44 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         let fine_name = format!("fig3 {dir}, steps halved");
         let fine_res = run_all(&fine, &|d, t| progress(&fine_name, d, t))?;
         let errs = numerical_errors(&rows, &oat_rows(&fine_res));
+        // the local sensitivities at the base: at δ, at δ with every step limit halved (their
+        // numerical error) and at δ/2 (their step error)
+        let mut local_res = Vec::new();
+        for (d, halved, what) in [
+            (DELTA, false, "local"),
+            (DELTA, true, "local, steps halved"),
+            (0.5 * DELTA, false, "local, δ/2"),
+        ] {
+            let st = study_around(Method::Oat, 2, mu, settings.quick, halved, Some(d))?;
+            let name = format!("fig3 {dir}, {what}");
+            local_res.push(run_all(&st, &|k, t| progress(&name, k, t))?);
+        }
+        let local = locals(&local_res[0], &local_res[1], &local_res[2], DELTA);
+        for l in &local {
+            for (m, metric) in ["r_max", "t_max"].iter().enumerate() {
+                let chord = rows.iter().find(|r| r.0 == l.sym).map_or(f64::NAN, |r| {
+                    if m == 0 {
+                        r.1[3]
+                    } else {
+                        r.2[3]
+                    }
+                });
+                local_csv.push_str(&format!(
+                    "{key},{},{metric},{},{},{},{},{},{},{},{}\n",
+                    l.sym,
+                    c(DELTA),
+                    c(l.ends[m][0]),
+                    c(l.ends[m][1]),
+                    c(l.value[m]),
+                    c(l.numerical[m]),
+                    c(l.half_delta[m]),
+                    c(l.step[m]),
+                    c(chord)
+                ));
+            }
+        }
         verdicts.extend(direction_verdicts(&rows, &errs, label, key));
-        verdicts.extend(ranking_verdicts(&rows, &errs, label, key));
+        verdicts.extend(ranking_verdicts(&rows, &errs, &local, label, key));
         let mut t = Table::new(
             format!("One at a time, {label}"),
             vec![
@@ -528,9 +806,11 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
                 Column::new("t_max at high", "s"),
                 Column::new("change of t_max ± numerical error", "s"),
                 Column::plain("normalised sensitivity of t_max"),
+                Column::plain("local d ln R_max/d ln x ± numerical ± step error"),
+                Column::plain("local d ln t_max/d ln x ± numerical ± step error"),
             ],
         );
-        for (((sym, p), r), e) in parameters().iter().zip(&rows).zip(&errs) {
+        for ((((sym, p), r), e), l) in parameters().iter().zip(&rows).zip(&errs).zip(&local) {
             let range = if *sym == "D" {
                 format!("{}–{} m²/s (log)", s3(p.lo * D_MODAL), s3(p.hi * D_MODAL))
             } else {
@@ -547,11 +827,23 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
                 Cell::text(sig(r.2[1], digits(r.2[0], r.2[1]))),
                 Cell::text(format!("{} ± {}", s3(r.2[4]), s3(e.2[4]))),
                 Cell::text(format!("{} ± {}", s3(r.2[3]), s3(e.2[3]))),
+                Cell::text(format!(
+                    "{} ± {} ± {}",
+                    s3(l.value[0]),
+                    s3(l.numerical[0]),
+                    s3(l.step[0])
+                )),
+                Cell::text(format!(
+                    "{} ± {} ± {}",
+                    s3(l.value[1]),
+                    s3(l.numerical[1]),
+                    s3(l.step[1])
+                )),
             ])
             .map_err(report_err)?;
         }
         tables.push(t);
-        base_rows.push((key, label, rows.clone()));
+        base_rows.push((key, label, rows.clone(), errs.clone(), local.clone()));
         let set = outputs(
             &res,
             Shard::WHOLE,
@@ -684,54 +976,89 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         "the 36 % does not follow from 2γ/R at 1 atm (42 %); γ/R would give 27 % for γ = 0.073 but then 17 % for 0.04. Likely an arithmetic slip in the text; it does not affect the simulations",
     ));
 
-    // paper-style panels: 3b (ranges) and 3c (normalised sensitivities) at each base
+    // paper-style panels: 3b (the change over each range) and 3c (normalised sensitivities)
+    // at each base, on log axes: the values span up to five decades (μ's against γ's), and a
+    // linear axis showed one bar and flattened the others to nothing
     let mut bars: Vec<(String, String, String)> = Vec::new();
-    for (key, label, rows) in &base_rows {
+    for (key, label, rows, errs, local) in &base_rows {
         let cats: Vec<String> = rows.iter().map(|r| r.0.to_string()).collect();
-        let bar = |title: String, y: &str, groups: Vec<String>, vals: Vec<Vec<f64>>| {
-            BarChart {
-                title,
-                x_label: "parameter".into(),
-                y_label: y.into(),
-                categories: cats.clone(),
-                groups,
-                values: vals,
-                reference: None,
-                size: (960, 480),
-            }
-            .to_svg()
-            .map_err(report_err)
+        let chart = |title: String, y: &str, groups: Vec<String>, vals: Vec<Vec<f64>>| BarChart {
+            title,
+            x_label: "parameter".into(),
+            y_label: y.into(),
+            categories: cats.clone(),
+            groups,
+            values: vals,
+            reference: None,
+            size: (960, 480),
         };
-        let ends = vec!["lowest value".to_string(), "highest value".to_string()];
-        bars.push((
-            format!("fig3b-rmax-{key}.svg"),
-            bar(
-                format!("Fig. 3b(i): R_max at the ends of each range ({label})"),
-                "R_max (µm)",
-                ends.clone(),
-                rows.iter().map(|r| vec![r.1[0] * 1e6, r.1[1] * 1e6]).collect(),
-            )?,
-            format!("R_max at the lowest and highest value of each parameter's range, the others at the base ({label}; Fig. 3b(i))."),
-        ));
-        bars.push((
-            format!("fig3b-tmax-{key}.svg"),
-            bar(
-                format!("Fig. 3b(ii): t_max at the ends of each range ({label})"),
-                "t_max (s)",
-                ends,
-                rows.iter().map(|r| vec![r.2[0], r.2[1]]).collect(),
-            )?,
-            format!("t_max at the lowest and highest value of each parameter's range ({label}; Fig. 3b(ii))."),
-        ));
+        for (m, metric, unit, scale, panel) in
+            [(0, "R_max", "µm", 1e6, "i"), (1, "t_max", "s", 1.0, "ii")]
+        {
+            let pick = |r: &OatRow| if m == 0 { r.1 } else { r.2 };
+            let vals: Vec<Vec<f64>> = rows.iter().map(|r| vec![pick(r)[2] * scale]).collect();
+            let intervals: Vec<Vec<(f64, f64)>> = rows
+                .iter()
+                .zip(errs.iter())
+                .map(|(r, e)| {
+                    let (v, e) = (pick(r)[2] * scale, pick(e)[2] * scale);
+                    vec![(v - e, v + e)]
+                })
+                .collect();
+            let svg = IntervalBars {
+                chart: chart(
+                    format!("Fig. 3b({panel}): change of {metric} over each range ({label})"),
+                    &format!("range of {metric}, max − min over the levels ({unit}, log)"),
+                    vec!["range over the levels".into()],
+                    vals.clone(),
+                ),
+                intervals,
+            }
+            .to_log_svg()
+            .map_err(report_err)?;
+            bars.push((
+                format!("fig3b-{}-{key}.svg", metric.replace('_', "").to_lowercase()),
+                svg,
+                format!(
+                    "Fig. 3b({panel}): the change of {metric} over each parameter's range (largest − smallest over the levels, the others at the base; {label}), on a log axis; error bars ± the numerical error (an error bar reaching below the axis is drawn from its bottom).{}",
+                    zeros_note(&cats, &vals, &["range"])
+                ),
+            ));
+        }
+        let groups = [
+            "R_max: chord over the range",
+            "R_max: local at the base",
+            "t_max: chord over the range",
+            "t_max: local at the base",
+        ];
+        let vals: Vec<Vec<f64>> = rows
+            .iter()
+            .zip(local.iter())
+            .map(|(r, l)| {
+                vec![
+                    r.1[3].abs(),
+                    l.value[0].abs(),
+                    r.2[3].abs(),
+                    l.value[1].abs(),
+                ]
+            })
+            .collect();
+        let svg = chart(
+            format!("Fig. 3c: normalised sensitivities ({label})"),
+            "|normalised sensitivity| (log)",
+            groups.iter().map(|g| g.to_string()).collect(),
+            vals.clone(),
+        )
+        .to_log_svg()
+        .map_err(report_err)?;
         bars.push((
             format!("fig3c-{key}.svg"),
-            bar(
-                format!("Fig. 3c: normalised sensitivities ({label})"),
-                "(Δmetric/Δx)·(x/metric)",
-                vec!["R_max".into(), "t_max".into()],
-                rows.iter().map(|r| vec![r.1[3], r.2[3]]).collect(),
-            )?,
-            format!("Normalised sensitivities of R_max and t_max ({label}; Fig. 3c)."),
+            svg,
+            format!(
+                "Fig. 3c: sizes of the normalised sensitivities of R_max and t_max ({label}), on a log axis: the chord between the range's ends (Δm/Δx)(x_base/m_base) beside the local elasticity d ln m/d ln x at the base (x·(1 ± {})); their signs and errors are in the tables.{}",
+                s3(DELTA),
+                zeros_note(&cats, &vals, &groups)
+            ),
         ));
     }
 
@@ -739,7 +1066,8 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     page.text("**The paper** (§2.3.1): 'Simulations were conducted on a 1.28 mm^3 grid with h = R0 = 0.04 mm … A single bubble located at the centre of the grid was exposed to a decompression corresponding to a depth change of 30 m in 3.75 min (ascent rate approx. 0.133 m s^-1). The tissue was assumed to be saturated with air at the start of the decompression … From figure 3a, it can be seen that increases in the parameters D, μ and γ led to a decrease in the maximum bubble radius (R_max) and a decrease in the time taken to reach this maximum (t_max). Increases in both LN2 and LO2 led to an increase in R_max but a decrease in t_max. … From this top panel it can be seen that μ has the largest effect upon R_max, while D has the largest effect upon t_max. … These results show that R_max and t_max are relatively insensitive to μ and that its large impact is due to its wide physiological range. LN2, LO2 and γ all have a similar influence that is larger than that of μ but the parameter to which R_max and t_max are most sensitive is D.' Caption: 'the fixed parameter values are the modal values of the range (γ = 0.056 N m^-1, LN2 = 0.0436, LO2 = 0.02, μ = 2 × 10^6 Pa, D = 1.4 × 10^-9 m^2 s^-1)'.");
     add_verdicts(&mut page, &verdicts);
     page.section("One at a time");
-    page.text("Both analyses vary each parameter over its range at the levels below with the others at their base values; 'normalised sensitivity' is (metric at the highest level − at the lowest)/(highest − lowest) × base value / metric at base. The second analysis moves only μ's base to 20 kPa, the stiffness at which the bubble can still grow by diffusion.");
+    page.text("Both analyses vary each parameter over its range at the levels below with the others at their base values; 'normalised sensitivity' is (metric at the highest level − at the lowest)/(highest − lowest) × base value / metric at base: a chord between the range's ends. The second analysis moves only μ's base to 20 kPa, the stiffness at which the bubble can still grow by diffusion.");
+    page.text(format!("Local sensitivities: a chord between the range's ends says little about the response at the base when the range is wide against it (μ's 0–4 MPa against a 20 kPa base: growth stops at MPa moduli, so the far end dominates). Beside it each parameter's local normalised sensitivity (elasticity) d ln m/d ln x at the base is computed by the central difference over x_base·(1 ± δ), δ = {}: (ln m(x₊) − ln m(x₋))/(ln(1 + δ) − ln(1 − δ)), two extra runs per parameter and base. A central difference is second-order: its truncation error falls as δ², so at δ = 0.1 it is about 1 % of the curvature term, while the change it divides (about 2δ|E| of the metric) stays above the runs' numerical error, which does not shrink with δ. Two errors go with it: the numerical error, by the rule below (twice its change when every step limit is halved), and the step error, its difference from the same estimate at δ/2 = {}; a comparison uses their sum. The verdicts on sensitivity (Fig. 3c: 'most sensitive', 'insensitive to μ') judge the local elasticity: the paper calls Fig. 3c 'the sensitivity (Δ bubble metric/Δ parameter value)' and sets it apart from the effect over the range ('its large impact is due to its wide physiological range'), which the chord carries in. Both are in the tables, the charts and `local-sensitivities.csv` (each parameter's metrics at x·(1 ± δ), the elasticity, its numerical error, the estimate at δ/2, the step error and the chord).", s3(DELTA), s3(0.5 * DELTA)));
     page.text("Numerical error: each analysis is run again with every step limit halved, and the numerical error of a number is twice its change (the Richardson estimate of a first-order scheme). A change between two levels, a range and a sensitivity each get the estimate of their own value, computed as that difference at both step sizes, not the sum of the two ends' errors: both ends run with the same step limits through nearly the same history, so most of their discretisation error is common and cancels in the difference (the sum would be a worst-case bound assuming opposite errors). This one definition is used by every ± figure and every 'within the numerical error' of this page. A direction counts only where the change exceeds its error; a change within it is unresolved (neither agreeing nor disagreeing with the paper). t_max is the time of the recorded step at which R is largest (the steps are adaptive, not a fixed frame interval), so it has no dead band of its own beyond this error. The ends are printed with enough digits to show the change judged.");
     for t in &tables {
         page.table(t);
@@ -748,6 +1076,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         page.figure(svg, Some(f), cap.clone()).map_err(report_err)?;
         files.add(f.clone(), svg.clone());
     }
+    files.add("local-sensitivities.csv", local_csv.clone());
     page.section("Radius time courses (Fig. 3a)");
     for (dir, set) in &nested {
         if *dir == "sobol" {
@@ -788,7 +1117,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
     }
     page.section("Equations and parameters");
     page.text(format!(
-        "The full model (diffusion 2.1 in the gel with Henry's law 2.2 at the open faces, the bubble's moles with the Laplace balance 2.4, hyperelastic Ω 2.9, D_surf = D_bulk) on the preset `profiles/phantoms/fig3-modal.toml`: a {} cube, h = {}, one bubble R0 = 40 µm at the centre, R_min = 40 µm, air (N2 + O2, each with its own L and the same D), saturated at 30 msw; profile `profiles/sensitivity-30m.toml` (30 msw to the surface in 3.75 min, then 90 min). Ranges (Table 1): γ 0.042–0.07 N/m, L_O2 0.013–0.027, μ 0–4 MPa, D 1e-10–2.7e-9 m²/s (both gases; log-spaced levels, the range spanning more than a decade). L_N2: Table 1 gives a single value (0.014); the caption's modal 0.0436 is the midpoint of 0.014–0.0732, the rule that reproduces every other modal value (0.056, 0.02, 2e6, 1.4e-9 are the midpoints of their ranges), so 0.014–0.0732 is used. One-at-a-time: {} levels per parameter, {} runs per analysis. Sobol': N = {}, {} runs on h = 80 µm, seed 2017. Metrics: R_max, the largest radius over the run, and t_max, its time (`r_max`, `t_max` of `decophantom sensitivity`). Every run of each design: `oat-modal/`, `oat-mu20k/`, `sobol/` (sensitivity.csv, indices.csv, courses.csv, report.md); the same designs run with `decophantom sensitivity --phantom profiles/phantoms/fig3-modal.toml --profile profiles/sensitivity-30m.toml --param material.surface_tension=0.042..0.07 --param gases.n2.ostwald=0.014..0.0732 --param gases.o2.ostwald=0.013..0.027 --param material.elasticity.shear_modulus=0..4e6 --param 'scale:gases.*.diffusivity=0.0714285714285714..1.928571428571429' --metric r_max --metric t_max --method oat --samples {}`.",
+        "The full model (diffusion 2.1 in the gel with Henry's law 2.2 at the open faces, the bubble's moles with the Laplace balance 2.4, hyperelastic Ω 2.9, D_surf = D_bulk) on the preset `profiles/phantoms/fig3-modal.toml`: a {} cube, h = {}, one bubble R0 = 40 µm at the centre, R_min = 40 µm, air (N2 + O2, each with its own L and the same D), saturated at 30 msw; profile `profiles/sensitivity-30m.toml` (30 msw to the surface in 3.75 min, then 90 min). Ranges (Table 1): γ 0.042–0.07 N/m, L_O2 0.013–0.027, μ 0–4 MPa, D 1e-10–2.7e-9 m²/s (both gases; log-spaced levels, the range spanning more than a decade). L_N2: Table 1 gives a single value (0.014); the caption's modal 0.0436 is the midpoint of 0.014–0.0732, the rule that reproduces every other modal value (0.056, 0.02, 2e6, 1.4e-9 are the midpoints of their ranges), so 0.014–0.0732 is used. One-at-a-time: {} levels per parameter, {} runs per analysis; local sensitivities: each parameter at base·(1 ± δ), 11 runs per base and δ (the base run and two per parameter), at δ = 0.1, at δ = 0.1 with every step limit halved and at δ = 0.05 (`local-sensitivities.csv`). Sobol': N = {}, {} runs on h = 80 µm, seed 2017. Metrics: R_max, the largest radius over the run, and t_max, its time (`r_max`, `t_max` of `decophantom sensitivity`). Every run of each design: `oat-modal/`, `oat-mu20k/`, `sobol/` (sensitivity.csv, indices.csv, courses.csv, report.md); the same designs run with `decophantom sensitivity --phantom profiles/phantoms/fig3-modal.toml --profile profiles/sensitivity-30m.toml --param material.surface_tension=0.042..0.07 --param gases.n2.ostwald=0.014..0.0732 --param gases.o2.ostwald=0.013..0.027 --param material.elasticity.shear_modulus=0..4e6 --param 'scale:gases.*.diffusivity=0.0714285714285714..1.928571428571429' --metric r_max --metric t_max --method oat --samples {}`.",
         "1.28 mm",
         if settings.quick { "80 µm (--quick)" } else { "40 µm" },
         levels,
@@ -832,6 +1161,46 @@ mod tests {
         assert_eq!(part_largest(&v(3.26), "μ"), Part::Disagrees);
         // a parameter clearly below another disagrees whatever the top pair does
         assert_eq!(part_largest(&v(32.6), "γ"), Part::Disagrees);
+    }
+
+    /// The local elasticity d ln m/d ln x: exact for a power law m = a·x^k at any δ (the
+    /// central difference of ln m is then exact); second-order otherwise, so that for
+    /// m = e^x at x = 1 (elasticity x = 1) the error at δ = 0.1 is below 1 % and the
+    /// difference from δ/2 (the reported step error) is about ¾ of it.
+    #[test]
+    fn the_local_elasticity_is_a_central_difference_of_logs() {
+        let x = 2.0e4;
+        for k in [-0.27, 0.0, 0.5, 2.0] {
+            let m = |v: f64| 3.0 * v.powf(k);
+            for d in [DELTA, 0.5 * DELTA] {
+                let e = elasticity(m(x * (1.0 - d)), m(x * (1.0 + d)), d);
+                assert!((e - k).abs() < 1e-12, "k = {k}, δ = {d}: {e}");
+            }
+        }
+        let at = |d: f64| elasticity((1.0 - d).exp(), (1.0 + d).exp(), d);
+        let (e, e2) = (at(DELTA), at(0.5 * DELTA));
+        assert!((e - 1.0).abs() < 0.01 && (e - 1.0).abs() > 1e-4, "{e}");
+        // second order: the step error |E(δ) − E(δ/2)| is ¾ of E(δ)'s own error
+        let ratio = (e - e2).abs() / (e - 1.0).abs();
+        assert!((ratio - 0.75).abs() < 0.01, "{ratio}");
+        // undefined without two positive metrics
+        assert!(elasticity(0.0, 1.0, DELTA).is_nan());
+        assert!(elasticity(1.0, f64::NAN, DELTA).is_nan());
+    }
+
+    /// A local sensitivity's comparisons use its numerical and step errors added.
+    #[test]
+    fn a_local_sensitivitys_error_adds_its_numerical_and_step_errors() {
+        let l = Local {
+            sym: "μ",
+            value: [-0.27, -0.12],
+            numerical: [1e-4, 0.03],
+            step: [4e-4, 0.05],
+            half_delta: [-0.2696, -0.17],
+            ends: [[1.0, 1.0], [1.0, 1.0]],
+        };
+        assert!((l.error(0) - 5e-4).abs() < 1e-15);
+        assert!((l.error(1) - 0.08).abs() < 1e-15);
     }
 
     #[test]

@@ -309,6 +309,124 @@ fn reproduce_fig2a_and_fig3_quick_against_an_independent_solve_and_the_paper() {
     assert!(error_bar_lines >= 3, "no error bars in bars-0.svg");
     let fig3 = std::fs::read_to_string(out.join("fig3/README.md")).unwrap();
     assert!(!fig3.contains("frames every 2 s") && !fig3.contains("D second for t_max"));
+
+    // ---- Fig. 3's local sensitivities (review #6): every elasticity is the central
+    // difference of ln m over base·(1 ± δ) recomputed from its own metrics, its step error the
+    // difference from δ/2, and the sensitivity verdicts say that they judge it
+    let local =
+        csv_rows(&std::fs::read_to_string(out.join("fig3/local-sensitivities.csv")).unwrap());
+    assert_eq!(local.len(), 2 * 5 * 2, "2 bases × 5 parameters × 2 metrics");
+    for r in &local {
+        let (d, lo, hi) = (
+            num(r, "delta"),
+            num(r, "metric_at_minus_delta"),
+            num(r, "metric_at_plus_delta"),
+        );
+        let want = (hi.ln() - lo.ln()) / ((1.0 + d).ln() - (1.0 - d).ln());
+        let e = num(r, "elasticity");
+        assert!((e - want).abs() <= 1e-12 * want.abs().max(1.0), "{r:?}");
+        let step = (e - num(r, "elasticity_at_half_delta")).abs();
+        assert!((num(r, "step_error") - step).abs() <= 1e-12, "{r:?}");
+        assert!(num(r, "numerical_error") >= 0.0);
+    }
+    let ours = |key: &str| -> String {
+        done.iter()
+            .find(|d| d.figure.name == "fig3")
+            .and_then(|d| d.verdicts.iter().find(|v| v.key == key))
+            .map(|v| v.ours.clone())
+            .unwrap()
+    };
+    for base in ["modal", "mu20k"] {
+        for v in ["most-sensitive-d", "mu-insensitive"] {
+            let t = ours(&format!("{base}:{v}"));
+            assert!(
+                t.contains("Measure: the local elasticity") && t.contains("chord"),
+                "{base}:{v}: {t}"
+            );
+        }
+    }
+
+    // ---- the panels (review #14, #22): no SVG writes one text twice at one place (the log
+    // axes' doubled "10"), and every bar of Fig. 3b and 3c is drawn (or marked "0") on its
+    // log axis, at least a few px tall
+    let mut svgs = Vec::new();
+    for sub in ["fig2a", "fig3"] {
+        for e in std::fs::read_dir(out.join(sub)).unwrap() {
+            let p = e.unwrap().path();
+            if p.extension().is_some_and(|x| x == "svg") {
+                svgs.push(p);
+            }
+        }
+    }
+    assert!(svgs.len() >= 8, "{svgs:?}");
+    let texts = |svg: &str| -> Vec<(String, String, String)> {
+        svg.split("<text")
+            .skip(1)
+            .map(|t| {
+                let attr = |k: &str| {
+                    t.split(&format!(" {k}=\""))
+                        .nth(1)
+                        .and_then(|v| v.split('"').next())
+                        .unwrap_or("")
+                        .to_string()
+                };
+                let body = t
+                    .split('>')
+                    .nth(1)
+                    .unwrap_or("")
+                    .split('<')
+                    .next()
+                    .unwrap_or("");
+                (attr("x"), attr("y"), body.trim().to_string())
+            })
+            .collect()
+    };
+    for p in &svgs {
+        let svg = std::fs::read_to_string(p).unwrap();
+        let mut seen = std::collections::HashSet::new();
+        for t in texts(&svg) {
+            assert!(seen.insert(t.clone()), "{}: {t:?} twice", p.display());
+        }
+    }
+    for (f, values) in [
+        ("fig3c-modal.svg", 20),
+        ("fig3c-mu20k.svg", 20),
+        ("fig3b-rmax-modal.svg", 5),
+        ("fig3b-tmax-mu20k.svg", 5),
+    ] {
+        let svg = std::fs::read_to_string(out.join("fig3").join(f)).unwrap();
+        let heights: Vec<f64> = svg
+            .split("<rect")
+            .skip(1)
+            .filter(|r| r.contains("stroke=\"none\"") && r.contains("opacity=\"1\""))
+            .filter_map(|r| {
+                let get = |k: &str| -> Option<f64> {
+                    r.split(&format!(" {k}=\""))
+                        .nth(1)?
+                        .split('"')
+                        .next()?
+                        .parse()
+                        .ok()
+                };
+                let w = get("width")?;
+                (w > 20.0 && w < 150.0).then_some(get("height")?)
+            })
+            .collect();
+        let zeros = texts(&svg).iter().filter(|t| t.2 == "0").count();
+        assert_eq!(
+            heights.len() + zeros,
+            values,
+            "{f}: {heights:?}, {zeros} zeros"
+        );
+        assert!(
+            heights.iter().all(|h| *h >= 10.0),
+            "{f}: a bar too short to see: {heights:?}"
+        );
+        assert!(
+            svg.contains("(log)") || svg.contains(", log)"),
+            "{f}: no log axis label"
+        );
+    }
 }
 
 /// Fig. 5 (--quick): every verdict that judges a change or a curvature does so by one rule (Fig.
