@@ -113,45 +113,8 @@ fn plateaus(g: &[super::fig5::BubbleGrowth]) -> (f64, f64, f64) {
     (m, lo, hi)
 }
 
-/// A series' curvature against its numerical error ([`curvature`]).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Curvature {
-    /// The largest |deviation| of the values from their least-squares line (NaN without a
-    /// line: fewer than 3 finite points).
-    pub deviation: f64,
-    /// What it must exceed: twice the largest numerical error of the levels, the bound of
-    /// Fig. 5's rule ([`super::fig5::change_over_levels`]; NaN if a level has no error).
-    pub bound: f64,
-    /// Whether the deviation exceeds the bound: the series bends beyond its numerical error.
-    pub resolved: bool,
-}
-
 /// How the curvature is judged, said once on the page.
-pub const CURVATURE_RULE: &str = "Curvature (Fig. 6a's 'nonlinearly'): a simulation is deterministic, so whether the plateau bends is judged by the numerical error, not by a p-value. The mean plateaus are fitted by a least-squares line over R0, and the series counts as curved only where the largest deviation of a mean from that line exceeds twice the largest numerical error of the means (each twice the change of the mean with every step limit halved): the bound of Fig. 5's rule for a change over a series' levels. A deviation is a fixed combination of the means (the residual of a line), whose numerical error is at most Σ_j |(I − H)_ij| e_j (H the hat matrix of the line); over these R0 levels the row sums of |I − H| stay below 2, so twice the largest error bounds it. A deviation within the bound is unresolved: the model cannot tell a line from a curve there. The F-tests are printed as a description of the shape only.";
-
-/// The curvature of `y` over `x` judged by the numerical `errors` of its levels: the largest
-/// deviation of `y` from its least-squares line against twice the largest error (Fig. 5's
-/// bound for a change over the levels). Non-finite pairs are dropped from the line.
-pub fn curvature(x: &[f64], y: &[f64], errors: &[f64]) -> Curvature {
-    let (xs, ys): (Vec<f64>, Vec<f64>) = x
-        .iter()
-        .zip(y)
-        .filter(|(a, b)| a.is_finite() && b.is_finite())
-        .map(|(a, b)| (*a, *b))
-        .unzip();
-    let deviation = linear_fit(&xs, &ys).map_or(f64::NAN, |l| {
-        xs.iter()
-            .zip(&ys)
-            .map(|(a, b)| (b - (l.intercept + l.slope * a)).abs())
-            .fold(0.0, f64::max)
-    });
-    let bound = super::fig5::change_over_levels(y, errors).bound;
-    Curvature {
-        deviation,
-        bound,
-        resolved: deviation > bound,
-    }
-}
+pub const CURVATURE_RULE: &str = "Curvature (Fig. 6a's 'nonlinearly'): a simulation is deterministic, so whether the plateau bends is judged by the numerical error, not by a p-value. The mean plateaus are fitted by a least-squares line over R0; the series counts as curved only where the largest deviation of a mean from that line exceeds that deviation's own numerical error: twice its change when every step limit is halved (the same level's deviation from the line of the halved-step means; the Richardson estimate of a first-order scheme, the rule of Figs 3 and 5). Each step between neighbouring R0 is judged the same way: the difference of the two means against twice its own change with the steps halved. A deviation or step within its error is unresolved: the model cannot tell a line from a curve, or a rise from none, there. The F-tests are printed as a description of the shape only.";
 
 /// Compute the figure.
 pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Error> {
@@ -303,8 +266,13 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
             .zip(&means_half[ri])
             .map(|(a, b)| 2.0 * (a - b).abs())
             .collect();
+        // each step between neighbouring R0 against its own numerical error (Fig. 3's rule)
         let steps: Vec<Part> = (1..r0s.len())
-            .map(|k| exceeds((means[ri][k], err[k]), (means[ri][k - 1], err[k - 1])))
+            .map(|k| {
+                let d = means[ri][k] - means[ri][k - 1];
+                let e = 2.0 * ((means_half[ri][k] - means_half[ri][k - 1]) - d).abs();
+                exceeds((d, e), (0.0, 0.0))
+            })
             .collect();
         let inc = if steps.iter().all(|p| *p == Part::Agrees) {
             Part::Agrees
@@ -319,14 +287,14 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
         let reg = super::fig5::regress(&xs, &means[ri]);
         // the curvature, judged by the numerical error of the means (the rule of Fig. 5), not
         // by a p-value: the simulation has no noise
-        let bent = curvature(&xs, &means[ri], &err);
+        let bent = super::fig5::curvature_over_levels(&xs, &means[ri], &means_half[ri]);
         let curved = if bent.resolved {
             Part::Agrees
         } else {
             Part::Unresolved
         };
         let ours = format!(
-            "{label}: mean plateau {} µm for R0 = {} µm ({}; numerical error of the means {} µm); largest deviation of the means from their least-squares line {} µm against twice the largest numerical error {} µm: {}. {}",
+            "{label}: mean plateau {} µm for R0 = {} µm ({}; numerical error of the means {} µm); largest deviation of the means from their least-squares line {} µm against its numerical error {} µm: {}. {}",
             means[ri]
                 .iter()
                 .map(|m| s3(*m))
@@ -342,7 +310,7 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
                 Part::Unresolved => "a step within the numerical error",
             },
             err.iter().map(|e| s3(*e)).collect::<Vec<_>>().join(" / "),
-            s3(bent.deviation),
+            s3(bent.deviation.abs()),
             s3(bent.bound),
             if bent.resolved {
                 "curved beyond the numerical error"
@@ -594,84 +562,20 @@ pub fn run(settings: &Settings, progress: Progress) -> Result<FigureOutput, Erro
 mod tests {
     use super::*;
 
-    /// The rule on synthetic numbers: a line plus a known bend c·(x − x̄)², whose largest
-    /// deviation from the least-squares line is worked out here by hand, judged against
-    /// errors above and below the threshold.
+    /// A step between neighbouring R0 is judged against its own numerical error: both
+    /// means moving together with the steps halved (a common error) leave the step resolved,
+    /// a step that changes by more than half itself is not. Numbers by hand.
     #[test]
-    fn curvature_counts_only_above_twice_the_largest_numerical_error() {
-        let x = [0.0, 1.0, 2.0, 3.0, 4.0];
-        // y = 10 + 3x + c(x − 2)²: the bend (4, 1, 0, 1, 4)·c has mean 2c and no slope over
-        // these x, so the line absorbs 2c and the deviations are (2, −1, −2, −1, 2)·c
-        let c = 0.5;
-        let y: Vec<f64> = x
-            .iter()
-            .map(|v| 10.0 + 3.0 * v + c * (v - 2.0) * (v - 2.0))
-            .collect();
-        let small = [0.1, 0.2, 0.3, 0.2, 0.1]; // bound 0.6 < deviation 1.0
-        let k = curvature(&x, &y, &small);
-        assert!((k.deviation - 2.0 * c).abs() < 1e-12, "{k:?}");
-        assert!((k.bound - 0.6).abs() < 1e-12);
-        assert!(k.resolved);
-        let large = [0.1, 0.6, 0.3, 0.2, 0.1]; // bound 1.2 > deviation 1.0
-        let k = curvature(&x, &y, &large);
-        assert!((k.bound - 1.2).abs() < 1e-12);
-        assert!(!k.resolved);
-        // exactly at the bound is not above it
-        assert!(!curvature(&x, &y, &[0.5; 5]).resolved);
-        // a straight line has no curvature to resolve, however small the errors
-        let line: Vec<f64> = x.iter().map(|v| 10.0 + 3.0 * v).collect();
-        let k = curvature(&x, &line, &[1e-9; 5]);
-        assert!(k.deviation < 1e-9 && !k.resolved, "{k:?}");
-        // an unknown error leaves it unresolved
-        assert!(!curvature(&x, &y, &[0.1, f64::NAN, 0.1, 0.1, 0.1]).resolved);
-    }
-
-    /// The reports' numbers (reports/paper/fig6, area law with R_ref = 0.2 mm): the means
-    /// 75.4 / 160 / 309 / 439 / 529 µm deviate from their line by up to 32.9 µm, far above
-    /// twice the largest numerical error (2 × 1.06 µm): curved. The constant fold's
-    /// 332 / 343 / 360 / 382 / 410 µm deviate by 1.41 µm, below 2 × 1.43 µm: unresolved,
-    /// whatever its F-test's p = 0.00576 said.
-    #[test]
-    fn the_reports_fig6a_curvatures() {
-        let x = [40.0, 60.0, 86.5, 120.0, 160.0];
-        let fixed = curvature(
-            &x,
-            &[75.4, 160.0, 309.0, 439.0, 529.0],
-            &[0.0243, 0.445, 0.518, 0.320, 1.06],
-        );
-        assert!((fixed.deviation - 32.92).abs() < 0.01, "{fixed:?}");
-        assert!(fixed.resolved);
-        let fold = curvature(
-            &x,
-            &[332.0, 343.0, 360.0, 382.0, 410.0],
-            &[1.43, 1.16, 0.672, 0.925, 0.567],
-        );
-        assert!((fold.deviation - 1.41).abs() < 0.01, "{fold:?}");
-        assert!(!fold.resolved);
-    }
-
-    /// Why twice the largest error bounds a deviation's numerical error over the R0 levels:
-    /// the residual of point i is Σ_j (I − H)_ij y_j, so its error is at most
-    /// Σ_j |(I − H)_ij| e_j ≤ (Σ_j |(I − H)_ij|) max e, and these row sums stay below 2 for
-    /// the full design's R0 and the quick one's.
-    #[test]
-    fn a_deviations_error_is_within_twice_the_largest_error() {
-        for x in [
-            vec![40.0, 60.0, 86.5, 120.0, 160.0],
-            vec![40.0, 86.5, 160.0],
-        ] {
-            let n = x.len() as f64;
-            let m = x.iter().sum::<f64>() / n;
-            let sxx: f64 = x.iter().map(|v| (v - m) * (v - m)).sum();
-            for i in 0..x.len() {
-                let row: f64 = (0..x.len())
-                    .map(|j| {
-                        let h = 1.0 / n + (x[i] - m) * (x[j] - m) / sxx;
-                        (if i == j { 1.0 - h } else { -h }).abs()
-                    })
-                    .sum();
-                assert!(row < 2.0, "R0 {x:?}, row {i}: {row}");
-            }
-        }
+    fn a_step_between_r0_levels_is_judged_against_its_own_error() {
+        let judge = |m: [f64; 2], half: [f64; 2]| {
+            let d = m[1] - m[0];
+            exceeds((d, 2.0 * ((half[1] - half[0]) - d).abs()), (0.0, 0.0))
+        };
+        // +10 µm, each mean 4 µm higher with the steps halved: error 0, rises
+        assert_eq!(judge([300.0, 310.0], [304.0, 314.0]), Part::Agrees);
+        // +1 µm, +1.8 with the steps halved: error 1.6 > 1: unresolved
+        assert_eq!(judge([300.0, 301.0], [300.0, 301.8]), Part::Unresolved);
+        // −5 µm, −5.5 halved: error 1: falls
+        assert_eq!(judge([300.0, 295.0], [300.0, 294.5]), Part::Disagrees);
     }
 }
