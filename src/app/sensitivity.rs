@@ -53,12 +53,16 @@ pub fn run(
     })?;
     // the output folder is checked before any run
     crate::report::output::check_target(&req.out, &[req.phantom.as_path(), req.profile.as_path()])?;
-    if req.samples < 2 {
-        return Err(cli_err(
-            "--samples",
-            format!("--samples must be at least 2 (got {})", req.samples),
-        ));
+    // --samples against the method (at least 2; Sobol' at least SOBOL_MIN_SAMPLES), before
+    // anything is read
+    StudySpec {
+        method,
+        samples: req.samples,
+        seed: req.seed,
+        params: Vec::new(),
+        metrics: Vec::new(),
     }
+    .check_samples()?;
     let text = std::fs::read_to_string(&req.phantom).map_err(|e| {
         InputError::new(format!("cannot read the phantom: {e}")).in_file(&req.phantom)
     })?;
@@ -92,6 +96,16 @@ pub fn run(
         .iter()
         .map(|m| Metric::parse(m))
         .collect::<Result<Vec<_>, _>>()?;
+    // the same metric twice (compared by canonical name: `r_max:0` and `r_max:00` are one)
+    // would give its column and indices twice
+    for (i, m) in metrics.iter().enumerate() {
+        if metrics[..i].iter().any(|q| q.name() == m.name()) {
+            return Err(cli_err(
+                "--metric",
+                format!("'{}' is given twice", m.name()),
+            ));
+        }
+    }
     let shard = match &req.shard {
         Some(s) => Shard::parse(s)?,
         None => Shard::WHOLE,
@@ -152,7 +166,22 @@ pub fn summary_text(r: &Results) -> String {
                 }
             })
             .collect();
-        s.push_str(&format!("{m} / {p}: {}\n", vals.join(", ")));
+        // a Sobol' estimate or interval outside [0, 1] is flagged, not printed as an index
+        let out = if r.spec.method == Method::Sobol {
+            crate::sweep::report::sobol_outside_unit(&v)
+        } else {
+            Vec::new()
+        };
+        let flag = if out.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " ({}: {})",
+                out.join(", "),
+                crate::sweep::report::OUTSIDE_UNIT
+            )
+        };
+        s.push_str(&format!("{m} / {p}: {}{flag}\n", vals.join(", ")));
     }
     s
 }
@@ -195,6 +224,7 @@ mod tests {
             rows,
             courses: Vec::new(),
             resumed: 0,
+            inputs: None,
         };
         let s = summary_text(&whole);
         assert!(
@@ -212,5 +242,64 @@ mod tests {
             "{s}"
         );
         assert!(s.contains("no indices") && !s.contains("mu_star"), "{s}");
+    }
+
+    #[test]
+    fn sweep_sobol_estimates_outside_the_unit_interval_are_flagged_not_printed_silently() {
+        // N = 2 base rows of one parameter (rows A, B, A_B): f(A) = 0, 1; f(B) = 1, 0;
+        // f(A_B) = f(B): the variance of {0, 1, 1, 0} is 1/4 and both estimators give 2
+        let spec = StudySpec {
+            method: Method::Sobol,
+            samples: 2,
+            seed: 1,
+            params: vec![Param {
+                path: "a.x".into(),
+                lo: 0.0,
+                hi: 1.0,
+                log: false,
+                base: 0.5,
+            }],
+            metrics: vec![Metric::parse("r_max").unwrap()],
+        };
+        let y = [0.0, 1.0, 1.0, 1.0, 0.0, 0.0];
+        let rows: Vec<Row> = spec
+            .values()
+            .into_iter()
+            .zip(y)
+            .enumerate()
+            .map(|(index, (values, m))| Row {
+                index,
+                values,
+                metrics: vec![m],
+            })
+            .collect();
+        let res = Results {
+            spec,
+            shard: Shard::WHOLE,
+            rows,
+            courses: Vec::new(),
+            resumed: 0,
+            inputs: None,
+        };
+        let (_, idx, notes) = crate::sweep::report::indices_and_notes(&res);
+        assert_eq!((idx[0].2[0], idx[0].2[3]), (2.0, 2.0), "{idx:?}");
+        let s = summary_text(&res);
+        assert!(
+            s.contains("(S1, ST: estimator outside [0, 1]: N too small)"),
+            "{s}"
+        );
+        assert!(
+            notes
+                .iter()
+                .any(|n| n.starts_with("r_max / a.x: estimator outside [0, 1]: N too small: S1 and ST from 2 usable base rows")),
+            "{notes:?}"
+        );
+        // inside [0, 1] nothing is flagged; NaN (undefined) has notes of its own
+        let ok = [0.3, 0.0, 1.0, 0.5, 0.2, 0.9, 16.0, 0.0];
+        assert!(crate::sweep::report::sobol_outside_unit(&ok).is_empty());
+        let nan = [f64::NAN; 6];
+        assert!(crate::sweep::report::sobol_outside_unit(&nan).is_empty());
+        let low = [0.01, -0.02, 0.05, 0.5, 0.2, 0.9];
+        assert_eq!(crate::sweep::report::sobol_outside_unit(&low), ["S1"]);
     }
 }

@@ -154,6 +154,32 @@ impl StudySpec {
         }
     }
 
+    /// The number of samples, checked before anything is read: at least 2 for every method
+    /// (two levels, trajectories or rows), and at least [`design::SOBOL_MIN_SAMPLES`] base rows
+    /// for Sobol' (fewer give indices and intervals that mean nothing); else bad input naming
+    /// `--samples`.
+    pub fn check_samples(&self) -> Result<(), InputError> {
+        let bad = |m: String| {
+            Err(InputError::new(m)
+                .in_file("<command line>")
+                .field("--samples"))
+        };
+        if self.samples < 2 {
+            return bad(format!(
+                "--samples must be at least 2 (got {})",
+                self.samples
+            ));
+        }
+        if self.method == Method::Sobol && self.samples < design::SOBOL_MIN_SAMPLES {
+            return bad(format!(
+                "--samples {}: Sobol' needs at least {} base rows (N(k + 2) runs); with fewer, the estimates stray outside [0, 1] and the bootstrap intervals have too few distinct resamples to mean anything",
+                self.samples,
+                design::SOBOL_MIN_SAMPLES
+            ));
+        }
+        Ok(())
+    }
+
     /// Unit-cube points of every run, in run order.
     pub fn points(&self) -> Vec<Vec<f64>> {
         let base: Vec<f64> = self.params.iter().map(|p| p.unit(p.base)).collect();
@@ -333,6 +359,20 @@ mod tests {
                 e.message
             );
         }
+        // --samples: at least 2, and at least SOBOL_MIN_SAMPLES base rows for Sobol'
+        assert!(spec(Method::Oat, 1, 2).check_samples().is_ok());
+        assert!(spec(Method::Morris, 1, 2).check_samples().is_ok());
+        for (m, s) in [
+            (Method::Oat, 1),
+            (Method::Sobol, 2),
+            (Method::Sobol, design::SOBOL_MIN_SAMPLES - 1),
+        ] {
+            let e = spec(m, 2, s).check_samples().unwrap_err();
+            assert_eq!(e.field.as_deref(), Some("--samples"), "{m:?} {s}");
+        }
+        assert!(spec(Method::Sobol, 2, design::SOBOL_MIN_SAMPLES)
+            .check_samples()
+            .is_ok());
         // an overflowing count is refused, not wrapped
         let e = spec(Method::Sobol, 3, usize::MAX).check_size().unwrap_err();
         assert_eq!(e.field.as_deref(), Some("--samples"));

@@ -6,6 +6,7 @@
 use super::{num, report, StudySpec};
 use crate::error::{Error, InputError};
 use crate::fit::data::build_params;
+use crate::fit::journal::fnv1a_128;
 use crate::fit::model::run_one;
 use crate::fit::paths;
 use crate::profile::PressureHistory;
@@ -30,6 +31,190 @@ pub struct Study {
     /// The pressure profile.
     pub profile: PressureHistory,
 }
+
+/// What a run's result depends on besides the design ([`StudySpec::fingerprint`]): the phantom
+/// and the profile, each as a 128-bit FNV-1a hash ([`crate::fit::journal::fnv1a_128`], the hash
+/// `fit`'s journal keys its simulations with) of its canonical text, and the program's version.
+/// A journal and the shards of a merge must agree on all of them.
+///
+/// - The phantom: the document as parsed (`toml::to_string` of the table, as `fit` hashes it):
+///   its comments, layout and number spelling (`4e-4` or `0.0004`) do not count, every value
+///   does, the grid step (`geometry.grid_step_m`) among them: `sensitivity` has no override
+///   of its own. The swept parameters are overwritten in every run, but their phantom values are
+///   the base values, part of the design anyway.
+/// - The profile: the pressure history as read and validated (breakpoint times, absolute
+///   pressures, the gas of each segment, water vapour, saturation; the `Debug` text, f64 in
+///   round-trip notation), so the same history in other units or another file format is the same
+///   profile; its label (the file's name) is left out, as no run reads it.
+/// - The version: another build of the solver may give other numbers (`fit`'s journal keys on it
+///   too).
+///
+/// The thread count is not part of it: a run's numbers do not depend on it.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct InputsId {
+    /// Hash of the phantom document (32 hexadecimal digits).
+    pub phantom: String,
+    /// Hash of the pressure history (32 hexadecimal digits).
+    pub profile: String,
+    /// The decophantom version that ran it.
+    pub version: String,
+}
+
+impl InputsId {
+    /// The identity of a study's inputs.
+    pub fn of(doc: &toml::Table, profile: &PressureHistory) -> InputsId {
+        let phantom = toml::to_string(doc).unwrap_or_else(|_| format!("{doc:?}"));
+        let history = PressureHistory {
+            label: String::new(),
+            ..profile.clone()
+        };
+        InputsId {
+            phantom: format!("{:032x}", fnv1a_128(phantom.as_bytes())),
+            profile: format!("{:032x}", fnv1a_128(format!("{history:?}").as_bytes())),
+            version: env!("CARGO_PKG_VERSION").to_string(),
+        }
+    }
+
+    /// Read back from design.toml's entries (`None` when one is missing).
+    fn from_table(t: &toml::Table) -> Option<InputsId> {
+        let get = |k: &str| t.get(k).and_then(|v| v.as_str()).map(str::to_string);
+        Some(InputsId {
+            phantom: get(PHANTOM_KEY)?,
+            profile: get(PROFILE_KEY)?,
+            version: get(VERSION_KEY)?,
+        })
+    }
+
+    /// design.toml's entries.
+    fn to_table(&self, t: &mut toml::Table) {
+        t.insert(PHANTOM_KEY.into(), self.phantom.clone().into());
+        t.insert(PROFILE_KEY.into(), self.profile.clone().into());
+        t.insert(VERSION_KEY.into(), self.version.clone().into());
+    }
+}
+
+/// design.toml's entry (and the journal header's field) of the phantom's hash.
+const PHANTOM_KEY: &str = "phantom_hash";
+/// … of the profile's hash.
+const PROFILE_KEY: &str = "profile_hash";
+/// … of the version.
+const VERSION_KEY: &str = "decophantom";
+
+/// Everything that fixes a study's runs: the design and the inputs.
+#[derive(Debug, Clone, PartialEq, Eq)]
+struct Identity {
+    design: String,
+    inputs: InputsId,
+}
+
+/// What differs between two studies' identities (`theirs` of a journal or a shard folder,
+/// `ours` of this run or the first folder), in words; empty when nothing does.
+fn differences(theirs: &Identity, ours: &Identity, there: &str, here: &str) -> Vec<String> {
+    let mut d = Vec::new();
+    if theirs.inputs.phantom != ours.inputs.phantom {
+        d.push(format!(
+            "the phantom (--phantom: the document as parsed; hash {} {there}, {} {here})",
+            theirs.inputs.phantom, ours.inputs.phantom
+        ));
+    }
+    if theirs.inputs.profile != ours.inputs.profile {
+        d.push(format!(
+            "the profile (--profile: the pressure history as read; hash {} {there}, {} {here})",
+            theirs.inputs.profile, ours.inputs.profile
+        ));
+    }
+    if theirs.design != ours.design {
+        d.push(format!(
+            "the design (--method, --samples, --seed, --param, --metric or a swept parameter's value in the phantom):\n  {there}: {}\n  {here}: {}",
+            theirs.design, ours.design
+        ));
+    }
+    if theirs.inputs.version != ours.inputs.version {
+        d.push(format!(
+            "the decophantom version ({} {there}, {} {here})",
+            theirs.inputs.version, ours.inputs.version
+        ));
+    }
+    d
+}
+
+/// The journal's first line: `# DESIGN phantom_hash=… profile_hash=… decophantom=… shard=I/N`.
+fn journal_header(id: &Identity, shard: Shard) -> String {
+    format!(
+        "# {} {PHANTOM_KEY}={} {PROFILE_KEY}={} {VERSION_KEY}={} shard={}/{}",
+        id.design,
+        id.inputs.phantom,
+        id.inputs.profile,
+        id.inputs.version,
+        shard.index,
+        shard.count
+    )
+}
+
+/// A journal header read back: the identity and the shard text; `None` for a header of
+/// another format (an older decophantom's, without the inputs' hashes).
+fn parse_journal_header(line: &str) -> Option<(Identity, String)> {
+    let body = line.strip_prefix("# ")?;
+    let mut it = body.rsplitn(5, ' ');
+    let shard = it.next()?.strip_prefix("shard=")?.to_string();
+    let version = it.next()?.strip_prefix(VERSION_KEY)?.strip_prefix('=')?;
+    let profile = it.next()?.strip_prefix(PROFILE_KEY)?.strip_prefix('=')?;
+    let phantom = it.next()?.strip_prefix(PHANTOM_KEY)?.strip_prefix('=')?;
+    let design = it.next()?.to_string();
+    Some((
+        Identity {
+            design,
+            inputs: InputsId {
+                phantom: phantom.to_string(),
+                profile: profile.to_string(),
+                version: version.to_string(),
+            },
+        },
+        shard,
+    ))
+}
+
+/// Refuse (exit 2, `--out`) a journal beside `out` whose first line is not `header`, naming the
+/// journal's folder and what differs: the phantom, the profile, the design, the version, the
+/// shard. Nothing is done without a journal; a matching one is left to [`Journal::previous`].
+fn check_journal(out: &Path, header: &str, id: &Identity, shard: Shard) -> Result<(), Error> {
+    let dir = journal_dir(out);
+    let Ok(text) = std::fs::read_to_string(dir.join(JOURNAL_FILES[0])) else {
+        return Ok(());
+    };
+    let head = text.lines().next().unwrap_or("");
+    if head == header {
+        return Ok(());
+    }
+    let what = match parse_journal_header(head) {
+        Some((theirs, their_shard)) => {
+            let mut d = differences(&theirs, id, "in the journal", "in this run");
+            let ours = format!("{}/{}", shard.index, shard.count);
+            if their_shard != ours {
+                d.push(format!(
+                    "the shard (--shard {their_shard} in the journal, {ours} in this run)"
+                ));
+            }
+            if d.is_empty() {
+                d.push(format!("its first line: {head}"));
+            }
+            format!("it differs in {}", d.join("; and in "))
+        }
+        None if head.is_empty() => "it has no header".to_string(),
+        None => format!(
+            "its first line is not a journal of this decophantom's (no hashes of the phantom and profile; an older version's?): {head}"
+        ),
+    };
+    Err(InputError::new(format!(
+        "'{}' holds the journal of a different study: {what}; resume with the same phantom, profile and settings, or delete that folder to start afresh",
+        dir.display()
+    ))
+    .field("--out")
+    .into())
+}
+
+/// The journal's files: the commit log (rows) and the courses.
+const JOURNAL_FILES: [&str; 2] = ["sensitivity.csv", "courses.csv"];
 
 /// The I-th of N slices of a design.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -112,6 +297,9 @@ pub struct Results {
     pub courses: Vec<(usize, Vec<(f64, f64)>)>,
     /// Runs skipped because the journal already held them.
     pub resumed: usize,
+    /// The phantom and profile the runs were made with (written to design.toml and checked by
+    /// [`merge`]); `None` for a study run in memory ([`run_all`]: `reproduce`'s figures).
+    pub inputs: Option<InputsId>,
 }
 
 impl Results {
@@ -299,13 +487,13 @@ pub fn run_study(
     validate(study)?;
     let values = spec.values();
     let range = shard.range(values.len());
-    let fp = format!(
-        "# {} shard={}/{}",
-        spec.fingerprint(),
-        shard.index,
-        shard.count
-    );
-    let names = ["sensitivity.csv", "courses.csv"];
+    let id = Identity {
+        design: spec.fingerprint(),
+        inputs: InputsId::of(&study.doc, &study.profile),
+    };
+    let fp = journal_header(&id, shard);
+    check_journal(out, &fp, &id, shard)?;
+    let names = JOURNAL_FILES;
     let mut done: Vec<Row> = Vec::new();
     let mut courses: Vec<(usize, Vec<(f64, f64)>)> = Vec::new();
     if let Some(texts) = Journal::previous(out, &fp, &names, "study")? {
@@ -358,6 +546,7 @@ pub fn run_study(
         rows: done,
         courses,
         resumed,
+        inputs: Some(id.inputs),
     };
     let set = outputs(&results, shard, command)?;
     set.commit(out)?;
@@ -393,6 +582,8 @@ pub fn run_all(study: &Study, progress: &(dyn Fn(usize, usize) + Sync)) -> Resul
         rows,
         courses,
         resumed: 0,
+        // reproduce's folders are figures, not shards to merge: their design.toml stays as it was
+        inputs: None,
     })
 }
 
@@ -415,6 +606,9 @@ pub fn outputs(res: &Results, shard: Shard, command: &str) -> Result<OutputSet, 
     );
     d.insert("runs".into(), (spec.values().len() as i64).into());
     d.insert("command".into(), command.to_string().into());
+    if let Some(i) = &res.inputs {
+        i.to_table(&mut d);
+    }
     set.add(
         "design.toml",
         toml::to_string(&d).map_err(|e| Error::Solver(format!("design.toml: {e}")))?,
@@ -450,12 +644,15 @@ fn check_out_not_inside(out: &Path, inputs: &[PathBuf]) -> Result<(), Error> {
 /// Merge shard folders (each with design.toml, sensitivity.csv, courses.csv) of one design
 /// into a whole study, and write it with its indices and report to `out`. `out` is checked
 /// before anything is read: it may not be, hold, or lie inside one of `dirs` (exit 2 naming
-/// `--out`, nothing written).
+/// `--out`, nothing written). Every folder must hold the first folder's design and have been
+/// run on the same inputs ([`InputsId`]: phantom, profile, version); a folder that differs, or
+/// that does not record its inputs, is refused (exit 2 naming it and what differs).
 pub fn merge(dirs: &[PathBuf], out: &Path, command: &str) -> Result<Results, Error> {
     let bad = |d: &Path, m: String| -> Error {
         InputError::new(m).in_file(d).field("design.toml").into()
     };
-    let mut spec: Option<(String, StudySpec)> = None;
+    // the first folder, its identity and design
+    let mut spec: Option<(&Path, Identity, StudySpec)> = None;
     let mut rows: Vec<Row> = Vec::new();
     let mut courses = Vec::new();
     if dirs.is_empty() {
@@ -483,15 +680,36 @@ pub fn merge(dirs: &[PathBuf], out: &Path, command: &str) -> Result<Results, Err
             .ok_or_else(|| bad(&dt, format!("cannot read the design '{fp}'")))?;
         // the design is built below: its size is checked first, as `sensitivity` does
         s.check_size().map_err(|e| bad(&dt, e.message))?;
-        if let Some((f0, _)) = &spec {
-            if *f0 != fp {
+        let recorded = InputsId::from_table(&t).ok_or_else(|| {
+            bad(
+                &dt,
+                format!(
+                    "no record of the phantom and profile '{}' was run on ({PHANTOM_KEY}, {PROFILE_KEY}, {VERSION_KEY}: written by an older decophantom?), so it cannot be checked against the other shards: run that shard again",
+                    d.display()
+                ),
+            )
+        })?;
+        let id = Identity {
+            design: fp,
+            inputs: recorded,
+        };
+        if let Some((d0, id0, _)) = &spec {
+            let there = format!("in '{}'", d.display());
+            let here = format!("in '{}'", d0.display());
+            let diff = differences(&id, id0, &there, &here);
+            if !diff.is_empty() {
                 return Err(bad(
                     &dt,
-                    format!("a different design from the first folder's:\n  {fp}\n  {f0}"),
+                    format!(
+                        "'{}' is not a shard of the same study as the first folder '{}': it differs in {}; merge only the shards of one study (the same phantom, profile and settings)",
+                        d.display(),
+                        d0.display(),
+                        diff.join("; and in ")
+                    ),
                 ));
             }
         }
-        let s = &spec.get_or_insert((fp, s)).1;
+        let s = &spec.get_or_insert((d.as_path(), id, s)).2;
         let csv = d.join("sensitivity.csv");
         rows.extend(parse_rows(
             &std::fs::read_to_string(&csv).map_err(Error::io_at(&csv))?,
@@ -501,7 +719,7 @@ pub fn merge(dirs: &[PathBuf], out: &Path, command: &str) -> Result<Results, Err
             &std::fs::read_to_string(d.join("courses.csv")).unwrap_or_default(),
         ));
     }
-    let Some((_, spec)) = spec else {
+    let Some((_, id, spec)) = spec else {
         unreachable!("dirs is not empty")
     };
     rows.sort_by_key(|r| r.index);
@@ -539,7 +757,114 @@ pub fn merge(dirs: &[PathBuf], out: &Path, command: &str) -> Result<Results, Err
         rows,
         courses,
         resumed: 0,
+        inputs: Some(id.inputs),
     };
     outputs(&res, Shard::WHOLE, command)?.commit_with_inputs(out, &inputs)?;
     Ok(res)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::gas::GasMix;
+
+    const PHANTOM: &str = "[geometry]\nshape = \"box\"\nsize_m = [3.2e-3, 3.2e-3, 3.2e-3]\ngrid_step_m = 400e-6\n\n[material]\nsurface_tension = 0.07\n";
+
+    fn history(label: &str, start_pa: f64) -> PressureHistory {
+        PressureHistory::new(
+            label,
+            vec![0.0, 10.0, 60.0],
+            vec![start_pa, 101_325.0, 101_325.0],
+            vec![GasMix::AIR; 2],
+            0.0,
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn sweep_inputs_id_changes_with_the_phantom_and_profile_not_their_spelling_or_threads() {
+        let doc: toml::Table = PHANTOM.parse().unwrap();
+        let prof = history("prof", 2.4e5);
+        let id = InputsId::of(&doc, &prof);
+        assert_eq!(id.phantom.len(), 32);
+        assert_eq!(id.version, env!("CARGO_PKG_VERSION"));
+        // the phantom: another value changes it (the grid step too), another spelling of the
+        // same document does not
+        let other: toml::Table = PHANTOM
+            .replace("surface_tension = 0.07", "surface_tension = 0.05")
+            .parse()
+            .unwrap();
+        let finer: toml::Table = PHANTOM.replace("400e-6", "200e-6").parse().unwrap();
+        let respelled: toml::Table = format!(
+            "# the same phantom, another layout\n{}",
+            PHANTOM.replace("400e-6", "0.0004").replace(" = ", "=")
+        )
+        .parse()
+        .unwrap();
+        assert_ne!(InputsId::of(&other, &prof).phantom, id.phantom);
+        assert_ne!(InputsId::of(&finer, &prof).phantom, id.phantom);
+        assert_eq!(InputsId::of(&respelled, &prof), id);
+        // the profile: another pressure or gas changes it, its label (the file's name) does not
+        assert_ne!(
+            InputsId::of(&doc, &history("prof", 5.1e5)).profile,
+            id.profile
+        );
+        let mut nitrox = prof.clone();
+        nitrox.gas = vec![GasMix::new(0.32, 0.0).unwrap(); 2];
+        assert_ne!(InputsId::of(&doc, &nitrox).profile, id.profile);
+        assert_eq!(InputsId::of(&doc, &history("prof60", 2.4e5)), id);
+        // nor the thread count the study runs on
+        for threads in [1, 2] {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            assert_eq!(pool.install(|| InputsId::of(&doc, &prof)), id, "{threads}");
+        }
+    }
+
+    #[test]
+    fn sweep_journal_header_reads_back_and_differences_name_what_differs() {
+        let doc: toml::Table = PHANTOM.parse().unwrap();
+        let id = Identity {
+            design: "method=oat samples=3 seed=1 params=a.x=0..1 metrics=r_max base=0.5".into(),
+            inputs: InputsId::of(&doc, &history("p", 2.4e5)),
+        };
+        let shard = Shard { index: 1, count: 3 };
+        let h = journal_header(&id, shard);
+        assert!(h.starts_with("# method=oat samples=3 "), "{h}");
+        let (back, s) = parse_journal_header(&h).unwrap();
+        assert_eq!((back, s.as_str()), (id.clone(), "1/3"));
+        // an older decophantom's header (no hashes) is not read as one of these
+        assert!(parse_journal_header(&format!("# {} shard=0/1", id.design)).is_none());
+        assert!(differences(&id, &id, "a", "b").is_empty());
+        let other = Identity {
+            inputs: InputsId::of(&doc, &history("p", 5.1e5)),
+            ..id.clone()
+        };
+        let d = differences(&other, &id, "in 'x'", "in 'y'");
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert!(
+            d[0].starts_with("the profile (--profile")
+                && d[0].contains(&format!(
+                    "{} in 'x', {} in 'y'",
+                    other.inputs.profile, id.inputs.profile
+                )),
+            "{d:?}"
+        );
+        let seed = Identity {
+            design: id.design.replace("seed=1", "seed=2"),
+            ..id.clone()
+        };
+        let d = differences(&seed, &id, "in 'x'", "in 'y'");
+        assert_eq!(d.len(), 1, "{d:?}");
+        assert!(
+            d[0].contains("in 'x': method=oat samples=3 seed=2"),
+            "{d:?}"
+        );
+        assert!(
+            d[0].contains("in 'y': method=oat samples=3 seed=1"),
+            "{d:?}"
+        );
+    }
 }

@@ -83,7 +83,7 @@ const SOBOL: [&str; 14] = [
     "--method",
     "sobol",
     "--samples",
-    "8",
+    "16",
     "--seed",
     "3",
 ];
@@ -98,7 +98,7 @@ fn sweep_sharded_three_ways_and_merged_gives_byte_identical_indices() {
     a.extend(["--out", w]);
     ok(&sensitivity(&ph, &pr, &a));
     eprintln!(
-        "sobol, 8 × (2 + 2) = 32 runs: {:.2} s",
+        "sobol, 16 × (2 + 2) = 64 runs: {:.2} s",
         t.elapsed().as_secs_f64()
     );
     let mut shards = Vec::new();
@@ -132,9 +132,9 @@ fn sweep_sharded_three_ways_and_merged_gives_byte_identical_indices() {
     assert_eq!(idx.lines().count(), 1 + 2 * 2);
     assert!(idx
         .starts_with("metric,parameter,s1,s1_lo95,s1_hi95,st,st_lo95,st_hi95,n_used,n_dropped\n"));
-    // 32 runs, each row index once
+    // 64 runs, each row index once
     let rows = std::fs::read_to_string(whole.join("sensitivity.csv")).unwrap();
-    assert_eq!(rows.lines().count(), 1 + 32);
+    assert_eq!(rows.lines().count(), 1 + 64);
     // merging only two of the three shards is refused, naming the missing runs
     let o = Command::new(bin())
         .arg("merge")
@@ -145,6 +145,33 @@ fn sweep_sharded_three_ways_and_merged_gives_byte_identical_indices() {
         .unwrap();
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("missing runs"));
+}
+
+/// The journal a study killed after its first `runs` runs would leave at `partial`, from the
+/// folder `done` of the same study run whole: the header (the design and the inputs' hashes
+/// from design.toml, the shard), those runs' rows and half a line cut by the kill.
+fn killed_journal(done: &Path, partial: &Path, runs: usize) {
+    let t: toml::Table = std::fs::read_to_string(done.join("design.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let get = |k: &str| t.get(k).and_then(|v| v.as_str()).unwrap().to_string();
+    let header = format!(
+        "# {} phantom_hash={} profile_hash={} decophantom={} shard={}",
+        get("design"),
+        get("phantom_hash"),
+        get("profile_hash"),
+        get("decophantom"),
+        get("shard")
+    );
+    let rows = std::fs::read_to_string(done.join("sensitivity.csv")).unwrap();
+    let kept: Vec<&str> = rows.lines().take(1 + runs).collect();
+    std::fs::create_dir_all(partial).unwrap();
+    std::fs::write(
+        partial.join("sensitivity.csv"),
+        format!("{header}\n{}\n{runs},0.0", kept.join("\n")),
+    )
+    .unwrap();
 }
 
 #[test]
@@ -165,24 +192,9 @@ fn sweep_resumes_from_its_journal_and_refuses_another_studys() {
     a.extend(["--out", first.to_str().unwrap()]);
     ok(&sensitivity(&ph, &pr, &a));
     // a journal as a killed run leaves it: the first 4 runs and half a line
-    let design = std::fs::read_to_string(first.join("design.toml")).unwrap();
-    let fp = design
-        .parse::<toml::Table>()
-        .unwrap()
-        .get("design")
-        .and_then(|v| v.as_str())
-        .unwrap()
-        .to_string();
-    let rows = std::fs::read_to_string(first.join("sensitivity.csv")).unwrap();
     let second = d.join("second");
     let j = d.join("second.partial");
-    std::fs::create_dir_all(&j).unwrap();
-    let kept: Vec<&str> = rows.lines().take(5).collect();
-    std::fs::write(
-        j.join("sensitivity.csv"),
-        format!("# {fp} shard=0/1\n{}\n5,0.0", kept.join("\n")),
-    )
-    .unwrap();
+    killed_journal(&first, &j, 4);
     let mut a = args.to_vec();
     a.extend(["--out", second.to_str().unwrap()]);
     let out = ok(&sensitivity(&ph, &pr, &a));
@@ -330,7 +342,7 @@ fn sweep_a_metric_undefined_in_every_run_keeps_the_other_metrics_results() {
     let pr = d.join("profile-ends.toml");
     std::fs::write(&pr, PROFILE_ENDS_AT_SURFACE).unwrap();
     let t = std::time::Instant::now();
-    for (method, samples, per_param) in [("sobol", "4", 4), ("morris", "3", 3)] {
+    for (method, samples, per_param) in [("sobol", "16", 16), ("morris", "3", 3)] {
         let out = d.join(method);
         ok(&sensitivity(
             &ph,
@@ -381,7 +393,7 @@ fn sweep_a_metric_undefined_in_every_run_keeps_the_other_metrics_results() {
         assert!(out.join("report.html").exists() && out.join("sensitivity.csv").exists());
     }
     eprintln!(
-        "sobol 16 runs + morris 9 runs: {:.2} s",
+        "sobol 64 runs + morris 9 runs: {:.2} s",
         t.elapsed().as_secs_f64()
     );
 }
@@ -391,7 +403,35 @@ fn sweep_refuses_bad_input_with_exit_2_naming_the_field() {
     let (ph, pr, d) = lab("sweep-bad");
     let out = d.join("o");
     let o = out.to_str().unwrap();
-    let cases: [(&[&str], &str); 6] = [
+    let cases: [(&[&str], &str); 8] = [
+        // the same metric twice (before: its column and indices twice)
+        (
+            &[
+                "--param",
+                "gases.n2.ostwald=0.01..0.03",
+                "--metric",
+                "r_max",
+                "--metric",
+                "r_max",
+            ],
+            "--metric",
+        ),
+        // Sobol' below its floor of 16 base rows (before: N = 2 printed S1 = 1.27 [1.27, 2.06])
+        (
+            &[
+                "--param",
+                "gases.n2.ostwald=0.01..0.03",
+                "--param",
+                "gases.n2.diffusivity=1e-10..5e-9",
+                "--metric",
+                "r_max",
+                "--method",
+                "sobol",
+                "--samples",
+                "15",
+            ],
+            "--samples",
+        ),
         (
             &[
                 "--param",
@@ -681,4 +721,178 @@ fn sweep_merge_refuses_an_output_that_is_holds_or_lies_in_an_input() {
     // a folder beside them is fine
     ok(&merge(&shards, &d.join("merged")));
     assert!(d.join("merged/indices.csv").exists());
+}
+
+/// A copy of the lab's phantom or profile with one text replaced, at `name` in `d`.
+fn variant(d: &Path, name: &str, text: &str, from: &str, to: &str) -> PathBuf {
+    assert!(text.contains(from), "{from}");
+    let p = d.join(name);
+    std::fs::write(&p, text.replace(from, to)).unwrap();
+    p
+}
+
+#[test]
+fn sweep_refuses_a_journal_of_other_inputs_naming_its_folder_and_what_differs() {
+    // before: a journal made with another profile or phantom was resumed (exit 0, "N resumed
+    // from the journal"), mixing the two studies' runs; its header held only the design
+    let (ph, pr, d) = lab("sweep-journal-inputs");
+    let pr20 = variant(&d, "profile20.toml", PROFILE, "[0, 60]", "[0, 20]");
+    let ph_st = variant(
+        &d,
+        "phantom-st.toml",
+        PHANTOM,
+        "surface_tension = 0.07",
+        "surface_tension = 0.05",
+    );
+    // the same phantom in another layout: comments, number spelling
+    let ph_same = variant(
+        &d,
+        "phantom-respelled.toml",
+        &format!("# the same phantom, respelled\n{PHANTOM}"),
+        "grid_step_m = 400e-6",
+        "grid_step_m = 0.0004 # 400 µm",
+    );
+    let args = [
+        "--param",
+        "gases.n2.ostwald=0.01..0.03",
+        "--metric",
+        "r_max",
+        "--samples",
+        "3",
+    ];
+    let first = d.join("first");
+    let mut a = args.to_vec();
+    a.extend(["--out", first.to_str().unwrap()]);
+    ok(&sensitivity(&ph, &pr, &a));
+    let out = d.join("again");
+    let j = d.join("again.partial");
+    let mut a = args.to_vec();
+    a.extend(["--out", out.to_str().unwrap()]);
+    for (phantom, profile, differs, same) in [
+        (&ph, &pr20, "the profile (--profile", "the phantom"),
+        (&ph_st, &pr, "the phantom (--phantom", "the profile"),
+    ] {
+        killed_journal(&first, &j, 2);
+        let before = snapshot(&j);
+        let o = sensitivity(phantom, profile, &a);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(err.contains("field '--out'"), "{err}");
+        assert!(
+            err.contains(&format!(
+                "'{}' holds the journal of a different study",
+                j.display()
+            )),
+            "{err}"
+        );
+        assert!(err.contains(differs) && !err.contains(same), "{err}");
+        assert!(!err.contains("the design"), "{err}");
+        assert!(before == snapshot(&j), "the journal was changed");
+        assert!(!out.exists());
+        std::fs::remove_dir_all(&j).unwrap();
+    }
+    // identical inputs, the phantom only respelled: resumed, and the same outputs
+    killed_journal(&first, &j, 2);
+    let s = ok(&sensitivity(&ph_same, &pr, &a));
+    assert!(s.contains("4 runs (2 resumed"), "{s}");
+    for f in ["sensitivity.csv", "indices.csv"] {
+        assert_eq!(
+            std::fs::read(first.join(f)).unwrap(),
+            std::fs::read(out.join(f)).unwrap(),
+            "{f}"
+        );
+    }
+    assert!(!j.exists());
+}
+
+#[test]
+fn sweep_merge_refuses_shards_of_other_inputs_naming_the_folder_and_what_differs() {
+    // before: shards run on another profile or phantom merged with exit 0 into wrong indices
+    let (ph, pr, d) = lab("sweep-merge-inputs");
+    let pr20 = variant(&d, "profile20.toml", PROFILE, "[0, 60]", "[0, 20]");
+    let ph_st = variant(
+        &d,
+        "phantom-st.toml",
+        PHANTOM,
+        "surface_tension = 0.07",
+        "surface_tension = 0.05",
+    );
+    let base = [
+        "--param",
+        "gases.n2.ostwald=0.01..0.03",
+        "--metric",
+        "r_max",
+        "--samples",
+        "3",
+    ];
+    let shard = |name: &str, phantom: &Path, profile: &Path, i: usize, extra: &[&str]| {
+        let s = d.join(name);
+        let spec = format!("{i}/2");
+        let mut a = base.to_vec();
+        a.extend(extra);
+        a.extend(["--shard", &spec, "--out", s.to_str().unwrap()]);
+        ok(&sensitivity(phantom, profile, &a));
+        s
+    };
+    let sh0 = shard("sh0", &ph, &pr, 0, &[]);
+    let sh1 = shard("sh1", &ph, &pr, 1, &[]);
+    let sh1_profile = shard("sh1-profile", &ph, &pr20, 1, &[]);
+    let sh1_phantom = shard("sh1-phantom", &ph_st, &pr, 1, &[]);
+    let sh1_seed = shard(
+        "sh1-seed",
+        &ph,
+        &pr,
+        1,
+        &["--method", "morris", "--seed", "2"],
+    );
+    for (other, differs) in [
+        (&sh1_profile, "it differs in the profile (--profile"),
+        (&sh1_phantom, "it differs in the phantom (--phantom"),
+    ] {
+        let o = merge(&[sh0.clone(), other.clone()], &d.join("m"));
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{err}");
+        assert!(
+            err.contains(&format!(
+                "'{}' is not a shard of the same study as the first folder '{}'",
+                other.display(),
+                sh0.display()
+            )),
+            "{err}"
+        );
+        assert!(err.contains(differs), "{err}");
+        assert!(!d.join("m").exists());
+    }
+    // another design: each folder's design is named with its folder
+    let o = merge(&[sh0.clone(), sh1_seed.clone()], &d.join("m"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&format!("in '{}': method=morris", sh1_seed.display()))
+            && err.contains(&format!("in '{}': method=oat", sh0.display())),
+        "{err}"
+    );
+    // a shard folder that does not record its inputs (an older decophantom's) is refused
+    let old = d.join("sh1-old");
+    std::fs::create_dir_all(&old).unwrap();
+    for f in ["sensitivity.csv", "courses.csv"] {
+        std::fs::copy(sh1.join(f), old.join(f)).unwrap();
+    }
+    let t = std::fs::read_to_string(sh1.join("design.toml")).unwrap();
+    let t: String = t
+        .lines()
+        .filter(|l| !l.starts_with("phantom_hash") && !l.starts_with("profile_hash"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    std::fs::write(old.join("design.toml"), t).unwrap();
+    let o = merge(&[sh0.clone(), old.clone()], &d.join("m"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("no record of the phantom and profile"),
+        "{err}"
+    );
+    // the shards of one study still merge
+    ok(&merge(&[sh0, sh1], &d.join("m")));
+    assert!(d.join("m/indices.csv").exists());
 }
