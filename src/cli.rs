@@ -20,10 +20,41 @@ fn quiet() -> bool {
     QUIET.load(std::sync::atomic::Ordering::Relaxed)
 }
 
+/// Write `text` to stdout. A reader that has gone away (`decophantom … | head -1`) is not an
+/// error of the run: the work goes on and its output files are written, only the printing
+/// stops (`print!` would panic on the broken pipe). Any other write error is said once on
+/// stderr.
+fn emit(text: &str) {
+    use std::io::Write;
+    static SAID: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+    let mut out = std::io::stdout().lock();
+    if let Err(e) = out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        if e.kind() != std::io::ErrorKind::BrokenPipe
+            && !SAID.swap(true, std::sync::atomic::Ordering::Relaxed)
+        {
+            eprintln!("warning: could not write to stdout: {e}");
+        }
+    }
+}
+
+/// [`emit`] with `format!` arguments.
+macro_rules! out {
+    ($($t:tt)*) => { emit(&format!($($t)*)) };
+}
+
+/// [`emit`] with `format!` arguments and a newline.
+macro_rules! outln {
+    ($($t:tt)*) => {{
+        let mut line = format!($($t)*);
+        line.push('\n');
+        emit(&line)
+    }};
+}
+
 /// Print a "wrote ..." line unless --quiet.
 fn wrote(path: &std::path::Path) {
     if !quiet() {
-        println!("wrote {}", path.display());
+        outln!("wrote {}", path.display());
     }
 }
 
@@ -502,12 +533,16 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
         Command::Completions(a) => {
             use clap::CommandFactory;
             let mut cmd = Cli::command();
-            clap_complete::generate(a.shell, &mut cmd, "decophantom", &mut std::io::stdout());
+            let mut text = Vec::new();
+            clap_complete::generate(a.shell, &mut cmd, "decophantom", &mut text);
+            emit(&String::from_utf8_lossy(&text));
             Ok(0)
         }
         Command::Man => {
             use clap::CommandFactory;
-            clap_mangen::Man::new(Cli::command()).render(&mut std::io::stdout())?;
+            let mut text = Vec::new();
+            clap_mangen::Man::new(Cli::command()).render(&mut text)?;
+            emit(&String::from_utf8_lossy(&text));
             Ok(0)
         }
         Command::Plan(a) => {
@@ -544,9 +579,9 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             let algorithm = req.algorithm.display().to_string();
             let outcome = decophantom::app::plan::run(&req)?;
             if a.json {
-                print!("{}", decophantom::app::json::plan(&outcome, &algorithm));
+                out!("{}", decophantom::app::json::plan(&outcome, &algorithm));
             } else {
-                print!("{}", outcome.text);
+                out!("{}", outcome.text);
             }
             for w in &outcome.warnings {
                 eprintln!("warning: {w}");
@@ -595,7 +630,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             let run = decophantom::app::simulate::run(&req, &mut |t, e| bar.update(t, e));
             bar.finish();
             let run = run?;
-            print!("{}", decophantom::run::text::describe(&run));
+            out!("{}", decophantom::run::text::describe(&run));
             wrote(&a.out);
             if let Some(c) = run.checkpoints.as_ref().filter(|c| c.written > 0) {
                 if matches!(
@@ -629,7 +664,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 r0: a.r0,
             };
             let rows = decophantom::phantom::elasticity_compare::compare(&req)?;
-            print!(
+            out!(
                 "{}",
                 decophantom::phantom::elasticity_compare::to_csv(&rows)
             );
@@ -639,7 +674,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             let mut bar = Progress::runs();
             let text = decophantom::app::demo::run(&a.out, &mut |t, e| bar.update(t, e));
             bar.finish();
-            print!("{}", text?);
+            out!("{}", text?);
             Ok(0)
         }
         Command::Check(a) => {
@@ -659,9 +694,9 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             bar.finish();
             let outcome = outcome?;
             if a.json {
-                print!("{}", decophantom::app::json::check(&outcome.evaluation));
+                out!("{}", decophantom::app::json::check(&outcome.evaluation));
             } else {
-                print!("{}", outcome.text);
+                out!("{}", outcome.text);
                 if let Some(out) = &a.out {
                     wrote(out);
                 }
@@ -692,11 +727,11 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             bar.finish();
             let ev = ev?;
             if a.json {
-                print!("{}", decophantom::app::json::evaluate(&ev));
+                out!("{}", decophantom::app::json::evaluate(&ev));
             } else {
-                print!("{}", decophantom::evaluate::tables::summary_text(&ev));
+                out!("{}", decophantom::evaluate::tables::summary_text(&ev));
                 if ev.resumed > 0 {
-                    println!(
+                    outln!(
                         "{} of {} runs read back from the journal of an unfinished evaluation",
                         ev.resumed,
                         ev.runs.len()
@@ -715,8 +750,8 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 command: command_line(),
             };
             let f = decophantom::app::fit::run(&req)?;
-            print!("{}", decophantom::app::fit::summary_text(&f));
-            println!("wrote {}", a.out.display());
+            out!("{}", decophantom::app::fit::summary_text(&f));
+            outln!("wrote {}", a.out.display());
             Ok(0)
         }
         Command::Synth(a) => {
@@ -729,7 +764,7 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
                 out: a.out.clone(),
             };
             let rows = decophantom::app::synth::run(&req)?;
-            println!("wrote {} ({rows} rows)", a.out.display());
+            outln!("wrote {} ({rows} rows)", a.out.display());
             Ok(0)
         }
         Command::Discover(a) => {
@@ -754,8 +789,8 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             if let Ok(b) = bar.lock() {
                 b.finish();
             }
-            print!("{}", decophantom::app::discover::summary_text(&d?));
-            println!("wrote {}", a.out.display());
+            out!("{}", decophantom::app::discover::summary_text(&d?));
+            outln!("wrote {}", a.out.display());
             Ok(0)
         }
         Command::Sensitivity(a) => {
@@ -780,8 +815,8 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             if let Ok(b) = bar.lock() {
                 b.finish();
             }
-            print!("{}", decophantom::app::sensitivity::summary_text(&r?));
-            println!("wrote {}", a.out.display());
+            out!("{}", decophantom::app::sensitivity::summary_text(&r?));
+            outln!("wrote {}", a.out.display());
             Ok(0)
         }
         Command::Reproduce(a) => {
@@ -808,14 +843,14 @@ pub fn run(cli: Cli) -> anyhow::Result<i32> {
             if let Ok(b) = bar.lock() {
                 b.finish();
             }
-            print!("{}", decophantom::app::reproduce::summary_text(&r?));
+            out!("{}", decophantom::app::reproduce::summary_text(&r?));
             wrote(&a.out);
             Ok(0)
         }
         Command::Merge(a) => {
             let r = decophantom::app::sensitivity::run_merge(&a.dirs, &a.out, &command_line())?;
-            print!("{}", decophantom::app::sensitivity::summary_text(&r));
-            println!("wrote {}", a.out.display());
+            out!("{}", decophantom::app::sensitivity::summary_text(&r));
+            outln!("wrote {}", a.out.display());
             Ok(0)
         }
     }

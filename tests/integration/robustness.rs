@@ -105,3 +105,38 @@ proptest! {
         let _ = decophantom::profile::divelog::parse(&xml, Path::new("d.xml"));
     }
 }
+
+/// A reader that has gone away (`decophantom … | head -1`) is not an error: the command does
+/// its work and exits 0 without a panic (Rust's `print!` panics on a broken pipe; the man page
+/// went to exit 3 on "Broken pipe").
+#[test]
+fn a_closed_stdout_is_not_a_panic() {
+    use std::process::{Command, Stdio};
+    let plan = [
+        "plan",
+        "--algorithm",
+        "algorithms/zhl16b-gf30-85.toml",
+        "--depth",
+        "45",
+        "--time",
+        "25",
+    ];
+    for args in [&["man"][..], &["completions", "bash"][..], &plan[..]] {
+        let mut child = Command::new(crate::common::bin())
+            .args(args)
+            .current_dir(crate::common::root())
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // close the reading end before the command writes
+        drop(child.stdout.take());
+        let o = child.wait_with_output().unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(0), "{args:?}: {err}");
+        assert!(
+            !err.contains("panicked") && !err.contains("Broken pipe"),
+            "{args:?}: {err}"
+        );
+    }
+}
