@@ -4,9 +4,12 @@
 //! and set against the simulated radius, time, dP/dt, the distance to the nearest open face and
 //! to the nearest other bubble; a runs test per bubble looks for serial correlation. Each
 //! grouping is a test (one-sample t-test of the mean residual; Pearson correlation's t-test; the
-//! runs test), and the signatures that hold at a Holm-adjusted p < 0.01 over the whole family of
-//! tests (phases, covariates, every bubble's runs test; the per-cycle means only word them) are
-//! put in words, strongest first.
+//! runs test, or the sign test where every residual of a bubble has one sign), and the signatures
+//! that hold at a Holm-adjusted p < 0.01 over the whole family of tests (each phase kind, each
+//! covariate tested, every bubble's runs test) are put in words, strongest first. The per-cycle
+//! means are outside the family: descriptive, unadjusted, used only to word a phase's signature
+//! ("on every decompression"). A covariate not defined at three or more observations, or
+//! constant over the data, is dropped (not tested, not in the family) and named with the reason.
 //!
 //! The radius covariate is the simulated radius, not the measured one: the measurement's noise
 //! is in both the measured radius and the residual, so against the measured radius even the true
@@ -16,7 +19,9 @@
 //! detects) makes the t-tests' p-values too small.
 
 use crate::fit::data::{Experiments, Measurements};
-use crate::fit::stats::{correlation, holm, mean_test, runs_test, RunsTest};
+use crate::fit::stats::{
+    correlation, holm, is_constant, mean_test, runs_test, RunsMethod, RunsTest,
+};
 use crate::phantom::grid::Grid;
 use crate::phantom::sim::Frame;
 
@@ -55,6 +60,9 @@ pub struct GroupMean {
     pub se: f64,
     /// Two-sided p-value of mean = 0.
     pub p_value: f64,
+    /// Holm-adjusted p-value over the diagnostics' family; `None` for a row outside the family
+    /// (the per-cycle means: descriptive only).
+    pub holm_p: Option<f64>,
 }
 
 /// Correlation of the residuals with a covariate.
@@ -62,10 +70,23 @@ pub struct GroupMean {
 pub struct Trend {
     /// Covariate name.
     pub covariate: &'static str,
+    /// Observations where the covariate is defined (those correlated).
+    pub n: usize,
     /// Pearson r.
     pub r: f64,
     /// Two-sided p-value.
     pub p_value: f64,
+    /// Holm-adjusted p-value over the diagnostics' family.
+    pub holm_p: f64,
+}
+
+/// A covariate left out of the tests, with the reason.
+#[derive(Debug, Clone, PartialEq)]
+pub struct DroppedCovariate {
+    /// Covariate name.
+    pub covariate: &'static str,
+    /// Why it was not tested, e.g. "constant over the data".
+    pub reason: String,
 }
 
 /// The runs test of one bubble.
@@ -75,8 +96,10 @@ pub struct BubbleRuns {
     pub experiment: String,
     /// Bubble index.
     pub bubble: usize,
-    /// The test.
+    /// The test (the sign test in its place when every residual has one sign).
     pub test: RunsTest,
+    /// Holm-adjusted p-value over the diagnostics' family.
+    pub holm_p: f64,
 }
 
 /// Residual diagnostics of one fit.
@@ -86,14 +109,17 @@ pub struct Diagnostics {
     pub phases: Vec<GroupMean>,
     /// By phase kind and cycle (a cycle starts at each compression).
     pub cycles: Vec<GroupMean>,
-    /// Against covariates.
+    /// Against covariates (those tested).
     pub trends: Vec<Trend>,
+    /// Covariates not tested, with the reason.
+    pub dropped: Vec<DroppedCovariate>,
     /// Runs test per bubble.
     pub runs: Vec<BubbleRuns>,
     /// The signatures in words, strongest first: the tests at a Holm-adjusted p < 0.01 over
     /// the `family` tests.
     pub signatures: Vec<String>,
-    /// How many tests the Holm adjustment counts: phases, covariates and runs tests.
+    /// How many tests the Holm adjustment counts: phases, covariates tested and runs tests
+    /// (`phases.len() + trends.len() + runs.len()`; the per-cycle means are not in it).
     pub family: usize,
 }
 
@@ -213,6 +239,7 @@ pub fn diagnose(
             experiment: s.experiment.clone(),
             bubble: s.bubble,
             test: runs_test(&own),
+            holm_p: f64::NAN,
         });
     }
     let group = |label: String, v: &[f64]| {
@@ -223,9 +250,10 @@ pub fn diagnose(
             mean,
             se,
             p_value: p,
+            holm_p: None,
         }
     };
-    let phases: Vec<GroupMean> = by_phase
+    let mut phases: Vec<GroupMean> = by_phase
         .iter()
         .map(|(ph, v)| group(ph.name().to_string(), v))
         .collect();
@@ -235,12 +263,22 @@ pub fn diagnose(
         .map(|((c, ph), v)| group(format!("{}, cycle {c}", ph.name()), v))
         .collect();
     let mut trends = Vec::new();
-    for (name, x) in [
-        ("simulated radius", &rad),
-        ("time", &time),
-        ("dP/dt", &rate),
-        ("distance to the nearest open face", &face),
-        ("distance to the nearest bubble", &near),
+    let mut dropped = Vec::new();
+    // the covariates, each with what an infinite value of it means (a NaN: not known)
+    for (name, x, infinite) in [
+        ("simulated radius", &rad, ""),
+        ("time", &time, ""),
+        ("dP/dt", &rate, ""),
+        (
+            "distance to the nearest open face",
+            &face,
+            "the phantom has no open face",
+        ),
+        (
+            "distance to the nearest bubble",
+            &near,
+            "the experiment has no other bubble",
+        ),
     ] {
         let pairs: Vec<(f64, f64)> = x
             .iter()
@@ -253,20 +291,91 @@ pub fn diagnose(
         if r.is_finite() {
             trends.push(Trend {
                 covariate: name,
+                n: xs.len(),
                 r,
                 p_value: p,
+                holm_p: f64::NAN,
+            });
+        } else {
+            dropped.push(DroppedCovariate {
+                covariate: name,
+                reason: drop_reason(x, &xs, &ys, infinite),
             });
         }
     }
-    let family = phases.len() + trends.len() + runs.len();
-    let signatures = words(&phases, &cycles, &trends, &runs);
+    // Holm over the family, in the order phases, covariates, runs tests
+    let family_p: Vec<f64> = phases
+        .iter()
+        .map(|g| g.p_value)
+        .chain(trends.iter().map(|t| t.p_value))
+        .chain(runs.iter().map(|r| r.test.p_value))
+        .collect();
+    let family = family_p.len();
+    let adjusted = holm(&family_p);
+    let (adj_phases, rest) = adjusted.split_at(phases.len());
+    let (adj_trends, adj_runs) = rest.split_at(trends.len());
+    for (g, q) in phases.iter_mut().zip(adj_phases) {
+        g.holm_p = Some(*q);
+    }
+    for (t, q) in trends.iter_mut().zip(adj_trends) {
+        t.holm_p = *q;
+    }
+    for (b, q) in runs.iter_mut().zip(adj_runs) {
+        b.holm_p = *q;
+    }
+    let signatures = words(&phases, &cycles, &trends, &runs, family);
     Diagnostics {
         phases,
         cycles,
         trends,
+        dropped,
         runs,
         signatures,
         family,
+    }
+}
+
+/// Why a covariate with values `all` (one per observation) gave no correlation: `xs`, `ys` are
+/// the pairs where it is finite, `infinite` what an infinite value of it means.
+fn drop_reason(all: &[f64], xs: &[f64], ys: &[f64], infinite: &str) -> String {
+    let inf = all.iter().filter(|v| v.is_infinite()).count();
+    let nan = all.iter().filter(|v| v.is_nan()).count();
+    let mut why = Vec::new();
+    if inf > 0 && !infinite.is_empty() {
+        why.push(format!("{infinite} ({inf} observations)"));
+    } else if inf > 0 {
+        why.push(format!("not finite at {inf} observations"));
+    }
+    if nan > 0 {
+        why.push(format!(
+            "not known at {nan} observations (no bubble positions)"
+        ));
+    }
+    let causes = if why.is_empty() {
+        String::new()
+    } else {
+        format!(": {}", why.join("; "))
+    };
+    if xs.is_empty() {
+        format!("not defined at any observation{causes}")
+    } else if xs.len() < 3 {
+        format!(
+            "defined at only {} observations, a correlation needs 3{causes}",
+            xs.len()
+        )
+    } else if is_constant(xs) {
+        if xs.len() == all.len() {
+            "constant over the data".to_string()
+        } else {
+            format!(
+                "constant over the {} observations where it is defined{causes}",
+                xs.len()
+            )
+        }
+    } else if is_constant(ys) {
+        "the residuals are constant".to_string()
+    } else {
+        "the correlation is not a finite number".to_string()
     }
 }
 
@@ -280,18 +389,8 @@ fn words(
     cycles: &[GroupMean],
     trends: &[Trend],
     runs: &[BubbleRuns],
+    m: usize,
 ) -> Vec<String> {
-    // Holm over the family, in the order phases, covariates, runs tests
-    let family: Vec<f64> = phases
-        .iter()
-        .map(|g| g.p_value)
-        .chain(trends.iter().map(|t| t.p_value))
-        .chain(runs.iter().map(|r| r.test.p_value))
-        .collect();
-    let m = family.len();
-    let adjusted = holm(&family);
-    let (adj_phases, rest) = adjusted.split_at(phases.len());
-    let (adj_trends, adj_runs) = rest.split_at(trends.len());
     let holm_note = |p: f64, q: f64| {
         use super::report::p_text;
         format!(
@@ -301,7 +400,11 @@ fn words(
         )
     };
     let mut out: Vec<(f64, String)> = Vec::new();
-    for (g, &q) in phases.iter().zip(adj_phases).filter(|(_, q)| **q < 0.01) {
+    for (g, q) in phases
+        .iter()
+        .filter_map(|g| g.holm_p.map(|q| (g, q)))
+        .filter(|(_, q)| *q < 0.01)
+    {
         let kind = g.label.as_str();
         // same sign in every cycle of this kind?
         let cyc: Vec<&GroupMean> = cycles
@@ -333,7 +436,11 @@ fn words(
             ),
         ));
     }
-    for (t, &q) in trends.iter().zip(adj_trends).filter(|(_, q)| **q < 0.01) {
+    for (t, q) in trends
+        .iter()
+        .map(|t| (t, t.holm_p))
+        .filter(|(_, q)| *q < 0.01)
+    {
         let dir = if t.r > 0.0 {
             "the simulated bubbles fall further below the measurements"
         } else {
@@ -351,20 +458,69 @@ fn words(
     }
     let correlated: Vec<(&BubbleRuns, f64)> = runs
         .iter()
-        .zip(adj_runs.iter().copied())
-        .filter(|(r, q)| *q < 0.01 && r.test.z < 0.0)
+        .map(|r| (r, r.holm_p))
+        .filter(|(r, q)| *q < 0.01 && r.test.clustered())
         .collect();
     if let Some(&(strongest, q)) = correlated.iter().min_by(|a, b| a.1.total_cmp(&b.1)) {
+        let one_sign = correlated
+            .iter()
+            .filter(|(r, _)| r.test.method == RunsMethod::SignTest)
+            .count();
+        let how = if one_sign == 0 {
+            String::new()
+        } else {
+            format!(
+                "; every residual of one sign for {one_sign} of them, where the sign test stands in for the runs test"
+            )
+        };
+        let test = if strongest.test.method == RunsMethod::SignTest {
+            "sign test"
+        } else {
+            "runs test"
+        };
         out.push((
             q,
             format!(
-                "residuals run in long stretches of one sign (systematic misfit, not noise) for {} of {} bubbles (runs test, smallest {})",
+                "residuals run in long stretches of one sign (systematic misfit, not noise) for {} of {} bubbles{how} (smallest: {} of {} bubble {}, {})",
                 correlated.len(),
                 runs.len(),
+                test,
+                strongest.experiment,
+                strongest.bubble,
                 holm_note(strongest.test.p_value, q)
             ),
         ));
     }
     out.sort_by(|a, b| a.0.total_cmp(&b.0));
     out.into_iter().map(|(_, s)| s).collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A covariate the correlation cannot use is named with why: constant (dP/dt of a profile
+    /// that only holds), infinite everywhere (one bubble: no nearest other bubble), not known
+    /// (no bubble positions), defined at too few rows (reasons by construction in this test).
+    #[test]
+    fn dropped_covariates_say_why() {
+        let ys: Vec<f64> = (0..5).map(|i| (i as f64).sin()).collect();
+        let flat = [0.0; 5];
+        assert_eq!(drop_reason(&flat, &flat, &ys, ""), "constant over the data");
+        let inf = [f64::INFINITY; 5];
+        assert_eq!(
+            drop_reason(&inf, &[], &[], "the experiment has no other bubble"),
+            "not defined at any observation: the experiment has no other bubble (5 observations)"
+        );
+        let nan = [f64::NAN; 5];
+        assert_eq!(
+            drop_reason(&nan, &[], &[], "the phantom has no open face"),
+            "not defined at any observation: not known at 5 observations (no bubble positions)"
+        );
+        let few = [1.0, 2.0, f64::NAN, f64::NAN, f64::NAN];
+        assert_eq!(
+            drop_reason(&few, &few[..2], &ys[..2], ""),
+            "defined at only 2 observations, a correlation needs 3: not known at 3 observations (no bubble positions)"
+        );
+    }
 }

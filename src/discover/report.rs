@@ -5,6 +5,7 @@ use super::diagnose::Diagnostics;
 use super::search::{CandidateOutcome, Discovery};
 use crate::error::Error;
 use crate::fit::data::{Experiments, Measurements};
+use crate::fit::paths;
 use crate::fit::report::{
     add_overlays, aicc_absent, data_info, estimate_stats, estimates_table_with_truth,
     exponent_floats, finite_estimate, finite_result, sig, DataInfo, DataOut,
@@ -38,6 +39,100 @@ struct DiscoverFile {
     round: Vec<RoundOut>,
     #[serde(skip_serializing_if = "<[_]>::is_empty")]
     bubble_weight: Vec<BubbleWeight>,
+    diagnostics: DiagnosticsOut,
+}
+
+/// The residual diagnostics' Holm family, dropped covariates and runs tests, of the baseline
+/// and of the final model.
+#[derive(Serialize)]
+struct DiagnosticsOut {
+    baseline: DiagnosisOut,
+    final_model: DiagnosisOut,
+}
+
+#[derive(Serialize)]
+struct DiagnosisOut {
+    /// Tests in the Holm family.
+    holm_family: usize,
+    /// The family's tests, by name (`phase: hold`, `covariate: time`, `runs: osc-150 bubble 0`);
+    /// the per-cycle means are outside it.
+    holm_family_members: Vec<String>,
+    /// Holm-adjusted p-values, in the order of `holm_family_members` (1 for a test whose p is
+    /// not a number).
+    holm_p: Vec<f64>,
+    #[serde(skip_serializing_if = "<[_]>::is_empty")]
+    dropped_covariate: Vec<DroppedOut>,
+    runs_test: Vec<RunsOut>,
+}
+
+#[derive(Serialize)]
+struct DroppedOut {
+    covariate: String,
+    reason: String,
+}
+
+#[derive(Serialize)]
+struct RunsOut {
+    experiment: String,
+    bubble: usize,
+    n_plus: usize,
+    n_minus: usize,
+    runs: usize,
+    /// `exact`, `normal approximation`, `sign test` (every residual of one sign) or
+    /// `no residual`.
+    method: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    p_value: Option<f64>,
+    holm_p: f64,
+}
+
+fn diagnosis_out(d: &Diagnostics) -> DiagnosisOut {
+    let members = d
+        .phases
+        .iter()
+        .map(|g| (format!("phase: {}", g.label), g.holm_p.unwrap_or(f64::NAN)))
+        .chain(
+            d.trends
+                .iter()
+                .map(|t| (format!("covariate: {}", t.covariate), t.holm_p)),
+        )
+        .chain(d.runs.iter().map(|r| {
+            (
+                format!("runs: {} bubble {}", r.experiment, r.bubble),
+                r.holm_p,
+            )
+        }));
+    let (holm_family_members, holm_p): (Vec<String>, Vec<f64>) = members.unzip();
+    DiagnosisOut {
+        holm_family: d.family,
+        holm_family_members,
+        holm_p: holm_p
+            .into_iter()
+            .map(|q| if q.is_finite() { q } else { 1.0 })
+            .collect(),
+        dropped_covariate: d
+            .dropped
+            .iter()
+            .map(|c| DroppedOut {
+                covariate: c.covariate.to_string(),
+                reason: c.reason.clone(),
+            })
+            .collect(),
+        runs_test: d
+            .runs
+            .iter()
+            .map(|r| RunsOut {
+                experiment: r.experiment.clone(),
+                bubble: r.bubble,
+                n_plus: r.test.n_plus,
+                n_minus: r.test.n_minus,
+                runs: r.test.runs,
+                method: r.test.method.name().to_string(),
+                p_value: Some(r.test.p_value).filter(|p| p.is_finite()),
+                holm_p: if r.holm_p.is_finite() { r.holm_p } else { 1.0 },
+            })
+            .collect(),
+    }
 }
 
 #[derive(Serialize)]
@@ -192,13 +287,16 @@ pub fn p_cell(p: f64) -> String {
 /// (ΔSSR < 0): the F statistic is not a test of anything then.
 pub const FITS_WORSE: &str = "—, fits worse than the current model";
 
-/// A candidate's fitted parameter for the round table: `name = value` with 3 significant
-/// digits; `name → 0 (at its null)` for a log-space parameter with null 0 that ran below a
-/// millionth of the smallest value its scan tried (the effect switched off, not a small
-/// effect); `name = value (at the bound)` for one at a bound of its range.
+/// A candidate's fitted parameter for the round table, named in a reader's words
+/// ([`paths::with_value_in`], elasticity terms from `own_terms` on named as added ones):
+/// `symbol = value unit` with 3 significant digits; `symbol → 0 (at its null)` for a
+/// log-space parameter with null 0 that ran below a millionth of the smallest value its scan
+/// tried (the effect switched off, not a small effect); `symbol = value unit (at the bound)`
+/// for one at a bound of its range.
 pub fn candidate_param_text(
     e: &crate::fit::lsq::Estimate,
     p: Option<&super::EffectParam>,
+    own_terms: Option<usize>,
 ) -> String {
     let at_null = p.is_some_and(|p| {
         let least = p
@@ -209,13 +307,49 @@ pub fn candidate_param_text(
             .fold(f64::INFINITY, f64::min);
         p.null == 0.0 && e.log && least.is_finite() && e.value.abs() < 1e-6 * least
     });
+    let value = paths::with_value_in(&e.name, &sig(e.value, 3), own_terms);
     if at_null {
-        format!("{} → 0 (at its null)", e.name)
+        format!(
+            "{} → 0 (at its null)",
+            paths::describe_in(&e.name, own_terms).0
+        )
     } else if e.at_bound {
-        format!("{} = {} (at the bound)", e.name, sig(e.value, 3))
+        format!("{value} (at the bound)")
     } else {
-        format!("{} = {}", e.name, sig(e.value, 3))
+        value
     }
+}
+
+/// The index of the first elasticity term `discover` adds: the phantom's own terms
+/// ([`paths::own_elasticity_terms`]), when every experiment's phantom has the same number.
+fn own_terms_of(experiments: &Experiments) -> Option<usize> {
+    let mut counts = experiments
+        .list
+        .iter()
+        .map(|e| paths::own_elasticity_terms(&e.phantom));
+    let first = counts.next()?;
+    counts.all(|c| c == first).then_some(first)
+}
+
+/// Estimates and true values with each parameter named in a reader's words
+/// ([`paths::label_in`]) for the report's tables; `discover.toml` keeps the paths.
+fn readable_estimates(
+    est: &[crate::fit::lsq::Estimate],
+    truth: &BTreeMap<String, f64>,
+    own_terms: Option<usize>,
+) -> (Vec<crate::fit::lsq::Estimate>, BTreeMap<String, f64>) {
+    let named: Vec<crate::fit::lsq::Estimate> = est
+        .iter()
+        .map(|e| crate::fit::lsq::Estimate {
+            name: paths::label_in(&e.name, own_terms),
+            ..e.clone()
+        })
+        .collect();
+    let truth = truth
+        .iter()
+        .map(|(k, v)| (paths::label_in(k, own_terms), *v))
+        .collect();
+    (named, truth)
 }
 
 /// Weighted RMSE, m: √(Σ wᵢrᵢ² / Σ wᵢ) from a weighted SSR Σ wᵢrᵢ² and the weights (the
@@ -447,6 +581,10 @@ fn discover_toml_with(
         added,
         round,
         bubble_weight: bubbles.to_vec(),
+        diagnostics: DiagnosticsOut {
+            baseline: diagnosis_out(&d.diagnostics_before),
+            final_model: diagnosis_out(&d.diagnostics_after),
+        },
     };
     toml::to_string(&file)
         .map(|t| exponent_floats(&t))
@@ -488,10 +626,49 @@ fn diag_p(p: f64) -> Cell {
     }
 }
 
+/// The Holm family of a diagnosis in words: how many tests, of which kinds, by name
+/// ("9 tests: 3 phases (compression, hold, decompression), …").
+pub fn family_text(d: &Diagnostics) -> String {
+    let plural = |n: usize, one: &str, many: &str| {
+        if n == 1 {
+            format!("1 {one}")
+        } else {
+            format!("{n} {many}")
+        }
+    };
+    format!(
+        "{}: {} ({}), {} ({}), {} (one per bubble; the sign test in its place for a bubble whose residuals all have one sign)",
+        plural(d.family, "test", "tests"),
+        plural(d.phases.len(), "phase", "phases"),
+        d.phases.iter().map(|g| g.label.as_str()).collect::<Vec<_>>().join(", "),
+        plural(d.trends.len(), "covariate", "covariates"),
+        d.trends.iter().map(|t| t.covariate).collect::<Vec<_>>().join(", "),
+        plural(d.runs.len(), "runs test", "runs tests"),
+    )
+}
+
+/// The method cell of a bubble's runs test.
+fn runs_method_text(t: &crate::fit::stats::RunsTest) -> String {
+    use crate::fit::stats::RunsMethod;
+    match t.method {
+        RunsMethod::SignTest => {
+            let n = t.n_plus + t.n_minus;
+            format!(
+                "all {n} residuals of one sign; sign test p = 2·0.5^{n} {} (two-sided), in place of the degenerate runs test",
+                p_text(t.p_value)
+            )
+        }
+        RunsMethod::NoData => "no nonzero residual: no test".into(),
+        RunsMethod::Exact => "runs test, exact".into(),
+        RunsMethod::Normal => "runs test, normal approximation".into(),
+    }
+}
+
 fn diagnostics_section(page: &mut Page, title: &str, d: &Diagnostics) -> Result<(), Error> {
     page.heading(3, title);
+    let family = family_text(d);
     if d.signatures.is_empty() {
-        page.text(format!("No systematic signature at a Holm-adjusted p < 0.01 over the {} tests below (phases, covariates, each bubble's runs test): the residuals look like noise by every grouping. The tables give the unadjusted p-values.", d.family));
+        page.text(format!("No systematic signature at a Holm-adjusted p < 0.01 over the {} tests below (phases, covariates, each bubble's runs test): the residuals look like noise by every grouping. The Holm family has {family}; the rows in it are marked \"yes\" in the column \"in Holm family\", with their Holm-adjusted p beside the unadjusted one.", d.family));
     } else {
         page.text(
             d.signatures
@@ -500,7 +677,12 @@ fn diagnostics_section(page: &mut Page, title: &str, d: &Diagnostics) -> Result<
                 .collect::<Vec<_>>()
                 .join("\n"),
         );
+        page.text(format!("The Holm family has {family}; the rows in it are marked \"yes\" in the column \"in Holm family\" below, with their Holm-adjusted p beside the unadjusted one. A signature is worded where the Holm-adjusted p < 0.01."));
     }
+    let holm_cells = |q: Option<f64>| match q {
+        Some(q) => [Cell::text("yes"), diag_p(q)],
+        None => [Cell::text("no (descriptive)"), Cell::text("—")],
+    };
     let mut t = Table::new(
         format!("{title}: mean residual (measured − simulated) by phase"),
         vec![
@@ -509,65 +691,107 @@ fn diagnostics_section(page: &mut Page, title: &str, d: &Diagnostics) -> Result<
             Column::new("mean", "µm"),
             Column::new("std. error", "µm"),
             Column::plain("t-test p"),
+            Column::plain("in Holm family"),
+            Column::plain("Holm-adjusted p"),
         ],
     );
     for g in d.phases.iter().chain(&d.cycles) {
-        t.push(vec![
+        let mut row = vec![
             Cell::text(&g.label),
             Cell::text(g.n.to_string()),
             diag(g.mean * 1e6, 3),
             diag(g.se * 1e6, 3),
             diag_p(g.p_value),
-        ])
-        .map_err(Error::Solver)?;
+        ];
+        row.extend(holm_cells(g.holm_p));
+        t.push(row).map_err(Error::Solver)?;
     }
     page.table(&t);
+    if !d.cycles.is_empty() {
+        page.text(format!(
+            "The per-cycle {} (\"…, cycle k\") {} descriptive: outside the Holm family of {} tests, {} unadjusted and not used for the decision (they only word a phase's signature, e.g. \"on every decompression\").",
+            if d.cycles.len() == 1 { "row" } else { "rows" },
+            if d.cycles.len() == 1 { "is" } else { "are" },
+            d.family,
+            if d.cycles.len() == 1 { "its p-value" } else { "their p-values" },
+        ));
+    }
     let mut t = Table::new(
         format!("{title}: residual against covariates"),
         vec![
             Column::plain("covariate"),
+            Column::plain("n"),
             Column::plain("Pearson r"),
             Column::plain("p"),
+            Column::plain("in Holm family"),
+            Column::plain("Holm-adjusted p"),
         ],
     );
     for tr in &d.trends {
-        t.push(vec![
+        let mut row = vec![
             Cell::text(tr.covariate),
+            Cell::text(tr.n.to_string()),
             if tr.r.is_finite() {
                 Cell::fixed(tr.r, 3)
             } else {
                 Cell::text("not defined")
             },
             diag_p(tr.p_value),
-        ])
-        .map_err(Error::Solver)?;
+        ];
+        row.extend(holm_cells(Some(tr.holm_p)));
+        t.push(row).map_err(Error::Solver)?;
     }
     page.table(&t);
+    if !d.dropped.is_empty() {
+        page.text(format!(
+            "Dropped (not tested, not in the Holm family): {}.",
+            d.dropped
+                .iter()
+                .map(|c| format!("{}: {}", c.covariate, c.reason))
+                .collect::<Vec<_>>()
+                .join("; ")
+        ));
+    }
     let mut t = Table::new(
         format!("{title}: runs test of each bubble's residual signs"),
         vec![
             Column::plain("experiment"),
             Column::plain("bubble"),
+            Column::plain("n₊, n₋"),
             Column::plain("runs"),
             Column::plain("expected"),
+            Column::plain("test"),
             Column::plain("p"),
+            Column::plain("in Holm family"),
+            Column::plain("Holm-adjusted p"),
         ],
     );
     for r in &d.runs {
-        t.push(vec![
+        let degenerate = matches!(
+            r.test.method,
+            crate::fit::stats::RunsMethod::SignTest | crate::fit::stats::RunsMethod::NoData
+        );
+        let mut row = vec![
             Cell::text(&r.experiment),
             Cell::text(r.bubble.to_string()),
+            Cell::text(format!("{}, {}", r.test.n_plus, r.test.n_minus)),
             Cell::text(r.test.runs.to_string()),
-            if r.test.expected.is_finite() {
+            if r.test.expected.is_finite() && !degenerate {
                 Cell::fixed(r.test.expected, 1)
             } else {
-                Cell::text("not defined")
+                Cell::text("—")
             },
+            Cell::text(runs_method_text(&r.test)),
             diag_p(r.test.p_value),
-        ])
-        .map_err(Error::Solver)?;
+        ];
+        row.extend(holm_cells(Some(r.holm_p)));
+        t.push(row).map_err(Error::Solver)?;
     }
     page.table(&t);
+    page.text(format!(
+        "The runs test is two-sided, p = 2·min(P(R ≤ r), P(R ≥ r)) capped at 1, from the exact distribution of the number of runs R given n₊ and n₋ (Wald & Wolfowitz 1940, summed in log space) while the rarer sign has at most {} residuals, else from the normal approximation with a continuity correction of ½ run (mean 1 + 2n₊n₋/n, variance 2n₊n₋(2n₊n₋ − n)/(n²(n − 1))). When every residual of a bubble has one sign there is one run and nothing to compare: the two-sided sign test, p = 2·0.5ⁿ (capped at 1), takes the runs test's place, in the table and in the Holm family. A signature is worded only for fewer runs than expected (long stretches of one sign).",
+        crate::fit::stats::EXACT_RUNS_MAX_MINORITY
+    ));
     Ok(())
 }
 
@@ -583,6 +807,7 @@ pub fn discover_outputs(
     let mut set = OutputSet::new();
     let info = data_info(data, experiments, &d.final_fit.model);
     let bubbles = bubble_weights(d, data);
+    let own_terms = own_terms_of(experiments);
     set.add(
         "discover.toml",
         discover_toml_with(d, Some(&info), &bubbles)?,
@@ -722,19 +947,22 @@ pub fn discover_outputs(
                 |x| sig(x, 4)
             ),
         ));
+        let (named, truth) = readable_estimates(&a.parameters, &info.truth, own_terms);
         page.table(&estimates_table_with_truth(
             &format!("{} parameters", a.effect),
-            &a.parameters,
+            &named,
             d.final_fit.inference.singular,
-            &info.truth,
+            &truth,
         )?);
     }
     if !d.final_fit.inference.estimates.is_empty() {
+        let (named, truth) =
+            readable_estimates(&d.final_fit.inference.estimates, &info.truth, own_terms);
         page.table(&estimates_table_with_truth(
             "Every free parameter of the final model",
-            &d.final_fit.inference.estimates,
+            &named,
             d.final_fit.inference.singular,
-            &info.truth,
+            &truth,
         )?);
     }
     page.section("Candidates, round by round");
@@ -778,7 +1006,7 @@ pub fn discover_outputs(
                     .estimates
                     .iter()
                     .enumerate()
-                    .map(|(i, e)| candidate_param_text(e, o.params.get(i)))
+                    .map(|(i, e)| candidate_param_text(e, o.params.get(i), own_terms))
                     .collect::<Vec<_>>()
                     .join("; "),
             };
@@ -890,24 +1118,136 @@ mod tests {
             null: 0.0,
             scan: vec![lo, lo * 10.0],
         };
-        let k = est("bulk", 2.238606641606635e-239, true, false);
+        let bulk = "material.elasticity.terms.1.bulk_modulus_per_volume";
+        let k = est(bulk, 2.238606641606635e-239, true, false);
         assert_eq!(
-            candidate_param_text(&k, Some(&param(1e12))),
-            "bulk → 0 (at its null)"
+            candidate_param_text(&k, Some(&param(1e12)), Some(1)),
+            "M of the added elasticity term → 0 (at its null)"
         );
         let k = est("perfusion.rate_per_s", 2.47e-7, true, false);
         assert_eq!(
-            candidate_param_text(&k, Some(&param(1e-5))),
-            "perfusion.rate_per_s = 2.47e-7"
+            candidate_param_text(&k, Some(&param(1e-5)), Some(1)),
+            "perfusion rate = 2.47e-7 1/s"
         );
-        let k = est("fixed", 2788.0, true, true);
+        let k = est("material.bubble_fixed_gases_pa", 2788.0, true, true);
         assert_eq!(
-            candidate_param_text(&k, Some(&param(1e2))),
-            "fixed = 2788 (at the bound)"
+            candidate_param_text(&k, Some(&param(1e2)), Some(1)),
+            "p_fixed = 2788 Pa (at the bound)"
         );
         // without the candidate's parameters nothing is claimed about the null
+        let k = est(bulk, 2.24e-239, true, false);
+        assert_eq!(
+            candidate_param_text(&k, None, Some(1)),
+            "M of the added elasticity term = 2.24e-239 Pa/m³"
+        );
+        // the committed example's round-1 hyperelastic term (reports/discover/report.md)
+        let k = est(
+            "material.elasticity.terms.1.shear_modulus",
+            21923.0,
+            true,
+            false,
+        );
+        assert_eq!(
+            candidate_param_text(&k, Some(&param(10.0)), Some(1)),
+            "μ of the added elasticity term = 21923 Pa"
+        );
+        // a path the naming does not know stays itself
         let k = est("bulk", 2.24e-239, true, false);
-        assert_eq!(candidate_param_text(&k, None), "bulk = 2.24e-239");
+        assert_eq!(candidate_param_text(&k, None, None), "bulk = 2.24e-239");
+    }
+
+    /// The diagnostics tables say which rows are in the Holm family and how many tests it
+    /// has, mark the per-cycle rows descriptive, name a dropped covariate with its reason, and
+    /// give a bubble whose residuals all have one sign the sign test (p = 2·0.5⁶¹, by hand) in
+    /// the runs test's place; the Holm-adjusted p of a row is the one [`holm`] gives over the
+    /// family (Holm 1979; `holm` is checked by hand in fit::stats).
+    #[test]
+    fn diagnostics_tables_state_the_holm_family() {
+        use crate::discover::diagnose::{BubbleRuns, DroppedCovariate, GroupMean, Trend};
+        use crate::fit::stats::{holm, runs_test, RunsMethod};
+        let g = |label: &str, p: f64| GroupMean {
+            label: label.into(),
+            n: 12,
+            mean: 1e-6,
+            se: 1e-6,
+            p_value: p,
+            holm_p: None,
+        };
+        let one_sign = runs_test(&[1.0; 61]);
+        assert_eq!(one_sign.method, RunsMethod::SignTest);
+        let mixed = runs_test(&[1.0, -1.0, 1.0, 1.0, -1.0, -1.0, 1.0, -1.0]);
+        let ps = [0.2, 0.3, 0.04, 0.5, one_sign.p_value, mixed.p_value];
+        let q = holm(&ps);
+        let mut phases = vec![
+            g("compression", ps[0]),
+            g("hold", ps[1]),
+            g("decompression", ps[2]),
+        ];
+        for (x, q) in phases.iter_mut().zip(&q) {
+            x.holm_p = Some(*q);
+        }
+        let d = Diagnostics {
+            phases,
+            cycles: vec![g("compression, cycle 1", 0.003)],
+            trends: vec![Trend {
+                covariate: "time",
+                n: 36,
+                r: 0.1,
+                p_value: ps[3],
+                holm_p: q[3],
+            }],
+            dropped: vec![DroppedCovariate {
+                covariate: "dP/dt",
+                reason: "constant over the data".into(),
+            }],
+            runs: vec![
+                BubbleRuns {
+                    experiment: "osc".into(),
+                    bubble: 0,
+                    test: one_sign,
+                    holm_p: q[4],
+                },
+                BubbleRuns {
+                    experiment: "osc".into(),
+                    bubble: 1,
+                    test: mixed,
+                    holm_p: q[5],
+                },
+            ],
+            signatures: vec![],
+            family: 6,
+        };
+        let mut page = Page::new("t");
+        diagnostics_section(&mut page, "Final model", &d).unwrap();
+        let md = page.to_markdown().unwrap();
+        assert!(md.contains("over the 6 tests below"), "{md}");
+        assert!(
+            md.contains("6 tests: 3 phases (compression, hold, decompression), 1 covariate (time), 2 runs tests"),
+            "{md}"
+        );
+        assert!(md.contains("| in Holm family | Holm-adjusted p |"), "{md}");
+        assert!(
+            md.contains(
+                "| compression, cycle 1 | 12 | 1.00 | 1.00 | 0.00300 | no (descriptive) | — |"
+            ),
+            "{md}"
+        );
+        assert!(
+            md.contains(&format!(
+                "| decompression | 12 | 1.00 | 1.00 | 0.0400 | yes | {} |",
+                p_cell(q[2])
+            )),
+            "{md}"
+        );
+        assert!(md.contains("outside the Holm family of 6 tests"), "{md}");
+        assert!(md.contains("dP/dt: constant over the data"), "{md}");
+        // the sign test: 2·0.5⁶¹ = 8.67e-19, below the printed floor
+        assert!(
+            md.contains("| osc | 0 | 61, 0 | 1 | — | all 61 residuals of one sign; sign test p = 2·0.5^61 \\< 1e-16 (two-sided), in place of the degenerate runs test | \\< 1e-16 | yes | \\< 1e-16 |"),
+            "{md}"
+        );
+        assert!(md.contains("| runs test, exact |"), "{md}");
+        assert!(!md.contains("not defined"), "{md}");
     }
 
     /// The weighted RMSE √(Σ wr²/Σ w), by hand: residuals 2 and 1 with weights 1 and 3 give

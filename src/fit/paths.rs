@@ -181,16 +181,68 @@ pub fn expand(doc: &toml::Table, pattern: &str) -> Vec<String> {
 /// `scale:gases.*.diffusivity` = 1.5 multiplies every gas's diffusivity by 1.5.
 pub const SCALE_PREFIX: &str = "scale:";
 
+/// The symbol and unit of an elasticity law's modulus field (the paper's eqs. 2.6–2.9).
+fn elastic_field(field: &str) -> Option<(&'static str, &'static str)> {
+    match field {
+        "shear_modulus" => Some(("μ", "Pa")),
+        "bulk_modulus" => Some(("K", "Pa")),
+        "bulk_modulus_per_volume" => Some(("M", "Pa/m³")),
+        _ => None,
+    }
+}
+
+/// "second", "third"… for the `k`-th (k ≥ 2) added term; "4th" and on in digits.
+fn ordinal(k: usize) -> String {
+    match k {
+        1 => "first".into(),
+        2 => "second".into(),
+        3 => "third".into(),
+        _ => format!("{k}th"),
+    }
+}
+
 /// A parameter path in a reader's words: its symbol (the paper's where it has one) and its
 /// unit (`None`: dimensionless), e.g. `material.surface_tension` → ("γ", Some("N/m")),
 /// `scale:gases.*.diffusivity` → ("D factor", None); a path it does not know is its own name.
+/// A term of an elasticity `sum` law, `material.elasticity.terms.N.FIELD`, is the field's
+/// symbol of that term, numbered as in the file from 0: `material.elasticity.terms.1.shear_modulus`
+/// → ("μ of elasticity term 1", Some("Pa")). [`describe_in`] names terms a search added.
 pub fn describe(path: &str) -> (String, Option<&'static str>) {
+    describe_in(path, None)
+}
+
+/// [`describe`] in a model whose elasticity terms from index `own_terms` on were added to the
+/// phantom's own (`discover`'s `elasticity:<law>` candidates append a term to the phantom's
+/// law, which becomes term 0 of a sum, or to the terms of a `sum` it already has): the first
+/// added term is "the added elasticity term", later ones "the second added elasticity term"…;
+/// a term below `own_terms` is "the phantom's elasticity term N". `None`: [`describe`]'s
+/// numbering.
+pub fn describe_in(path: &str, own_terms: Option<usize>) -> (String, Option<&'static str>) {
     let gas = |g: &str| g.to_uppercase();
     let segs: Vec<&str> = path.split('.').collect();
+    match segs.as_slice() {
+        ["material", "elasticity", field] => {
+            if let Some((sym, unit)) = elastic_field(field) {
+                return (sym.into(), Some(unit));
+            }
+        }
+        ["material", "elasticity", "terms", i, field] => {
+            if let (Ok(i), Some((sym, unit))) = (i.parse::<usize>(), elastic_field(field)) {
+                let term = match own_terms {
+                    None => format!("elasticity term {i}"),
+                    Some(own) if i < own => format!("the phantom's elasticity term {i}"),
+                    Some(own) if i == own => "the added elasticity term".to_string(),
+                    Some(own) => format!("the {} added elasticity term", ordinal(i - own + 1)),
+                };
+                return (format!("{sym} of {term}"), Some(unit));
+            }
+        }
+        _ => {}
+    }
     match (path, segs.as_slice()) {
         ("material.surface_tension", _) => ("γ".into(), Some("N/m")),
-        ("material.elasticity.shear_modulus", _) => ("μ".into(), Some("Pa")),
         ("material.surface.fold", _) => ("k (surface fold)".into(), None),
+        ("material.surface.exponent", _) => ("a (surface exponent)".into(), None),
         ("material.temperature_k", _) => ("T".into(), Some("K")),
         ("material.bubble_fixed_gases_pa", _) => ("p_fixed".into(), Some("Pa")),
         ("perfusion.rate_per_s", _) => ("perfusion rate".into(), Some("1/s")),
@@ -204,7 +256,12 @@ pub fn describe(path: &str) -> (String, Option<&'static str>) {
 
 /// [`describe`] as an axis or category label: `γ (N/m)`, `L_N2`.
 pub fn label(path: &str) -> String {
-    match describe(path) {
+    label_in(path, None)
+}
+
+/// [`describe_in`] as a label: `μ of the added elasticity term (Pa)`.
+pub fn label_in(path: &str, own_terms: Option<usize>) -> String {
+    match describe_in(path, own_terms) {
         (sym, Some(unit)) => format!("{sym} ({unit})"),
         (sym, None) => sym,
     }
@@ -212,9 +269,31 @@ pub fn label(path: &str) -> String {
 
 /// [`describe`] with a value, for a legend: `γ = 0.07 N/m`, `L_N2 = 0.014`.
 pub fn with_value(path: &str, value: &str) -> String {
-    match describe(path) {
+    with_value_in(path, value, None)
+}
+
+/// [`describe_in`] with a value: `μ of the added elasticity term = 21923 Pa`.
+pub fn with_value_in(path: &str, value: &str, own_terms: Option<usize>) -> String {
+    match describe_in(path, own_terms) {
         (sym, Some(unit)) => format!("{sym} = {value} {unit}"),
         (sym, None) => format!("{sym} = {value}"),
+    }
+}
+
+/// The number of elasticity terms a phantom document has of its own: the length of `terms` of
+/// a `sum` law, else 1 (its one law, or the default). The index of the first term `discover`
+/// adds, for [`describe_in`].
+pub fn own_elasticity_terms(doc: &toml::Table) -> usize {
+    let el = doc
+        .get("material")
+        .and_then(|m| m.get("elasticity"))
+        .and_then(|e| e.as_table());
+    match el {
+        Some(t) if t.get("law").and_then(|l| l.as_str()) == Some("sum") => t
+            .get("terms")
+            .and_then(|x| x.as_array())
+            .map_or(0, |a| a.len()),
+        _ => 1,
     }
 }
 
@@ -471,6 +550,56 @@ mod tests {
         );
         // a path it does not know stays itself
         assert_eq!(label("geometry.grid_step_m"), "geometry.grid_step_m");
+    }
+
+    /// The terms of an elasticity `sum` (`material.elasticity.terms.N.FIELD`): numbered as in
+    /// the file, or, in a model that added terms after the phantom's own, "the added" one
+    /// (reference: the symbols of src/phantom/elasticity.rs's fields, μ Pa, K Pa, M Pa/m³).
+    #[test]
+    fn elasticity_terms_in_a_readers_words() {
+        let mu = "material.elasticity.terms.1.shear_modulus";
+        let m = "material.elasticity.terms.1.bulk_modulus_per_volume";
+        assert_eq!(label(mu), "μ of elasticity term 1 (Pa)");
+        assert_eq!(label_in(mu, Some(1)), "μ of the added elasticity term (Pa)");
+        assert_eq!(
+            with_value_in(mu, "21923", Some(1)),
+            "μ of the added elasticity term = 21923 Pa"
+        );
+        assert_eq!(
+            label_in(m, Some(1)),
+            "M of the added elasticity term (Pa/m³)"
+        );
+        assert_eq!(
+            label_in("material.elasticity.terms.3.bulk_modulus", Some(2)),
+            "K of the second added elasticity term (Pa)"
+        );
+        assert_eq!(
+            label_in("material.elasticity.terms.0.shear_modulus", Some(1)),
+            "μ of the phantom's elasticity term 0 (Pa)"
+        );
+        assert_eq!(
+            label("material.elasticity.bulk_modulus_per_volume"),
+            "M (Pa/m³)"
+        );
+        assert_eq!(label("material.surface.exponent"), "a (surface exponent)");
+        // a field that is not a modulus, or a malformed index, stays itself
+        for raw in [
+            "material.elasticity.terms.1.law_weight",
+            "material.elasticity.terms.x.shear_modulus",
+        ] {
+            assert_eq!(label_in(raw, Some(1)), raw);
+        }
+        // the phantom's own terms: a sum's list, or 1 for any other law or none
+        let sum: toml::Table = "[material.elasticity]\nlaw = \"sum\"\nterms = [{ law = \"hyperelastic\", shear_modulus = 40.0 }, { law = \"bulk-modulus\", bulk_modulus_per_volume = 1e16 }]\n"
+            .parse()
+            .unwrap();
+        assert_eq!(own_elasticity_terms(&sum), 2);
+        let one: toml::Table =
+            "[material.elasticity]\nlaw = \"hyperelastic\"\nshear_modulus = 40.0\n"
+                .parse()
+                .unwrap();
+        assert_eq!(own_elasticity_terms(&one), 1);
+        assert_eq!(own_elasticity_terms(&toml::Table::new()), 1);
     }
 
     fn doc() -> toml::Table {

@@ -5,8 +5,11 @@
 //!   model is true, with independent Gaussian errors of the given relative weights;
 //! - AICc = n·ln(SSR/n) + 2K + 2K(K + 1)/(n − K − 1), K = parameters + 1 (the variance)
 //!   (Burnham & Anderson 2002, eq. 2.5 with the least-squares likelihood);
-//! - the Wald–Wolfowitz runs test on residual signs (normal approximation; Bradley 1968),
-//!   which detects systematic misfit along time without assuming a form for it;
+//! - the Wald–Wolfowitz runs test on residual signs (two-sided; the exact conditional
+//!   distribution of the runs given the signs' counts while the rarer sign has at most 20
+//!   residuals, the normal approximation with continuity correction above; Wald & Wolfowitz
+//!   1940, Bradley 1968), which detects systematic misfit along time without assuming a form
+//!   for it, and the sign test in its place when every residual has one sign;
 //! - Pearson correlation with its t-test (residual against a covariate).
 
 use statrs::distribution::{ContinuousCDF, FisherSnedecor, Normal, StudentsT};
@@ -61,50 +64,185 @@ pub fn aicc(ssr: f64, n: usize, p: usize) -> f64 {
     nf * (ssr / nf).ln() + 2.0 * k + 2.0 * k * (k + 1.0) / (nf - k - 1.0)
 }
 
-/// Wald–Wolfowitz runs test on the signs of `residuals` (zeros dropped).
+/// How a [`RunsTest`]'s p-value was computed.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RunsMethod {
+    /// The exact conditional distribution of the number of runs given n₊ and n₋ (Wald &
+    /// Wolfowitz 1940; Swed & Eisenhart 1943), used when min(n₊, n₋) ≤
+    /// [`EXACT_RUNS_MAX_MINORITY`].
+    Exact,
+    /// The normal approximation with a continuity correction of ½ run, used when both signs
+    /// number more than [`EXACT_RUNS_MAX_MINORITY`].
+    Normal,
+    /// Every residual has one sign: the runs test is degenerate (one run, nothing to compare),
+    /// and the two-sided sign test of n residuals all of one sign, p = min(1, 2·0.5ⁿ), stands in
+    /// its place.
+    SignTest,
+    /// No nonzero finite residual: nothing to test (p is NaN).
+    NoData,
+}
+
+impl RunsMethod {
+    /// How the method is named in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            RunsMethod::Exact => "exact",
+            RunsMethod::Normal => "normal approximation",
+            RunsMethod::SignTest => "sign test",
+            RunsMethod::NoData => "no residual",
+        }
+    }
+}
+
+/// The exact distribution is used while the rarer sign has at most this many residuals (the
+/// range of Swed & Eisenhart's 1943 tables; a lone or rare sign is where the normal
+/// approximation fails); above it the normal approximation with continuity correction is used,
+/// which agrees with the exact p to within 0.01 at n₊ = n₋ = 30 (tested).
+pub const EXACT_RUNS_MAX_MINORITY: usize = 20;
+
+/// Wald–Wolfowitz runs test on the signs of `residuals` (zeros and non-finite values dropped).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct RunsTest {
     /// Runs observed.
     pub runs: usize,
+    /// Positive residuals, n₊.
+    pub n_plus: usize,
+    /// Negative residuals, n₋.
+    pub n_minus: usize,
     /// Runs expected under randomness, 1 + 2n₊n₋/n.
     pub expected: f64,
-    /// z statistic (normal approximation).
+    /// Standardized statistic (R − E)/sd, without continuity correction; NaN where the variance
+    /// is 0 (fewer than one residual of either sign, or n₊ = n₋ = 1).
     pub z: f64,
-    /// Two-sided p-value; NaN with fewer than 2 of either sign.
+    /// Two-sided p-value by `method`: 2·min(P(R ≤ r), P(R ≥ r)), capped at 1, for the runs
+    /// test; the sign test's p when every residual has one sign; NaN without residuals.
     pub p_value: f64,
+    /// How `p_value` was computed.
+    pub method: RunsMethod,
 }
 
-/// The runs test (two-sided).
+impl RunsTest {
+    /// Whether the signs cluster (fewer runs than expected under randomness, or every residual
+    /// of one sign): the direction of a systematic misfit, rather than of alternating signs.
+    pub fn clustered(&self) -> bool {
+        match self.method {
+            RunsMethod::SignTest => true,
+            RunsMethod::NoData => false,
+            _ => (self.runs as f64) < self.expected,
+        }
+    }
+}
+
+/// ln C(a, b), −∞ when b > a (no such choice).
+fn ln_choose(a: usize, b: usize) -> f64 {
+    use statrs::function::gamma::ln_gamma;
+    if b > a {
+        return f64::NEG_INFINITY;
+    }
+    ln_gamma(a as f64 + 1.0) - ln_gamma(b as f64 + 1.0) - ln_gamma((a - b) as f64 + 1.0)
+}
+
+/// P(R = r) for the number of runs R in a random arrangement of `n_plus` positive and
+/// `n_minus` negative signs (both ≥ 1), all C(n, n₊) arrangements equally likely (Wald &
+/// Wolfowitz 1940): P(R = 2k) = 2·C(n₊−1, k−1)·C(n₋−1, k−1)/C(n, n₊) and P(R = 2k+1) =
+/// [C(n₊−1, k−1)·C(n₋−1, k) + C(n₊−1, k)·C(n₋−1, k−1)]/C(n, n₊), in log space (ln Γ).
+pub fn runs_pmf(n_plus: usize, n_minus: usize, r: usize) -> f64 {
+    if n_plus == 0 || n_minus == 0 {
+        // one run, with certainty
+        return if r == 1 { 1.0 } else { 0.0 };
+    }
+    if r < 2 {
+        return 0.0;
+    }
+    let total = ln_choose(n_plus + n_minus, n_plus);
+    let (a, b) = (n_plus - 1, n_minus - 1);
+    let k = r / 2;
+    let term = |x: f64| (x - total).exp();
+    if r.is_multiple_of(2) {
+        2.0 * term(ln_choose(a, k - 1) + ln_choose(b, k - 1))
+    } else {
+        term(ln_choose(a, k - 1) + ln_choose(b, k)) + term(ln_choose(a, k) + ln_choose(b, k - 1))
+    }
+}
+
+/// The exact two-sided p-value of `runs` runs given n₊ and n₋ (both ≥ 1):
+/// min(1, 2·min(P(R ≤ runs), P(R ≥ runs))), each tail summed from [`runs_pmf`].
+pub fn runs_exact_p(n_plus: usize, n_minus: usize, runs: usize) -> f64 {
+    let most = 2 * n_plus.min(n_minus) + usize::from(n_plus != n_minus);
+    let lower: f64 = (1..=runs.min(most))
+        .map(|r| runs_pmf(n_plus, n_minus, r))
+        .sum();
+    let upper: f64 = (runs.max(1)..=most)
+        .map(|r| runs_pmf(n_plus, n_minus, r))
+        .sum();
+    (2.0 * lower.min(upper)).min(1.0)
+}
+
+/// Mean and variance of the number of runs given n₊ and n₋ (Wald & Wolfowitz 1940):
+/// E = 1 + 2n₊n₋/n, Var = 2n₊n₋(2n₊n₋ − n)/(n²(n − 1)).
+fn runs_moments(n_plus: usize, n_minus: usize) -> (f64, f64) {
+    let (np, nm) = (n_plus as f64, n_minus as f64);
+    let n = np + nm;
+    let expected = 1.0 + 2.0 * np * nm / n.max(1.0);
+    let var = if n > 1.0 {
+        2.0 * np * nm * (2.0 * np * nm - n) / (n * n * (n - 1.0))
+    } else {
+        0.0
+    };
+    (expected, var)
+}
+
+/// The normal approximation's two-sided p-value of `runs` runs given n₊ and n₋, with a
+/// continuity correction of ½ run toward the mean: 2·P(Z ≥ max(|r − E| − ½, 0)/sd).
+pub fn runs_normal_p(n_plus: usize, n_minus: usize, runs: usize) -> f64 {
+    let (expected, var) = runs_moments(n_plus, n_minus);
+    if !(var > 0.0) {
+        return f64::NAN;
+    }
+    let d = ((runs as f64 - expected).abs() - 0.5).max(0.0);
+    (2.0 * normal_sf(d / var.sqrt())).min(1.0)
+}
+
+/// The runs test (two-sided) of the residuals' signs, zeros and non-finite values dropped: exact
+/// while the rarer sign has at most [`EXACT_RUNS_MAX_MINORITY`] residuals, the normal
+/// approximation above; the sign test when every residual has one sign ([`RunsMethod`]).
 pub fn runs_test(residuals: &[f64]) -> RunsTest {
     let signs: Vec<bool> = residuals
         .iter()
         .filter(|r| **r != 0.0 && r.is_finite())
         .map(|r| *r > 0.0)
         .collect();
-    let np = signs.iter().filter(|s| **s).count() as f64;
-    let nm = signs.len() as f64 - np;
+    let n_plus = signs.iter().filter(|s| **s).count();
+    let n_minus = signs.len() - n_plus;
     let runs = if signs.is_empty() {
         0
     } else {
         1 + signs.windows(2).filter(|w| w[0] != w[1]).count()
     };
-    let n = np + nm;
-    let expected = 1.0 + 2.0 * np * nm / n.max(1.0);
-    if np < 2.0 || nm < 2.0 {
-        return RunsTest {
-            runs,
-            expected,
-            z: f64::NAN,
-            p_value: f64::NAN,
-        };
-    }
-    let var = 2.0 * np * nm * (2.0 * np * nm - n) / (n * n * (n - 1.0));
-    let z = (runs as f64 - expected) / var.sqrt();
+    let (expected, var) = runs_moments(n_plus, n_minus);
+    let z = if var > 0.0 {
+        (runs as f64 - expected) / var.sqrt()
+    } else {
+        f64::NAN
+    };
+    let (p_value, method) = if signs.is_empty() {
+        (f64::NAN, RunsMethod::NoData)
+    } else if n_plus == 0 || n_minus == 0 {
+        let n = signs.len() as i32;
+        ((2.0 * 0.5f64.powi(n)).min(1.0), RunsMethod::SignTest)
+    } else if n_plus.min(n_minus) <= EXACT_RUNS_MAX_MINORITY {
+        (runs_exact_p(n_plus, n_minus, runs), RunsMethod::Exact)
+    } else {
+        (runs_normal_p(n_plus, n_minus, runs), RunsMethod::Normal)
+    };
     RunsTest {
         runs,
+        n_plus,
+        n_minus,
         expected,
         z,
-        p_value: 2.0 * normal_sf(z.abs()),
+        p_value,
+        method,
     }
 }
 
@@ -118,6 +256,24 @@ pub fn standard_normal<R: rand::Rng>(rng: &mut R) -> f64 {
 
 fn normal_sf(z: f64) -> f64 {
     Normal::new(0.0, 1.0).map_or(f64::NAN, |n| n.sf(z))
+}
+
+/// Whether a sum of squares about the mean `ss` of `n` values with mean `m` is no spread at
+/// all: a spread at the rounding level of the mean is a constant (453 equal distances leave
+/// Σ(x − x̄)² ≈ 4e-32 from rounding alone).
+fn flat(ss: f64, m: f64, n: usize) -> bool {
+    !(ss > n as f64 * (1e-12 * m.abs()).powi(2))
+}
+
+/// Whether the values of `v` are one constant up to rounding (the test [`correlation`] applies
+/// before it reports a correlation); true for no values.
+pub fn is_constant(v: &[f64]) -> bool {
+    let n = v.len();
+    if n == 0 {
+        return true;
+    }
+    let m = v.iter().sum::<f64>() / n as f64;
+    flat(v.iter().map(|x| (x - m).powi(2)).sum(), m, n)
 }
 
 /// Pearson correlation of `x` and `y` with the two-sided p-value of t = r√((n−2)/(1−r²)).
@@ -135,10 +291,7 @@ pub fn correlation(x: &[f64], y: &[f64]) -> (f64, f64) {
         sxx += a * a;
         syy += b * b;
     }
-    // a spread at the rounding level of the mean is a constant (453 equal distances leave
-    // sxx ≈ 4e-32 from rounding alone): no correlation to report
-    let flat = |s: f64, m: f64| !(s > n as f64 * (1e-12 * m.abs()).powi(2));
-    if flat(sxx, mx) || flat(syy, my) {
+    if flat(sxx, mx, n) || flat(syy, my, n) {
         return (f64::NAN, f64::NAN);
     }
     let r = (sxy / (sxx * syy).sqrt()).clamp(-1.0, 1.0);
@@ -338,6 +491,129 @@ mod tests {
         let mut v = vec![1.0; 20];
         v.extend(vec![-1.0; 20]);
         assert!(runs_test(&v).p_value < 1e-6);
+    }
+
+    /// The distribution of the number of runs by brute force: every one of the C(n, n₊)
+    /// arrangements of n₊ positive and n₋ negative signs (bit masks with n₊ bits set), its runs
+    /// counted; returns P(R = r) for r = 0..=n. Independent of [`runs_pmf`]'s formula.
+    fn enumerated_runs(n_plus: usize, n_minus: usize) -> Vec<f64> {
+        let n = n_plus + n_minus;
+        let mut counts = vec![0u64; n + 1];
+        let mut total = 0u64;
+        for mask in 0u32..(1u32 << n) {
+            if mask.count_ones() as usize != n_plus {
+                continue;
+            }
+            let bit = |i: usize| (mask >> i) & 1;
+            let runs = 1 + (1..n).filter(|&i| bit(i) != bit(i - 1)).count();
+            counts[runs] += 1;
+            total += 1;
+        }
+        counts.iter().map(|&c| c as f64 / total as f64).collect()
+    }
+
+    #[test]
+    fn exact_runs_distribution_sums_to_one() {
+        for (a, b) in [
+            (1, 1),
+            (1, 7),
+            (2, 2),
+            (3, 5),
+            (10, 10),
+            (20, 45),
+            (50, 3),
+            (60, 60),
+        ] {
+            let most = 2 * a.min(b) + 1;
+            let s: f64 = (0..=most).map(|r| runs_pmf(a, b, r)).sum();
+            assert!((s - 1.0).abs() < 1e-12, "n₊ = {a}, n₋ = {b}: Σ P = {s}");
+            // and no mass outside 2..=2·min + (1 if unequal)
+            assert_eq!(runs_pmf(a, b, 1), 0.0);
+            if a == b {
+                assert_eq!(runs_pmf(a, b, 2 * a + 1), 0.0);
+            }
+        }
+    }
+
+    #[test]
+    fn exact_runs_p_matches_enumeration_of_every_arrangement() {
+        // n₊ = n₋ = 2 by hand: ++−−, −−++ (2 runs), +−−+, −++− (3 runs), +−+−, −+−+ (4 runs):
+        // P(R = 2) = P(R = 3) = P(R = 4) = 1/3, so p(2) = 2/3 and p(3) = 1 (capped)
+        for r in 2..=4 {
+            assert!((runs_pmf(2, 2, r) - 1.0 / 3.0).abs() < 1e-14);
+        }
+        assert!((runs_exact_p(2, 2, 2) - 2.0 / 3.0).abs() < 1e-14);
+        assert_eq!(runs_exact_p(2, 2, 3), 1.0);
+        // every (n₊, n₋) with n ≤ 12, every attainable run count: pmf and two-sided p against
+        // the distribution enumerated in this test
+        for n in 2..=12 {
+            for a in 1..n {
+                let b = n - a;
+                let dist = enumerated_runs(a, b);
+                for r in 0..=n {
+                    assert!(
+                        (runs_pmf(a, b, r) - dist[r]).abs() < 1e-12,
+                        "P(R = {r} | {a}, {b})"
+                    );
+                    if dist[r] == 0.0 {
+                        continue;
+                    }
+                    let lower: f64 = dist[..=r].iter().sum();
+                    let upper: f64 = dist[r..].iter().sum();
+                    let want = (2.0 * lower.min(upper)).min(1.0);
+                    let got = runs_exact_p(a, b, r);
+                    assert!(
+                        (got - want).abs() < 1e-12,
+                        "p({r} | {a}, {b}) = {got}, by enumeration {want}"
+                    );
+                }
+            }
+        }
+        // a lone positive among 60 negatives at an end of the series (2 runs): it sits at an end
+        // in 2 of its 61 places (by hand from Wald & Wolfowitz's formula), p = 2·2/61
+        let mut v = vec![-1.0; 60];
+        v.push(1.0);
+        let t = runs_test(&v);
+        assert_eq!((t.runs, t.n_plus, t.n_minus), (2, 1, 60));
+        assert_eq!(t.method, RunsMethod::Exact);
+        assert!((t.p_value - 4.0 / 61.0).abs() < 1e-12, "{}", t.p_value);
+        assert!(t.clustered());
+    }
+
+    #[test]
+    fn normal_approximation_agrees_with_the_exact_runs_p_at_30_and_30() {
+        // E = 31, sd = 3.84 (Wald & Wolfowitz 1940's moments); the exact p is the reference,
+        // from [`runs_pmf`] checked against enumeration above
+        for r in [20, 24, 27, 29, 31, 34, 37, 42] {
+            let (e, x) = (runs_normal_p(30, 30, r), runs_exact_p(30, 30, r));
+            assert!((e - x).abs() < 0.01, "R = {r}: normal {e}, exact {x}");
+        }
+        // the test switches to the approximation above 20 of the rarer sign
+        let v: Vec<f64> = (0..60)
+            .map(|i| if i % 4 < 2 { 1.0 } else { -1.0 })
+            .collect();
+        let t = runs_test(&v);
+        assert_eq!((t.n_plus, t.n_minus, t.runs), (30, 30, 30));
+        assert_eq!(t.method, RunsMethod::Normal);
+        assert_eq!(t.p_value, runs_normal_p(30, 30, 30));
+    }
+
+    #[test]
+    fn residuals_all_of_one_sign_get_the_sign_test() {
+        // the two-sided sign test of n residuals all of one sign: p = 2·0.5ⁿ (binomial(n, ½)
+        // tails, by hand), capped at 1; zeros and non-finite values are dropped first
+        let t = runs_test(&[1.0, 2.0, 0.0, 3.0, 4.0, f64::NAN, 5.0]);
+        assert_eq!(t.method, RunsMethod::SignTest);
+        assert_eq!((t.runs, t.n_plus, t.n_minus), (1, 5, 0));
+        assert!((t.p_value - 0.0625).abs() < 1e-15);
+        assert!(t.clustered());
+        let t = runs_test(&vec![-2e-6; 61]);
+        assert_eq!(t.method, RunsMethod::SignTest);
+        assert!((t.p_value - 2.0 * 0.5f64.powi(61)).abs() < 1e-30);
+        assert_eq!(runs_test(&[-1.0]).p_value, 1.0);
+        let t = runs_test(&[0.0, 0.0]);
+        assert_eq!(t.method, RunsMethod::NoData);
+        assert!(t.p_value.is_nan() && !t.clustered());
     }
 
     #[test]

@@ -1125,6 +1125,37 @@ fn the_diagnosis_correlates_residuals_with_the_simulated_radius() {
     for s in &d.signatures {
         assert!(s.contains("Holm-adjusted over"), "{s}");
     }
+    // the per-cycle means are outside it; every row in it carries the Holm-adjusted p that
+    // `holm` gives over the family's p-values in the order phases, covariates, runs tests
+    assert!(!d.cycles.is_empty() && d.cycles.iter().all(|c| c.holm_p.is_none()));
+    let family: Vec<f64> = d
+        .phases
+        .iter()
+        .map(|g| g.p_value)
+        .chain(d.trends.iter().map(|t| t.p_value))
+        .chain(d.runs.iter().map(|r| r.test.p_value))
+        .collect();
+    let adjusted: Vec<f64> = d
+        .phases
+        .iter()
+        .map(|g| g.holm_p.expect("a phase is in the family"))
+        .chain(d.trends.iter().map(|t| t.holm_p))
+        .chain(d.runs.iter().map(|r| r.holm_p))
+        .collect();
+    assert_eq!(adjusted, decophantom::fit::stats::holm(&family));
+    // without bubble positions (no first frames given) the two distances are not tested: named
+    // as dropped, with the reason
+    let dropped: Vec<&str> = d.dropped.iter().map(|c| c.covariate).collect();
+    assert_eq!(
+        dropped,
+        [
+            "distance to the nearest open face",
+            "distance to the nearest bubble"
+        ]
+    );
+    for c in &d.dropped {
+        assert!(c.reason.contains("no bubble positions"), "{c:?}");
+    }
 }
 
 /// What `discover` says of data `synth` made with `--effect surface-permeability=30
@@ -1156,6 +1187,28 @@ fn provenance_and_statistics_are_reported(t: &toml::Table, report: &str, disc: &
     );
     assert!(
         report.contains("| parameter | estimate | true value (synth) |"),
+        "{report}"
+    );
+    // the report names the fold in a reader's words, discover.toml by its path
+    assert!(report.contains("| k (surface fold) | "), "{report}");
+    assert!(!report.contains("material.surface.fold"), "{report}");
+    // the residual diagnostics' Holm family, stated in the report and in discover.toml
+    for which in ["baseline", "final_model"] {
+        let g = &t["diagnostics"][which];
+        let members = g["holm_family_members"].as_array().unwrap();
+        assert_eq!(
+            g["holm_family"].as_integer(),
+            Some(members.len() as i64),
+            "{g:?}"
+        );
+        assert_eq!(g["holm_p"].as_array().unwrap().len(), members.len());
+        assert!(
+            report.contains(&format!("The Holm family has {} tests:", members.len())),
+            "{report}"
+        );
+    }
+    assert!(
+        report.contains("| in Holm family | Holm-adjusted p |"),
         "{report}"
     );
     let n = t["observations"].as_integer().unwrap();
