@@ -74,6 +74,16 @@ pub fn discover_journaled(
                 .into(),
         );
     }
+    if req.max_effects == 0 {
+        // a search that may add nothing tests no candidate: its "nothing missing" would be
+        // a conclusion it never drew
+        return Err(InputError::new(
+            "must be at least 1 (0 would test no candidate; to fit the model as it is, use `fit`)",
+        )
+        .in_file("<command line>")
+        .field("--max-effects")
+        .into());
+    }
     // the output folder is checked before any fitting (and again at the commit)
     let inputs = [req.measured.as_path(), req.experiments.as_path()];
     crate::report::output::check_target(&req.out, &inputs)?;

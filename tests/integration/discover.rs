@@ -1319,3 +1319,26 @@ fn fit_gives_the_true_value_of_a_synthetic_path_and_calls_other_data_measured() 
     assert!(report.contains("**Data**: measured radii"), "{report}");
     assert!(!report.contains("true value"), "{report}");
 }
+
+/// `--max-effects 0` is refused before anything is read: a search that may add nothing tests
+/// no candidate, and its "no missing effect found" would be a conclusion it never drew.
+#[test]
+fn discover_refuses_max_effects_zero() {
+    let dir = tempdir("discover-max-effects-0");
+    let req = decophantom::app::discover::DiscoverRequest {
+        measured: dir.join("m.csv"),
+        experiments: dir.join("e.toml"),
+        out: dir.join("out"),
+        alpha: 0.01,
+        max_effects: 0,
+        only: Vec::new(),
+        command: String::new(),
+    };
+    let e = decophantom::app::discover::discover_journaled(&req, &|_, _| {})
+        .err()
+        .expect("refused");
+    let text = e.to_string();
+    assert!(matches!(e, decophantom::error::Error::Input(_)), "{text}");
+    assert!(text.contains("--max-effects") && text.contains("at least 1"), "{text}");
+    assert!(!dir.join("out").exists() && !dir.join("out.partial").exists());
+}
