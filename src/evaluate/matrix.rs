@@ -54,14 +54,20 @@ pub fn run_matrix_journaled(
         .flat_map(|c| laws.iter().map(move |l| (c, *l)))
         .collect();
     let total = jobs.len() as f64;
-    breathed_gas_params(&phantom.params, &criteria.protocol).map_err(|e| {
-        // the phantom file, with the line of the field when the source is a readable file
-        let e = e.in_file(&phantom.source);
-        Error::Input(match std::fs::read_to_string(&phantom.source) {
-            Ok(text) => crate::error::ensure_line(e, &text),
-            Err(_) => e,
-        })
-    })?;
+    // the phantom file, with the line of the field when the source is a readable file
+    let located = |e| {
+        Error::Input(crate::phantom::config::in_phantom_file(
+            e,
+            std::path::Path::new(&phantom.source),
+        ))
+    };
+    let breathed = breathed_gas_params(&phantom.params, &criteria.protocol).map_err(located)?;
+    // the bubbles' fixed gases against every schedule's pressures, before anything runs
+    for cand in &candidates {
+        breathed
+            .bubble_fixed_gases_for(&cand.history)
+            .map_err(located)?;
+    }
     let params: Vec<PhantomParams> = jobs
         .iter()
         .map(|&(_, law)| {

@@ -220,6 +220,16 @@ pub struct LoadedPhantom {
     pub description: String,
 }
 
+/// `e`, an error in a phantom's field found after the file was read (against a profile, say),
+/// placed in the phantom file `path`: the file, and the line of the field when the file reads.
+pub fn in_phantom_file(e: InputError, path: &Path) -> InputError {
+    let e = e.in_file(path);
+    match std::fs::read_to_string(path) {
+        Ok(text) => crate::error::ensure_line(e, &text),
+        Err(_) => e,
+    }
+}
+
 /// Read and validate a phantom TOML file.
 pub fn load_phantom(path: &Path) -> Result<LoadedPhantom, InputError> {
     let text = crate::error::read_text(path, "the phantom file")?;

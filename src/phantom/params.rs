@@ -355,6 +355,35 @@ impl PhantomParams {
     /// unsaturated), naming both settings. `evaluate`/`check` set p_fixed from the criteria's
     /// `[protocol]` (P_H2O + P_CO2 + P_vO2 ≥ the P_H2O of their faces).
     pub fn bubble_fixed_gases_for(&self, profile: &PressureHistory) -> Result<f64, InputError> {
+        let fixed = self.paired_fixed_gases(profile)?;
+        // the fixed gases alone at or above the ambient pressure would hold a bubble open at
+        // any size: no radius satisfies the Laplace balance once the pressure gets there, and
+        // the run would fail mid-way (tissue's are about 17 kPa: vapour, CO2, venous O2)
+        let (at, lowest) = profile.times_s.iter().zip(&profile.ambient_pa).fold(
+            (f64::NAN, f64::INFINITY),
+            |a, (t, p)| {
+                if *p < a.1 {
+                    (*t, *p)
+                } else {
+                    a
+                }
+            },
+        );
+        if fixed > 0.0 && fixed >= lowest {
+            return Err(InputError::new(format!(
+                "the bubbles' fixed gases, {} Pa, reach the profile's lowest ambient pressure, {} Pa at t = {} s: the other gases alone would then hold a bubble open at any size and no radius satisfies the Laplace balance; lower material.bubble_fixed_gases_pa (tissue's water vapour, CO2 and venous O2 are about 17 kPa)",
+                crate::error::num(fixed),
+                crate::error::num(lowest),
+                crate::error::num(at)
+            ))
+            .field("material.bubble_fixed_gases_pa"));
+        }
+        Ok(fixed)
+    }
+
+    /// The bubbles' fixed gases paired with the profile's water vapour
+    /// ([`Self::bubble_fixed_gases_for`] before its check against the ambient pressure).
+    fn paired_fixed_gases(&self, profile: &PressureHistory) -> Result<f64, InputError> {
         let (fixed, vapour) = (self.bubble_fixed_gases, profile.vapour_pa);
         if !(vapour > 0.0) {
             return Ok(fixed);

@@ -739,3 +739,32 @@ seed = 1
     assert!(radius.contains("No bubble in this run"));
     assert!(!dir.join("ev.partial").exists());
 }
+
+/// Fixed gases at or above the profile's lowest ambient pressure can hold no bubble in Laplace
+/// balance: refused before the run (exit 2, the phantom file, line and field, the pressure and
+/// its time), where the run used to fail mid-way with exit 3 and no place named.
+#[test]
+fn fixed_gases_above_the_lowest_ambient_pressure_are_refused_before_the_run() {
+    let dir = tempdir("fixed-above-ambient");
+    let phantom = write(
+        &dir,
+        "fixed.toml",
+        "[geometry]\nshape = \"box\"\nsize_m = [3.2e-3, 3.2e-3, 3.2e-3]\ngrid_step_m = 400e-6\n\n[material]\nbubble_fixed_gases_pa = 1e5\n\n[gases.n2]\ndiffusivity = 2.5e-9\nostwald = 0.014\n[gases.o2]\ndiffusivity = 2.5e-9\nostwald = 0.027\n\n[[bubbles]]\nposition_m = [1.6e-3, 1.6e-3, 1.6e-3]\ninitial_radius_m = 60e-6\n",
+    );
+    let profile = write(
+        &dir,
+        "altitude.toml",
+        "time_unit = \"s\"\npressure_unit = \"pa\"\ngas = \"air\"\npoints = [[0, 101325], [10, 20000], [60, 20000]]\n",
+    );
+    let out = dir.join("run");
+    let o = simulate(&profile, &phantom, &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("fixed.toml:7:")
+            && err.contains("material.bubble_fixed_gases_pa")
+            && err.contains("20000 Pa at t = 10 s"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

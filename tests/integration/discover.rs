@@ -1339,6 +1339,9 @@ fn discover_refuses_max_effects_zero() {
         .expect("refused");
     let text = e.to_string();
     assert!(matches!(e, decophantom::error::Error::Input(_)), "{text}");
-    assert!(text.contains("--max-effects") && text.contains("at least 1"), "{text}");
+    assert!(
+        text.contains("--max-effects") && text.contains("at least 1"),
+        "{text}"
+    );
     assert!(!dir.join("out").exists() && !dir.join("out.partial").exists());
 }
