@@ -435,7 +435,8 @@ pub struct PlanArgs {
     #[command(flatten)]
     pub dive: DiveArgs,
     /// Format of the printed table and of --out: md, csv or toml (default md printed; --out
-    /// by its extension: .csv the waypoints `check` reads, .md the table, else the schedule TOML).
+    /// by its extension: .toml the schedule TOML, .csv the waypoints `check` reads, .md the
+    /// table; any other extension is refused).
     #[arg(long, value_parser = ["md", "csv", "toml"])]
     pub format: Option<String>,
     /// Write the schedule here (readable by check, simulate, evaluate --schedule); an existing

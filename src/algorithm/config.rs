@@ -199,11 +199,12 @@ impl Overrides {
                 // the floor: 1000 m in the 30 days a history may last
                 // ([`super::conventions::MIN_TRAVEL_RATE_M_MIN`])
                 let lo = super::conventions::MIN_TRAVEL_RATE_M_MIN;
-                if !(v.is_finite() && v >= lo && v <= 100.0) {
+                let hi = super::conventions::MAX_TRAVEL_RATE_M_MIN;
+                if !(v.is_finite() && v >= lo && v <= hi) {
                     return cmd(
                         opt,
                         format!(
-                            "rate {} m/min is outside {lo:.4}..100 m/min (at {lo:.4} m/min 1000 m take the whole 30 days a history may last)",
+                            "rate {} m/min is outside {lo:.4}..{hi} m/min (at {lo:.4} m/min 1000 m take the whole 30 days a history may last)",
                             crate::error::num(v)
                         ),
                     );

@@ -91,6 +91,13 @@ pub const MAX_WATER_VAPOUR_PA: f64 = 20_000.0;
 pub const MIN_TRAVEL_RATE_M_MIN: f64 =
     super::schedule::MAX_PLAN_DEPTH_M / (crate::profile::MAX_DURATION_S / 60.0);
 
+/// Fastest descent or ascent rate accepted, m/min: the top of the range of `--descent-rate` and
+/// `--ascent-rate`, and of the travel legs of a schedule (a `descent` or `ascent` leg of a
+/// schedule TOML, a segment between two waypoints of a CSV): 100 m/min is several times the
+/// travel rates of the usual tables (ascents at 9–18 m/min), so a faster movement is an error
+/// of the file (a misplaced decimal, seconds given as minutes), not a dive.
+pub const MAX_TRAVEL_RATE_M_MIN: f64 = 100.0;
+
 /// Whether `v` lies in the closed range `r` (a NaN never does).
 pub fn within(v: f64, r: (f64, f64)) -> bool {
     v >= r.0 && v <= r.1

@@ -49,6 +49,40 @@ impl DecoGas {
 /// Deepest dive a plan may have, m.
 pub const MAX_PLAN_DEPTH_M: f64 = 1000.0;
 
+/// How far a `[[stops]]` row's depth may lie from its stop leg's, m: half the 0.1 m a stop
+/// table is printed to (`plan --out` writes full precision, so its files agree exactly).
+pub const STOP_TABLE_TOLERANCE_M: f64 = 0.05;
+
+/// How far a `[[stops]]` row's runtime and minutes may lie outside what its legs give, min:
+/// half the 0.1 min (6 s) a stop table is printed to.
+pub const STOP_TABLE_TOLERANCE_MIN: f64 = 0.05;
+
+/// A rate for a message, m/min: to 4 significant digits (3000, not 2999.999999999531 from
+/// times in minutes), `inf` for a change in no time.
+pub(crate) fn rate_text(rate: f64) -> String {
+    if !(rate.is_finite() && rate > 0.0) {
+        return crate::error::num(rate);
+    }
+    let scale = 10f64.powi(3 - rate.log10().floor() as i32);
+    crate::error::num((rate * scale).round() / scale)
+}
+
+/// The rate of a change of depth of `depth_change_m` in `duration_s`, m/min, when it is faster
+/// than [`super::conventions::MAX_TRAVEL_RATE_M_MIN`] (infinite for a change in no time);
+/// `None` for no change or an accepted rate. A relative 1e-9 is allowed for the rounding of
+/// times written in minutes, so that a leg at exactly 100 m/min passes.
+pub(crate) fn too_fast(depth_change_m: f64, duration_s: f64) -> Option<f64> {
+    if depth_change_m == 0.0 {
+        return None;
+    }
+    let rate = if duration_s > 0.0 {
+        depth_change_m.abs() / (duration_s / 60.0)
+    } else {
+        f64::INFINITY
+    };
+    (rate > super::conventions::MAX_TRAVEL_RATE_M_MIN * (1.0 + 1e-9)).then_some(rate)
+}
+
 impl DivePlan {
     /// The gases available on the ascent: the deco gases, and each travel gas from the deep
     /// end of its range (where the diver left it on the way down) unless a deco gas is
@@ -496,6 +530,219 @@ fn line_of_nth(text: &str, header: &str, n: usize) -> Option<usize> {
         .map(|(i, _)| i + 1)
 }
 
+/// 1-based line of `key =` in the `n`-th (0-based) table `header` (e.g. `[[stops]]`), `None`
+/// if the table or the key is not found.
+fn line_of_nth_key(text: &str, header: &str, n: usize, key: &str) -> Option<usize> {
+    let start = line_of_nth(text, header, n)?;
+    text.lines()
+        .enumerate()
+        .skip(start)
+        .take_while(|(_, l)| !l.trim_start().starts_with('['))
+        .find(|(_, l)| {
+            let t = l.trim_start();
+            t.starts_with(key) && t[key.len()..].trim_start().starts_with('=')
+        })
+        .map(|(i, _)| i + 1)
+}
+
+/// A leg's kind against its direction, and its rate: a `descent` goes down, an `ascent` up
+/// (both may be a zero-length gas switch), and a change of depth takes a time within the
+/// accepted rates. `Err((field, message))`.
+fn check_travel(l: &RawLeg) -> Result<(), (&'static str, String)> {
+    use super::conventions::{MAX_TRAVEL_RATE_M_MIN, MIN_TRAVEL_RATE_M_MIN};
+    let change = l.end_depth_m - l.start_depth_m;
+    let moves = change.abs() > 1e-9;
+    let (from, to) = (
+        crate::error::num(l.start_depth_m),
+        crate::error::num(l.end_depth_m),
+    );
+    let wrong_way = match l.kind {
+        LegKind::Descent => change < -1e-9 || (!moves && l.duration_s > 0.0),
+        LegKind::Ascent => change > 1e-9 || (!moves && l.duration_s > 0.0),
+        LegKind::Stop | LegKind::Bottom => false,
+    };
+    if wrong_way {
+        let (kind, should) = match l.kind {
+            LegKind::Descent => ("descent", "go down"),
+            _ => ("ascent", "go up"),
+        };
+        let actual = if change > 1e-9 {
+            "goes down".to_string()
+        } else if change < -1e-9 {
+            "goes up".to_string()
+        } else {
+            format!("stays at {from} m")
+        };
+        return Err((
+            "kind",
+            format!(
+                "kind \"{kind}\" but the leg {actual} ({from} m to {to} m): a {kind} must {should}; correct the kind or the depths"
+            ),
+        ));
+    }
+    if !moves {
+        return Ok(());
+    }
+    if let Some(rate) = too_fast(change, l.duration_s) {
+        return Err((
+            "duration_s",
+            format!(
+                "{from} m to {to} m in {} s is {} m/min, faster than the accepted {MAX_TRAVEL_RATE_M_MIN} m/min; give the time the movement takes",
+                crate::error::num(l.duration_s),
+                rate_text(rate)
+            ),
+        ));
+    }
+    let rate = change.abs() / (l.duration_s / 60.0);
+    if rate < MIN_TRAVEL_RATE_M_MIN * (1.0 - 1e-9) {
+        return Err((
+            "duration_s",
+            format!(
+                "{from} m to {to} m in {} s is {} m/min, slower than the accepted {MIN_TRAVEL_RATE_M_MIN:.4} m/min (at which 1000 m take the whole 30 days a history may last)",
+                crate::error::num(l.duration_s),
+                rate_text(rate)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// A stop as the legs give it: a run of consecutive `stop` legs at one depth.
+#[derive(Debug, Clone, Copy)]
+struct LegStop {
+    depth_m: f64,
+    /// Runtime when the stop starts and ends, s.
+    start_s: f64,
+    end_s: f64,
+    /// The legs' total duration, s.
+    duration_s: f64,
+    /// The gas of its last leg.
+    gas: GasMix,
+    /// 0-based index of its first leg.
+    first_leg: usize,
+}
+
+/// The stops of the legs, in order.
+fn stops_of_legs(legs: &[Leg]) -> Vec<LegStop> {
+    let mut out: Vec<LegStop> = Vec::new();
+    let mut now = 0.0;
+    let mut prev_stop = false;
+    for (i, l) in legs.iter().enumerate() {
+        let start = now;
+        now += l.duration_s;
+        if l.kind != LegKind::Stop {
+            prev_stop = false;
+            continue;
+        }
+        match out.last_mut() {
+            Some(g) if prev_stop && (g.depth_m - l.start_depth_m).abs() <= 1e-9 => {
+                g.end_s = now;
+                g.duration_s += l.duration_s;
+                g.gas = l.gas;
+            }
+            _ => out.push(LegStop {
+                depth_m: l.start_depth_m,
+                start_s: start,
+                end_s: now,
+                duration_s: l.duration_s,
+                gas: l.gas,
+                first_leg: i,
+            }),
+        }
+        prev_stop = true;
+    }
+    out
+}
+
+/// Row `i` of a stop table against the legs' stops ([`Schedule::from_toml_str`] gives the
+/// rule). `Err((field, message))`.
+fn check_stop_row(
+    row: &Stop,
+    i: usize,
+    leg_stops: &[LegStop],
+) -> Result<(), (&'static str, String)> {
+    use crate::error::num;
+    let Some(g) = leg_stops.get(i) else {
+        let depths: Vec<String> = leg_stops.iter().map(|g| num(g.depth_m)).collect();
+        return Err((
+            "depth_m",
+            format!(
+                "the stop table lists {} m, but the legs have no stop for it ({}); every row must be a run of `stop` legs",
+                num(row.depth_m),
+                if depths.is_empty() {
+                    "they have no stop legs".to_string()
+                } else {
+                    format!("their stops are at {} m", depths.join(", "))
+                }
+            ),
+        ));
+    };
+    let leg = g.first_leg + 1;
+    if (row.depth_m - g.depth_m).abs() > STOP_TABLE_TOLERANCE_M {
+        return Err((
+            "depth_m",
+            format!(
+                "{} m, but the legs' stop {} is at {} m (leg {leg}); the table must list the legs' stops in order (within {STOP_TABLE_TOLERANCE_M} m)",
+                num(row.depth_m),
+                i + 1,
+                num(g.depth_m)
+            ),
+        ));
+    }
+    if row.gas != g.gas {
+        return Err((
+            "gas",
+            format!(
+                "{}, but leg {leg} (the stop at {} m) breathes {}",
+                gas_text(row.gas),
+                num(g.depth_m),
+                gas_text(g.gas)
+            ),
+        ));
+    }
+    let end_min = g.end_s / 60.0;
+    if (row.runtime_min - end_min).abs() > STOP_TABLE_TOLERANCE_MIN {
+        return Err((
+            "runtime_min",
+            format!(
+                "runtime {} min, but the legs leave the stop at {} m at {} min (within {STOP_TABLE_TOLERANCE_MIN} min)",
+                num(row.runtime_min),
+                num(g.depth_m),
+                num(end_min)
+            ),
+        ));
+    }
+    let legs_min = g.duration_s / 60.0;
+    let since_min = match i {
+        0 => end_min - g.start_s / 60.0,
+        _ => end_min - leg_stops[i - 1].end_s / 60.0,
+    };
+    let (lo, hi) = (
+        legs_min - STOP_TABLE_TOLERANCE_MIN,
+        since_min + 1.0 + STOP_TABLE_TOLERANCE_MIN,
+    );
+    if !(row.stop_min >= lo && row.stop_min <= hi) {
+        let since = if i == 0 {
+            "arriving".to_string()
+        } else {
+            format!("leaving the stop at {} m", num(leg_stops[i - 1].depth_m))
+        };
+        return Err((
+            "stop_min",
+            format!(
+                "{} min at {} m, but the legs stay {} min (leg {leg}), {} min after {since}: a stop's minutes lie between its legs' and that time plus one minute of rounding ({}..{} min)",
+                num(row.stop_min),
+                num(g.depth_m),
+                num(legs_min),
+                num(since_min),
+                num(lo.max(0.0)),
+                num(hi)
+            ),
+        ));
+    }
+    Ok(())
+}
+
 impl Schedule {
     /// Write as TOML (the `plan --out` format) with an optional summary.
     pub fn to_toml_string(&self, summary: Option<&ScheduleSummary>) -> String {
@@ -536,8 +783,28 @@ impl Schedule {
     }
 
     /// Read a schedule TOML (as written by [`Schedule::to_toml_string`]). `path` is used in
-    /// error messages. Checks: at least one leg, legs continuous in depth, depths ≥ 0,
-    /// durations ≥ 0, stops/bottoms at constant depth, and the last leg ends at the surface.
+    /// error messages. Checks: at least one leg, the first starting at the surface (the phantom
+    /// starts saturated there; a first leg below it would be an instant compression), legs
+    /// continuous in depth, depths ≥ 0, durations ≥ 0, stops/bottoms at constant depth, a
+    /// `descent` going down and an `ascent` going up, every change of depth at a rate within
+    /// [`super::conventions::MIN_TRAVEL_RATE_M_MIN`] ..=
+    /// [`super::conventions::MAX_TRAVEL_RATE_M_MIN`] (0.0231–100 m/min, the documented range
+    /// of descent and ascent rates; a leg that changes depth in no time is refused), and the
+    /// last leg ends at the surface. A leg of zero duration and no change of depth (a gas
+    /// switch) is accepted whatever its kind.
+    ///
+    /// The `[[stops]]` table is what reports print as the stop table, so it is checked against
+    /// the legs, never taken on trust: a stop of the legs is a run of consecutive `stop` legs at
+    /// one depth, and the table must list each, in order, one row per stop, with its depth
+    /// within [`STOP_TABLE_TOLERANCE_M`], its gas the gas of the stop's (last) leg, its
+    /// runtime (when leaving) within [`STOP_TABLE_TOLERANCE_MIN`] of the legs', and its
+    /// minutes no shorter than the stop's legs (less [`STOP_TABLE_TOLERANCE_MIN`]) and no
+    /// longer than the time since the previous stop was left (since arriving, for the first)
+    /// plus one minute and [`STOP_TABLE_TOLERANCE_MIN`]: the planners' rounding conventions
+    /// count the travel from the previous stop into a stop's minutes (whole minutes of
+    /// runtime) and round the first stop up to a whole minute (VPM-B), and nothing else. A
+    /// mismatch is refused naming the row's line and field. A file without `[[stops]]` gets
+    /// the table derived from the legs (minutes = the stop's legs, as for CSV waypoints).
     pub fn from_toml_str(text: &str, path: &Path) -> Result<Schedule, InputError> {
         Self::from_toml_str_unlined(text, path).map_err(|e| crate::error::ensure_line(e, text))
     }
@@ -696,6 +963,15 @@ impl Schedule {
                     ));
                 }
             }
+            if legs.is_empty() && l.start_depth_m.abs() > 1e-9 {
+                return Err(err(
+                    "start_depth_m",
+                    format!(
+                        "the schedule starts at {} m: legs run from the surface (0 m), where the phantom starts saturated, and a first leg below it would be an instant compression; add the descent from 0 m",
+                        crate::error::num(l.start_depth_m)
+                    ),
+                ));
+            }
             let constant = matches!(l.kind, LegKind::Stop | LegKind::Bottom);
             if constant && (l.start_depth_m - l.end_depth_m).abs() > 1e-9 {
                 return Err(err(
@@ -703,6 +979,7 @@ impl Schedule {
                     "a stop or bottom leg must stay at one depth".into(),
                 ));
             }
+            check_travel(l).map_err(|(f, m)| err(f, m))?;
             legs.push(Leg {
                 kind: l.kind,
                 start_depth_m: l.start_depth_m,
@@ -723,6 +1000,7 @@ impl Schedule {
                     .unwrap_or_else(|| crate::error::last_line(text)),
             ));
         }
+        let leg_stops = stops_of_legs(&legs);
         let mut stops = Vec::with_capacity(raw.stops.len());
         for (i, s) in raw.stops.iter().enumerate() {
             let stop_err = |field: &str, m: String| {
@@ -752,12 +1030,46 @@ impl Schedule {
                     ));
                 }
             }
-            stops.push(Stop {
+            let row = Stop {
                 depth_m: s.depth_m,
                 stop_min: s.stop_min,
                 runtime_min: s.runtime_min,
                 gas,
-            });
+            };
+            check_stop_row(&row, i, &leg_stops).map_err(|(f, m)| {
+                let mut e = stop_err(f, m);
+                if let Some(line) = line_of_nth_key(text, "[[stops]]", i, f) {
+                    e = e.at_line(line);
+                }
+                e
+            })?;
+            stops.push(row);
+        }
+        if raw.stops.is_empty() {
+            stops = leg_stops
+                .iter()
+                .map(|g| Stop {
+                    depth_m: g.depth_m,
+                    stop_min: g.duration_s / 60.0,
+                    runtime_min: g.end_s / 60.0,
+                    gas: g.gas,
+                })
+                .collect();
+        } else if let Some(g) = leg_stops.get(raw.stops.len()) {
+            return Err(InputError::new(format!(
+                "leg {} is a stop at {} m (runtime {} min) that the stop table does not list ({} row(s) for {} stops); add its [[stops]] row, or leave out [[stops]] to have the table derived from the legs",
+                g.first_leg + 1,
+                crate::error::num(g.depth_m),
+                crate::error::num(g.end_s / 60.0),
+                raw.stops.len(),
+                leg_stops.len()
+            ))
+            .in_file(path)
+            .field("stops")
+            .at_line(
+                line_of_nth(text, "[[legs]]", g.first_leg)
+                    .unwrap_or_else(|| crate::error::last_line(text)),
+            ));
         }
         Ok(Schedule {
             label: raw.label,
@@ -843,5 +1155,224 @@ impl Schedule {
             ambient_pa: self.surface_pressure_pa,
         };
         Ok(h)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// 30 m for 20 min on air, up at 9 m/min to a 5-min EAN50 stop at 3 m (left at 30.0 min),
+    /// then 3 m in 20 s to the surface: the legs as lines 6–39, the stop table from line 41.
+    const TEXT: &str = r#"label = "t"
+surface_pressure_pa = 101325.0
+pa_per_m = 9985.0
+water_vapour_pa = 6270.0
+
+[[legs]]
+kind = "descent"
+start_depth_m = 0.0
+end_depth_m = 30.0
+duration_s = 120.0
+gas = "air"
+
+[[legs]]
+kind = "bottom"
+start_depth_m = 30.0
+end_depth_m = 30.0
+duration_s = 1200.0
+gas = "air"
+
+[[legs]]
+kind = "ascent"
+start_depth_m = 30.0
+end_depth_m = 3.0
+duration_s = 180.0
+gas = "air"
+
+[[legs]]
+kind = "stop"
+start_depth_m = 3.0
+end_depth_m = 3.0
+duration_s = 300.0
+gas = "EAN50"
+
+[[legs]]
+kind = "ascent"
+start_depth_m = 3.0
+end_depth_m = 0.0
+duration_s = 20.0
+gas = "EAN50"
+
+[[stops]]
+depth_m = 3.0
+stop_min = 5.0
+runtime_min = 30.0
+gas = "EAN50"
+"#;
+
+    fn read(text: &str) -> Result<Schedule, InputError> {
+        Schedule::from_toml_str(text, Path::new("s7.toml"))
+    }
+
+    /// `text` with the `n`-th (1-based) occurrence of `from` replaced by `to`.
+    fn edit(text: &str, n: usize, from: &str, to: &str) -> String {
+        let at = text.match_indices(from).nth(n - 1).unwrap().0;
+        format!("{}{to}{}", &text[..at], &text[at + from.len()..])
+    }
+
+    fn refused(text: &str) -> (Option<usize>, String, String) {
+        let e = read(text).unwrap_err();
+        assert_eq!(e.file.as_deref(), Some(Path::new("s7.toml")), "{e}");
+        (e.line, e.field.clone().unwrap_or_default(), e.to_string())
+    }
+
+    #[test]
+    fn a_stop_table_that_agrees_with_the_legs_is_read() {
+        let s = read(TEXT).unwrap();
+        assert_eq!(s.stops.len(), 1);
+        assert_eq!(s.stop_time_min(), 5.0);
+        // minutes rounded up to the whole minute (the first stop) and a runtime printed to
+        // 0.1 min pass; so does a depth printed to 0.1 m
+        read(&edit(TEXT, 1, "stop_min = 5.0", "stop_min = 6.0")).unwrap();
+        read(&edit(TEXT, 1, "runtime_min = 30.0", "runtime_min = 30.04")).unwrap();
+        read(&edit(
+            TEXT,
+            1,
+            "depth_m = 3.0\nstop_min",
+            "depth_m = 3.04\nstop_min",
+        ))
+        .unwrap();
+    }
+
+    /// Defect A: a stop of 50 min over a 5-min leg was reported as it was, with the simulation
+    /// on the legs.
+    #[test]
+    fn a_stop_table_that_contradicts_the_legs_is_refused_at_its_line_and_field() {
+        let (line, field, msg) = refused(&edit(TEXT, 1, "stop_min = 5.0", "stop_min = 50.0"));
+        assert_eq!(
+            (line, field.as_str()),
+            (Some(43), "stops.stop_min"),
+            "{msg}"
+        );
+        assert!(
+            msg.starts_with("s7.toml:43: field 'stops.stop_min': stop 1: 50 min"),
+            "{msg}"
+        );
+        assert!(msg.contains("legs stay 5 min (leg 4)"), "{msg}");
+        // shorter than the leg
+        let (line, field, _) = refused(&edit(TEXT, 1, "stop_min = 5.0", "stop_min = 4.9"));
+        assert_eq!((line, field.as_str()), (Some(43), "stops.stop_min"));
+        let (line, field, msg) = refused(&edit(
+            TEXT,
+            1,
+            "depth_m = 3.0\nstop_min",
+            "depth_m = 6.0\nstop_min",
+        ));
+        assert_eq!((line, field.as_str()), (Some(42), "stops.depth_m"), "{msg}");
+        let (line, field, _) = refused(&edit(TEXT, 1, "runtime_min = 30.0", "runtime_min = 30.3"));
+        assert_eq!((line, field.as_str()), (Some(44), "stops.runtime_min"));
+        let (line, field, msg) = refused(&edit(TEXT, 3, "gas = \"EAN50\"", "gas = \"air\""));
+        assert_eq!((line, field.as_str()), (Some(45), "stops.gas"), "{msg}");
+        // a row the legs have no stop for: named with the stops the legs have
+        let extra = format!("{TEXT}\n[[stops]]\ndepth_m = 6.0\nstop_min = 1.0\nruntime_min = 31.0\ngas = \"EAN50\"\n");
+        let (line, field, msg) = refused(&extra);
+        assert_eq!((line, field.as_str()), (Some(48), "stops.depth_m"), "{msg}");
+        assert!(msg.contains("their stops are at 3 m"), "{msg}");
+        // a stop leg without its row: named at the leg
+        let two = edit(TEXT, 1, "duration_s = 300.0", "duration_s = 240.0");
+        let two = edit(
+            &two,
+            2,
+            "[[legs]]\nkind = \"ascent\"",
+            "[[legs]]\nkind = \"ascent\"\nstart_depth_m = 3.0\nend_depth_m = 2.0\nduration_s = 6.0\ngas = \"EAN50\"\n\n[[legs]]\nkind = \"stop\"\nstart_depth_m = 2.0\nend_depth_m = 2.0\nduration_s = 60.0\ngas = \"EAN50\"\n\n[[legs]]\nkind = \"ascent\"",
+        )
+        .replace("start_depth_m = 3.0\nend_depth_m = 0.0", "start_depth_m = 2.0\nend_depth_m = 0.0")
+        .replace("stop_min = 5.0", "stop_min = 4.0")
+        .replace("runtime_min = 30.0", "runtime_min = 29.0");
+        let (line, field, msg) = refused(&two);
+        assert_eq!((line, field.as_str()), (Some(41), "stops"), "{msg}");
+        assert!(msg.contains("leg 6 is a stop at 2 m"), "{msg}");
+        // with a row for it, the same legs are read; the second stop's minutes may count the
+        // travel from the first (whole minutes of runtime: 2 min from 29.0 to 30.1)
+        let both = format!("{two}\n[[stops]]\ndepth_m = 2.0\nstop_min = 1.1\nruntime_min = 30.1\ngas = \"EAN50\"\n");
+        let s = read(&both).unwrap();
+        assert_eq!(s.stops.len(), 2);
+    }
+
+    /// Without `[[stops]]` the table is the legs' stops (the report's stop time is never 0 for
+    /// a schedule that stops).
+    #[test]
+    fn an_absent_stop_table_is_derived_from_the_legs() {
+        let cut = TEXT.find("[[stops]]").unwrap();
+        let s = read(&TEXT[..cut]).unwrap();
+        assert_eq!(
+            s.stops,
+            vec![Stop {
+                depth_m: 3.0,
+                stop_min: 5.0,
+                runtime_min: 30.0,
+                gas: GasMix::new(0.5, 0.0).unwrap(),
+            }]
+        );
+    }
+
+    /// Defect B: legs that move in no time, faster than the accepted rates or against their
+    /// kind, and a schedule that starts below the surface, are refused at the leg's line.
+    #[test]
+    fn impossible_movements_are_refused_at_the_legs_line() {
+        let ascent = |d: &str| edit(TEXT, 1, "duration_s = 180.0", &format!("duration_s = {d}"));
+        for d in ["0.0", "1e-9", "16.1"] {
+            let (line, field, msg) = refused(&ascent(d));
+            assert_eq!(
+                (line, field.as_str()),
+                (Some(20), "legs.duration_s"),
+                "{msg}"
+            );
+            assert!(msg.contains("faster than the accepted 100 m/min"), "{msg}");
+        }
+        // 27 m in 16.2 s is exactly 100 m/min: accepted
+        read(&ascent("16.2").replace("runtime_min = 30.0", "runtime_min = 27.27")).unwrap();
+        // 27 m in 100 000 s (0.016 m/min) is slower than 0.0231 m/min
+        let (line, field, msg) = refused(&ascent("100000.0"));
+        assert_eq!(
+            (line, field.as_str()),
+            (Some(20), "legs.duration_s"),
+            "{msg}"
+        );
+        assert!(msg.contains("slower than"), "{msg}");
+        let (line, field, _) = refused(&edit(TEXT, 1, "duration_s = 120.0", "duration_s = 0.0"));
+        assert_eq!((line, field.as_str()), (Some(6), "legs.duration_s"));
+        // kinds against the direction
+        let up = edit(TEXT, 1, "kind = \"descent\"", "kind = \"ascent\"");
+        let (line, field, msg) = refused(&up);
+        assert_eq!((line, field.as_str()), (Some(6), "legs.kind"), "{msg}");
+        assert!(
+            msg.contains("kind \"ascent\" but the leg goes down (0 m to 30 m)"),
+            "{msg}"
+        );
+        let down = edit(TEXT, 2, "kind = \"ascent\"", "kind = \"descent\"");
+        let (line, field, _) = refused(&down);
+        assert_eq!((line, field.as_str()), (Some(34), "legs.kind"));
+        // an ascent that stays put for a while; a zero-length one (a gas switch) is accepted
+        let flat = edit(TEXT, 1, "kind = \"stop\"", "kind = \"ascent\"");
+        let (line, field, _) = refused(&flat);
+        assert_eq!((line, field.as_str()), (Some(27), "legs.kind"));
+        let switch = edit(
+            TEXT,
+            1,
+            "[[legs]]\nkind = \"stop\"",
+            "[[legs]]\nkind = \"ascent\"\nstart_depth_m = 3.0\nend_depth_m = 3.0\nduration_s = 0.0\ngas = \"EAN50\"\n\n[[legs]]\nkind = \"stop\"",
+        );
+        read(&switch).unwrap();
+        // the first leg below the surface: an instant compression at t = 0
+        let deep = edit(TEXT, 1, "start_depth_m = 0.0", "start_depth_m = 20.0");
+        let (line, field, msg) = refused(&deep);
+        assert_eq!(
+            (line, field.as_str()),
+            (Some(6), "legs.start_depth_m"),
+            "{msg}"
+        );
+        assert!(msg.contains("starts at 20 m"), "{msg}");
     }
 }

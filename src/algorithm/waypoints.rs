@@ -1,7 +1,12 @@
 //! Schedules from other tools: a CSV of waypoints `time_min,depth_m[,gas]` (header required,
 //! linear between waypoints). The gas on a row is breathed from that waypoint to the next;
 //! rows without a `gas` column (or with an empty cell) keep the previous gas, starting from
-//! `default_gas`. Constant-depth segments after the deepest point become stops.
+//! `default_gas`. Constant-depth segments after the deepest point become stops. The first
+//! waypoint is at the surface (0 min, 0 m), and no segment moves faster than
+//! [`super::conventions::MAX_TRAVEL_RATE_M_MIN`] (100 m/min, the top of the documented rate
+//! range). A segment slower than the bottom of that range
+//! ([`super::conventions::MIN_TRAVEL_RATE_M_MIN`]) is accepted: waypoints carry no kind, and a
+//! slow change of depth is a drift at a stop or at the bottom, not a travel at a planned rate.
 
 use super::conventions::Conventions;
 use super::schedule::{Leg, LegKind, Schedule, Stop};
@@ -268,7 +273,7 @@ pub fn parse_waypoints_csv(
             gas = GasMix::parse(g)
                 .map_err(|m| InputError::new(m).in_file(path).at_line(line).field("gas"))?;
         }
-        if let Some(&(tp, _, _, _)) = pts.last() {
+        if let Some(&(tp, dp, _, _)) = pts.last() {
             let dur = (t - tp) * 60.0;
             if t <= tp || now_s + dur == now_s {
                 return Err(InputError::new(format!(
@@ -278,6 +283,21 @@ pub fn parse_waypoints_csv(
                 .at_line(line)
                 .field("time_min"));
             }
+            if let Some(rate) = super::schedule::too_fast(d - dp, dur) {
+                return Err(InputError::new(format!(
+                    "{} m at {} min after {} m at {} min is {} at {} m/min, faster than the accepted {} m/min; check this row's time and depth",
+                    crate::error::num(d),
+                    crate::error::num(t),
+                    crate::error::num(dp),
+                    crate::error::num(tp),
+                    if d > dp { "a descent" } else { "an ascent" },
+                    super::schedule::rate_text(rate),
+                    super::conventions::MAX_TRAVEL_RATE_M_MIN
+                ))
+                .in_file(path)
+                .at_line(line)
+                .field("depth_m"));
+            }
             now_s += dur;
         } else if t != 0.0 {
             return Err(InputError::new(format!(
@@ -286,6 +306,14 @@ pub fn parse_waypoints_csv(
             .in_file(path)
             .at_line(line)
             .field("time_min"));
+        } else if d != 0.0 {
+            return Err(InputError::new(format!(
+                "the first waypoint is at {} m: a schedule starts at the surface (0 m at time 0), where the phantom starts saturated, and a first point below it would be an instant compression; add the surface row and the descent (a profile that starts saturated at depth is read by simulate --profile)",
+                crate::error::num(d)
+            ))
+            .in_file(path)
+            .at_line(line)
+            .field("depth_m"));
         }
         pts.push((t, d, gas, line));
     }
@@ -410,5 +438,53 @@ mod tests {
         )
         .unwrap_err();
         assert_eq!(e.field.as_deref(), Some("time_min"));
+    }
+
+    /// Defect B: a descent at 2·10⁶ m/min, and a first row below the surface (an instant
+    /// compression at t = 0), are refused naming the row's line and field; exactly 100 m/min,
+    /// and a slow drift at a stop, are accepted.
+    #[test]
+    fn impossible_movements_are_refused_at_their_row() {
+        let read =
+            |text: &str| parse_waypoints_csv(text, Path::new("w.csv"), &DECOTENGU, GasMix::AIR);
+        let e = read("time_min,depth_m,gas\n0,0,air\n0.0001,200,\n5,200,\n7,0,\n").unwrap_err();
+        assert_eq!(
+            (e.file.as_deref(), e.line, e.field.as_deref()),
+            (Some(Path::new("w.csv")), Some(3), Some("depth_m")),
+            "{e}"
+        );
+        assert!(
+            e.message
+                .contains("a descent at 2000000 m/min, faster than the accepted 100 m/min"),
+            "{e}"
+        );
+        let e = read("time_min,depth_m\n0,0\n2,30\n20,30\n20.01,0\n").unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(5), Some("depth_m")),
+            "{e}"
+        );
+        assert!(e.message.contains("an ascent at 3000 m/min"), "{e}");
+        let e = read("time_min,depth_m\n0,20\n5,20\n7,0\n").unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(2), Some("depth_m")),
+            "{e}"
+        );
+        assert!(e.message.contains("the first waypoint is at 20 m"), "{e}");
+        read("time_min,depth_m\n0,0\n0.3,30\n20,30\n20.3,0\n").unwrap();
+        read("time_min,depth_m\n0,0\n2,30\n20,30\n23,6\n33,5.9\n34,0\n").unwrap();
+        // the legacy two-column files go through the same checks, at their own line and column
+        let dir = std::env::temp_dir().join(format!("decophantom-wp-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let f = dir.join("deep-start.txt");
+        std::fs::write(&f, "0 30\n3.75 0\n90 0\n").unwrap();
+        let e = read_legacy_schedule(&f, &DECOTENGU, GasMix::AIR).unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(1), Some("value")),
+            "{e}"
+        );
+        std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -68,7 +68,8 @@ pub struct PlanRequest {
     /// existing file is replaced only if `plan` wrote it and it is unchanged since.
     pub out: Option<PathBuf>,
     /// Format of `out` when given explicitly (`--format`); else from its extension
-    /// (`.csv` waypoints, `.md` the table, anything else the schedule TOML).
+    /// (`.toml` the schedule TOML, `.csv` waypoints, `.md` the table; any other is refused,
+    /// [`out_format`]).
     pub out_format: Option<PlanFormat>,
     /// Command-line settings replacing the algorithm file's (`--gf`, `--ascent-rate` ...).
     pub overrides: Overrides,
@@ -87,26 +88,49 @@ pub const OTU_WARN: f64 = 300.0;
 /// Longest bottom time searched for a no-decompression limit, min (a day).
 pub const NDL_SEARCH_MAX_MIN: f64 = 1440.0;
 
-/// The format `--out` is written in: the explicit one, else from the extension. An explicit
-/// format that contradicts a known extension (`--format toml --out s.csv`) is refused.
+/// The format `--out` is written in: the explicit one, else from the extension. The name must
+/// end in `.toml` (the schedule TOML) or `.csv` (waypoints), the extensions `check`,
+/// `simulate` and `evaluate --schedule` read those formats by, or `.md` (the stop table, for
+/// people): any other name (`.txt`, which they read as the paper's two-column format, or none,
+/// which they refuse) would hold a schedule no command reads back, and is refused before
+/// planning. An explicit format that contradicts the extension (`--format toml --out s.csv`)
+/// is refused.
 pub fn out_format(
     out: &std::path::Path,
     given: Option<PlanFormat>,
 ) -> Result<PlanFormat, InputError> {
-    let by_ext = out
+    let ext = out
         .extension()
-        .and_then(|e| PlanFormat::parse(&e.to_string_lossy()));
-    match (given, by_ext) {
-        (Some(g), Some(e)) if g != e => Err(InputError::new(format!(
+        .map(|e| e.to_string_lossy().to_ascii_lowercase());
+    let by_ext = match ext.as_deref() {
+        Some("toml") => Some(PlanFormat::Toml),
+        Some("csv") => Some(PlanFormat::Csv),
+        Some("md" | "markdown") => Some(PlanFormat::Md),
+        _ => None,
+    };
+    let Some(by_ext) = by_ext else {
+        let found = match ext.as_deref() {
+            Some("txt") => {
+                "'.txt' (read as the paper's two-column minutes/metres format)".to_string()
+            }
+            Some(e) => format!("'.{e}'"),
+            None => "no extension".to_string(),
+        };
+        return Err(InputError::new(format!(
+            "the file name has {found}; name it .toml (the schedule TOML) or .csv (waypoints time_min,depth_m,gas), which check, simulate and evaluate --schedule read by their extension, or .md (the stop table, for reading)"
+        ))
+        .in_file(out)
+        .field("--out"));
+    };
+    match given {
+        Some(g) if g != by_ext => Err(InputError::new(format!(
             "--format {} contradicts the file name's extension; name the file .{} or drop --format",
             g.name(),
             g.name()
         ))
         .in_file(out)
         .field("--out")),
-        (Some(g), _) => Ok(g),
-        (None, Some(e)) => Ok(e),
-        (None, None) => Ok(PlanFormat::Toml),
+        _ => Ok(by_ext),
     }
 }
 
@@ -604,4 +628,47 @@ fn markdown(s: &Schedule, plan: &DivePlan, o: &OxygenExposure, x: &MdExtras) -> 
         let _ = writeln!(out, "Warning: {w}");
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    /// Defect C: `--out` names a file the schedule readers read back by its extension (or the
+    /// `.md` table); `.txt` (the paper's two-column format to them) and no extension are refused,
+    /// naming the file and `--out` and listing the accepted extensions.
+    #[test]
+    fn out_names_an_extension_the_readers_read() {
+        for (name, given, want) in [
+            ("s.toml", None, PlanFormat::Toml),
+            ("s.TOML", None, PlanFormat::Toml),
+            ("s.csv", None, PlanFormat::Csv),
+            ("s.md", None, PlanFormat::Md),
+            ("s.toml", Some(PlanFormat::Toml), PlanFormat::Toml),
+        ] {
+            assert_eq!(out_format(Path::new(name), given).unwrap(), want, "{name}");
+        }
+        for (name, given, found) in [
+            ("sch.txt", None, "'.txt' (read as the paper's two-column"),
+            ("sch", None, "no extension"),
+            ("sch", Some(PlanFormat::Toml), "no extension"),
+            ("sch.json", Some(PlanFormat::Csv), "'.json'"),
+        ] {
+            let e = out_format(Path::new(name), given).unwrap_err();
+            assert_eq!(
+                (e.file.as_deref(), e.field.as_deref()),
+                (Some(Path::new(name)), Some("--out")),
+                "{e}"
+            );
+            assert!(e.message.contains(found), "{e}");
+            assert!(e.message.contains("name it .toml"), "{e}");
+            assert!(
+                e.message.contains(".csv") && e.message.contains(".md"),
+                "{e}"
+            );
+        }
+        let e = out_format(Path::new("s.csv"), Some(PlanFormat::Toml)).unwrap_err();
+        assert!(e.message.contains("contradicts"), "{e}");
+    }
 }

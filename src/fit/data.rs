@@ -2,7 +2,8 @@
 //! experiments that produced them (`experiments.toml`).
 //!
 //! `measurements.csv`: header `experiment,bubble,time_s,radius_m` and optionally `sd_m` (the
-//! measurement standard deviation of that row), any column order, any row order. `bubble` is
+//! measurement standard deviation of that row), any column order and no other column; rows of
+//! different bubbles in any order, the rows of one bubble in increasing time. `bubble` is
 //! the 0-based index of the bubble in the experiment's phantom (the numbering of
 //! `simulate`'s `bubbles.csv`). Lines starting with `#` are comments; a file `synth` wrote
 //! carries its settings in one ([`SYNTHETIC_TAG`], read into [`Measurements::provenance`]).
@@ -219,6 +220,13 @@ impl Measurements {
 /// one of its bubbles.
 pub const MAX_RADIUS_M: f64 = 1e-2;
 
+/// Smallest radius a measurement may give, m: 1 nm, the floor of [`MIN_SD_M`]. Imaging
+/// resolves bubble radii to ~0.1–1 µm (sub-pixel edge fits ~10 nm): a radius below 1 nm (or
+/// of 0: no bubble) is not a measured radius of a bubble but a placeholder or a unit error, and
+/// in a fit it would pull the model towards a bubble that has dissolved. `synth` clamps its
+/// noisy radii at this floor.
+pub const MIN_RADIUS_M: f64 = 1e-9;
+
 /// Smallest measurement standard deviation, m: 1 nm. Bubble radii are measured by imaging,
 /// whose resolution is ~0.1–1 µm (sub-pixel edge fits reach ~10 nm); an sd below 1 nm is not
 /// an uncertainty of such a measurement, and its weight 1/sd² (above 1e18 m⁻²) would let one
@@ -234,11 +242,14 @@ pub const MAX_SD_M: f64 = MAX_RADIUS_M;
 pub const COLUMNS: [&str; 5] = ["experiment", "bubble", "time_s", "radius_m", "sd_m"];
 
 /// Read `measurements.csv`. Refused (exit 2, file/row/field named): a missing column, a column
-/// of [`COLUMNS`] named twice in the header (line 1), a value that is not a finite number, a
-/// radius outside 0 ..= [`MAX_RADIUS_M`] (1 cm), an sd outside [`MIN_SD_M`] ..= [`MAX_SD_M`]
-/// (1 nm ..= 1 cm), an `sd_m` column filled on some rows and empty on others, a bubble index
-/// that is not a non-negative integer, and a time that does not increase within a bubble. A
-/// radius larger than the experiment's phantom can hold is refused by [`check_against`].
+/// not in [`COLUMNS`] (a misspelled `sd` would otherwise leave the fit unweighted, silently) or
+/// one of them named twice in the header (line 1), a value that is not a finite number, a
+/// radius outside [`MIN_RADIUS_M`] ..= [`MAX_RADIUS_M`] (1 nm ..= 1 cm), an sd outside
+/// [`MIN_SD_M`] ..= [`MAX_SD_M`] (1 nm ..= 1 cm), an `sd_m` column filled on some rows and
+/// empty on others, a bubble index that is not a non-negative integer, and a time that does not
+/// increase within a bubble (repeated, or earlier than the bubble's row above it; rows of
+/// different bubbles may interleave). A radius larger than the experiment's phantom can hold is
+/// refused by [`check_against`].
 pub fn read_measurements(path: &Path) -> Result<Measurements, InputError> {
     let text = crate::error::read_text(path, "the measurements")?;
     parse_measurements(&text, path)
@@ -270,6 +281,19 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
             .at_line(1)
             .field(name));
         }
+    }
+    // a column the reader does not know would be ignored, silently: a misspelled `sd` would
+    // leave the fit unweighted
+    let unknown: Vec<&str> = headers.iter().filter(|h| !COLUMNS.contains(h)).collect();
+    if let Some(first) = unknown.first() {
+        return Err(InputError::new(format!(
+            "unknown column{} '{}'; the columns are experiment, bubble, time_s, radius_m and optionally sd_m (the measurement standard deviation, m), any order, no others",
+            if unknown.len() > 1 { "s" } else { "" },
+            unknown.join("', '")
+        ))
+        .in_file(path)
+        .at_line(1)
+        .field(first.to_string()));
     }
     let mut cols = [0usize; 4];
     for (k, name) in ["experiment", "bubble", "time_s", "radius_m"]
@@ -345,6 +369,16 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
                 format!("a radius cannot be negative (got {radius} m)"),
             ));
         }
+        if radius < MIN_RADIUS_M {
+            return Err(err(
+                "radius_m",
+                format!(
+                    "{} m is not a measured bubble radius (at least {} m, 1 nm: imaging resolves ~0.1 µm); leave out the rows where no bubble is seen",
+                    crate::error::num(radius),
+                    crate::error::num(MIN_RADIUS_M)
+                ),
+            ));
+        }
         if radius > MAX_RADIUS_M {
             return Err(err(
                 "radius_m",
@@ -383,15 +417,39 @@ pub fn parse_measurements(text: &str, path: &Path) -> Result<Measurements, Input
             Some(_) => with_sd = with_sd.or(Some(line)),
             None => without_sd = without_sd.or(Some(line)),
         }
-        groups
-            .entry((experiment, bubble))
-            .or_default()
-            .push(Observation {
-                time,
-                radius,
-                sd,
-                line,
-            });
+        // the rows of one bubble in time order: a time not after the bubble's row above it is
+        // a repeated or misplaced row
+        if let Some(prev) = groups
+            .get(&(experiment.clone(), bubble))
+            .and_then(|g| g.last())
+        {
+            if !(time > prev.time) {
+                let what = if time == prev.time {
+                    format!(
+                        "time {} s appears twice (lines {} and {line})",
+                        prev.time, prev.line
+                    )
+                } else {
+                    format!(
+                        "time {} s comes after {} s on line {}",
+                        crate::error::num(time),
+                        crate::error::num(prev.time),
+                        prev.line
+                    )
+                };
+                return Err(err(
+                    "time_s",
+                    format!("experiment '{experiment}', bubble {bubble}: {what}; times must increase within a bubble (rows of different bubbles may interleave)"),
+                ));
+            }
+        }
+        let group = groups.entry((experiment, bubble)).or_default();
+        group.push(Observation {
+            time,
+            radius,
+            sd,
+            line,
+        });
     }
     if let (Some(with), Some(without)) = (with_sd, without_sd) {
         return Err(InputError::new(format!(
@@ -759,9 +817,9 @@ mod tests {
     use super::*;
 
     /// The plausibility limits of `radius_m` and `sd_m`, by their documented values: a radius in
-    /// 0 ..= 1 cm and an sd in 1 nm ..= 1 cm are read, the first value past either end is
-    /// refused naming its line and field; a column of the reader named twice is refused at
-    /// line 1 naming the column, while a repeated column the reader does not use is ignored.
+    /// 1 nm ..= 1 cm and an sd in 1 nm ..= 1 cm are read, the first value past either end (and a
+    /// radius of 0 or 1e-300 m) is refused naming its line and field; a column of the reader
+    /// named twice is refused at line 1 naming the column.
     #[test]
     fn radius_and_sd_ranges_and_duplicate_columns() {
         let path = Path::new("m.csv");
@@ -769,7 +827,7 @@ mod tests {
             format!("experiment,bubble,time_s,radius_m,sd_m\na,0,0,1e-4,2e-6\na,0,10,{r},{sd}\n")
         };
         for (r, sd) in [
-            ("0", "2e-6"),
+            ("1e-9", "2e-6"),
             ("1e-2", "2e-6"),
             ("1e-4", "1e-9"),
             ("1e-4", "1e-2"),
@@ -777,6 +835,9 @@ mod tests {
             parse_measurements(&row(r, sd), path).unwrap_or_else(|e| panic!("{r}, {sd}: {e}"));
         }
         for (r, sd, field) in [
+            ("0", "2e-6", "radius_m"),
+            ("1e-300", "2e-6", "radius_m"),
+            ("9.99e-10", "2e-6", "radius_m"),
             ("1.0000001e-2", "2e-6", "radius_m"),
             ("0.0617", "2e-6", "radius_m"), // 61.7 µm written in mm
             ("1e-4", "9.99e-10", "sd_m"),
@@ -793,8 +854,79 @@ mod tests {
             assert_eq!((e.line, e.field.as_deref()), (Some(1), Some(col)), "{e}");
             assert!(e.message.contains("appears twice"), "{e}");
         }
-        let extra = "experiment,bubble,time_s,radius_m,note,note\na,0,0,1e-4,x,y\n";
-        parse_measurements(extra, path).unwrap();
+    }
+
+    /// Defect D: a column the reader does not read (a misspelled `sd`, a `note`) is refused at
+    /// line 1 naming it and the accepted columns; the fit would otherwise run unweighted.
+    #[test]
+    fn unknown_columns_are_refused() {
+        let path = Path::new("m.csv");
+        for (header, field, named) in [
+            ("experiment,bubble,time_s,radius_m,sd", "sd", "'sd'"),
+            ("experiment,bubble,time_s,radius_m,note", "note", "'note'"),
+            (
+                "note,experiment,bubble,time_s,radius_m,note",
+                "note",
+                "'note', 'note'",
+            ),
+            (
+                "experiment,bubble,Time_s,time_s,radius_m",
+                "Time_s",
+                "'Time_s'",
+            ),
+        ] {
+            let n = header.split(',').count();
+            let row = ["x"; 8][..n].join(",");
+            let e = parse_measurements(&format!("{header}\n{row}\n"), path).unwrap_err();
+            assert_eq!(
+                (e.file.as_deref(), e.line, e.field.as_deref()),
+                (Some(path), Some(1), Some(field)),
+                "{e}"
+            );
+            assert!(e.message.contains(named), "{e}");
+            assert!(
+                e.message
+                    .contains("experiment, bubble, time_s, radius_m and optionally sd_m"),
+                "{e}"
+            );
+        }
+    }
+
+    /// Defect D: the rows of one bubble in increasing time (0, 20, 10 s is refused at the 10,
+    /// naming the row above it); rows of different bubbles may interleave.
+    #[test]
+    fn times_increase_within_a_bubble() {
+        let path = Path::new("m.csv");
+        let text = "experiment,bubble,time_s,radius_m\na,0,0,1e-4\na,0,20,1e-4\na,0,10,1e-4\na,0,30,1e-4\n";
+        let e = parse_measurements(text, path).unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(4), Some("time_s")),
+            "{e}"
+        );
+        assert!(
+            e.message.contains("time 10 s comes after 20 s on line 3"),
+            "{e}"
+        );
+        let twice = "experiment,bubble,time_s,radius_m\na,0,0,1e-4\na,0,10,1e-4\na,0,10,1e-4\n";
+        let e = parse_measurements(twice, path).unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(4), Some("time_s")),
+            "{e}"
+        );
+        assert!(e.message.contains("appears twice (lines 3 and 4)"), "{e}");
+        let interleaved = "experiment,bubble,time_s,radius_m\na,0,0,1e-4\na,1,0,1e-4\nb,0,0,1e-4\na,0,10,1e-4\na,1,5,1e-4\n";
+        let m = parse_measurements(interleaved, path).unwrap();
+        assert_eq!(m.len(), 5);
+        assert_eq!(
+            m.series[0]
+                .points
+                .iter()
+                .map(|p| p.time)
+                .collect::<Vec<_>>(),
+            [0.0, 10.0]
+        );
     }
 
     /// An `sd_m` column filled on some rows only is refused at the first row without one

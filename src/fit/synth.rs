@@ -289,7 +289,8 @@ pub const MAX_ROWS: usize = 1_000_000;
 
 /// Synthesise `measurements.csv` text, its first line the settings ([`provenance_line`]):
 /// every bubble of every experiment sampled at 0, `every`,
-/// 2·`every`, … s while it exists, with N(0, `noise_sd`²) added (clamped at 0) and `sd_m` =
+/// 2·`every`, … s while it exists, with N(0, `noise_sd`²) added (clamped at the smallest
+/// radius `measurements.csv` accepts, [`super::data::MIN_RADIUS_M`], 1 nm) and `sd_m` =
 /// `noise_sd` in every row. The CSV is written by the `csv` crate (a name holding a comma, a
 /// quote or `#` is quoted) and read back by `fit`'s own reader before it is returned, so what
 /// `synth` writes `fit` reads as written. Refused before any simulation (exit 2, naming
@@ -375,7 +376,7 @@ pub fn synthesize(
                 if !(r > 0.0) {
                     continue;
                 }
-                let y = (r + noise_sd * normal()).max(0.0);
+                let y = (r + noise_sd * normal()).max(super::data::MIN_RADIUS_M);
                 w.write_record([
                     e.name.as_str(),
                     &b.to_string(),

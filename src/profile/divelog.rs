@@ -15,8 +15,9 @@
 //!   `min`, `h`. Any other unit, or a value that is there but not a finite
 //!   number (an empty UDDF `<depth>`), is refused naming its line and field.
 //! - Samples are sorted by time (samples out of time order are noted with the line of the
-//!   first), duplicate times merged (the last wins, noted), negative depths clamped to 0
-//!   (noted); a sample or waypoint without a time or a depth is skipped (noted with its line);
+//!   first), duplicate times merged (the last wins, noted), negative depths down to
+//!   −[`SURFACE_NOISE_DEPTH_M`] (−1 m, sensor noise at the surface) clamped to 0 (noted) and
+//!   deeper negative ones refused naming the sample's line and time; a sample or waypoint without a time or a depth is skipped (noted with its line);
 //!   if the first sample is not at time 0, a surface point (0 s, 0 m) is prepended (recorded in
 //!   [`ImportedDive::notes`]).
 //! - Surface pressure and water density are taken from the file when present and plausible
@@ -515,8 +516,16 @@ fn environment(surface: Option<f64>, density: Option<f64>, notes: &mut Vec<Strin
     (s, d)
 }
 
+/// Most a depth may lie above the surface and still be read as the surface, m: a depth
+/// sensor's noise and its zeroing against the surface pressure give a few tens of centimetres
+/// either side of 0 (hence the clamp); a metre covers that with margin. A sample further above
+/// the surface is not noise but an error of the log (a sign, an offset, a pressure read as a
+/// depth), and setting it to 0 m mid-dive would move the results, so it is refused.
+pub const SURFACE_NOISE_DEPTH_M: f64 = 1.0;
+
 /// A sample's time within the 30-day limit and its depth within the accepted ambient
-/// pressure, refused naming the sample's line and field.
+/// pressure and not above the surface by more than [`SURFACE_NOISE_DEPTH_M`], refused naming
+/// the sample's line and field.
 fn check_sample(
     cx: &Cx,
     node: &Node,
@@ -527,6 +536,17 @@ fn check_sample(
 ) -> Result<(), InputError> {
     if t > super::MAX_DURATION_S {
         return Err(cx.err(node, t_field, super::duration_message(t)));
+    }
+    if d < -SURFACE_NOISE_DEPTH_M {
+        return Err(cx.err(
+            node,
+            d_field,
+            format!(
+                "depth {} m at {} s is above the surface by more than the {SURFACE_NOISE_DEPTH_M} m of sensor noise read as 0 m; correct or remove the sample (a depth is positive downwards)",
+                crate::error::num(d),
+                crate::error::num(t)
+            ),
+        ));
     }
     let p = surface_pa + d.max(0.0) * density * STANDARD_GRAVITY;
     if p > super::MAX_AMBIENT_PA {
@@ -569,7 +589,9 @@ impl Skipped {
 }
 
 /// Sort (noting samples earlier than the one before them, with the line of the first),
-/// merge duplicate times (last wins), clamp negative depths, prepend the surface.
+/// merge duplicate times (last wins), clamp negative depths (at most
+/// [`SURFACE_NOISE_DEPTH_M`] above the surface: [`check_sample`] refuses the others), prepend
+/// the surface.
 fn normalise(
     mut samples: Vec<(f64, f64, usize)>,
     cx: &Cx,
@@ -628,7 +650,9 @@ fn normalise(
         ));
     }
     if clamped > 0 {
-        notes.push(format!("{clamped} negative depth(s) set to 0 m"));
+        notes.push(format!(
+            "{clamped} negative depth(s) (within {SURFACE_NOISE_DEPTH_M} m of the surface: sensor noise) set to 0 m"
+        ));
     }
     match out.first() {
         None => {
@@ -1126,5 +1150,46 @@ mod tests {
         assert!(e.line.is_some(), "{e}");
         let e = parse("<foo/>", Path::new("x.xml")).unwrap_err();
         assert!(e.message.contains("neither"), "{e}");
+    }
+
+    /// Defect E: a depth a metre or more above the surface mid-dive is refused naming the
+    /// sample's line, field and time (it was set to 0 m with a note); sensor noise within
+    /// [`SURFACE_NOISE_DEPTH_M`] of the surface is still set to 0 m, noted.
+    #[test]
+    fn large_negative_depths_are_refused_small_ones_clamped() {
+        let ssrf = |d: &str| {
+            format!(
+                "<divelog program='subsurface' version='3'>\n<dives>\n<dive number='1' date='2020-01-01' time='10:00:00'>\n<divecomputer>\n<sample time='0:00 min' depth='0.0 m' />\n<sample time='2:00 min' depth='20.0 m' />\n<sample time='12:34 min' depth='{d} m' />\n<sample time='20:00 min' depth='20.0 m' />\n<sample time='24:00 min' depth='0.0 m' />\n</divecomputer>\n</dive>\n</dives>\n</divelog>\n"
+            )
+        };
+        let path = Path::new("log.ssrf");
+        let e = parse(&ssrf("-21.6"), path).unwrap_err();
+        assert_eq!(
+            (e.file.as_deref(), e.line, e.field.as_deref()),
+            (Some(path), Some(7), Some("sample.depth")),
+            "{e}"
+        );
+        assert!(e.message.contains("depth -21.6 m at 754 s"), "{e}");
+        let e = parse(&ssrf("-1.01"), path).unwrap_err();
+        assert_eq!(e.line, Some(7), "{e}");
+        for d in ["-0.4", "-1.0"] {
+            let dives = parse(&ssrf(d), path).unwrap();
+            assert_eq!(dives[0].samples[2], (754.0, 0.0), "{d}");
+            assert!(
+                dives[0]
+                    .notes
+                    .iter()
+                    .any(|n| n.contains("1 negative depth(s)")),
+                "{d}: {:?}",
+                dives[0].notes
+            );
+        }
+        let uddf = "<uddf version=\"3.2.0\">\n<profiledata>\n<repetitiongroup>\n<dive>\n<samples>\n<waypoint><depth>0</depth><divetime>0</divetime></waypoint>\n<waypoint><depth>-21.6</depth><divetime>600</divetime></waypoint>\n<waypoint><depth>0</depth><divetime>1200</divetime></waypoint>\n</samples>\n</dive>\n</repetitiongroup>\n</profiledata>\n</uddf>\n";
+        let e = parse(uddf, Path::new("log.uddf")).unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(7), Some("waypoint.depth")),
+            "{e}"
+        );
     }
 }

@@ -526,3 +526,59 @@ fn plan_out_follows_format_and_round_trips_through_the_csv_check_reads() {
     assert_eq!(o.status.code(), Some(2));
     assert_eq!(std::fs::read(&alg).unwrap(), before);
 }
+
+/// Every shipped algorithm file's plans read back through the schedule TOML reader (whose
+/// stop table is checked against the legs, and whose legs' kinds and rates are checked) and
+/// through the waypoint CSV reader (whose segments' rates are checked) unchanged: the checks
+/// of what a file may say refuse nothing a planner writes. Dives: no-stop, air deco, nitrox,
+/// trimix with two deco gases, and a hypoxic trimix with a travel gas.
+#[test]
+fn every_shipped_algorithms_plans_pass_the_schedule_readers_checks() {
+    use decophantom::algorithm::plan_dive;
+    use decophantom::algorithm::waypoints::parse_waypoints_csv;
+    // (depth m, bottom time min, bottom gas, deco gases, travel gases)
+    type Dive<'a> = (f64, f64, &'a str, &'a [&'a str], &'a [&'a str]);
+    let dives: [Dive; 6] = [
+        (18.0, 20.0, "air", &[], &[]),
+        (30.0, 25.0, "air", &[], &[]),
+        (40.0, 35.0, "32", &["50"], &[]),
+        (45.0, 25.0, "18/45", &["50@21", "100@6"], &[]),
+        (60.0, 20.0, "18/45", &["50", "100@6"], &[]),
+        (100.0, 15.0, "10/70", &["50", "100@6"], &["21/35@0..60"]),
+    ];
+    let mut files: Vec<_> = std::fs::read_dir(root().join("algorithms"))
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    files.sort();
+    assert!(files.len() >= 10, "{files:?}");
+    let mut stops = 0;
+    for f in &files {
+        let alg = load_algorithm(f).unwrap();
+        for (depth, time, gas, deco, travel) in dives {
+            let deco: Vec<String> = deco.iter().map(|s| s.to_string()).collect();
+            let travel: Vec<String> = travel.iter().map(|s| s.to_string()).collect();
+            let Ok((_, s)) = plan_dive(&alg, depth, time, Some(gas), &deco, &travel) else {
+                continue; // a dive the algorithm refuses (e.g. past its gases' limits)
+            };
+            stops += s.stops.len();
+            let at = format!("{} {depth} m {time} min {gas}", f.display());
+            let back = Schedule::from_toml_str(&s.to_toml_string(None), f.as_path())
+                .unwrap_or_else(|e| panic!("{at}: {e}"));
+            assert_eq!(back, s, "{at}");
+            let csv = decophantom::app::plan::waypoints_csv(&s);
+            parse_waypoints_csv(
+                &csv,
+                std::path::Path::new("w.csv"),
+                &alg.conventions,
+                GasMix::AIR,
+            )
+            .unwrap_or_else(|e| panic!("{at}: {e}"));
+        }
+    }
+    assert!(
+        stops > 100,
+        "{stops} stops: the dives should need decompression"
+    );
+}

@@ -49,7 +49,8 @@ fn good_phantom() -> String {
 const SHORT_PROFILE: &str =
     "time_unit = \"s\"\npressure_unit = \"psi-gauge\"\npoints = [[0, 0], [5, 5], [10, 0]]\n";
 
-/// A 10 m / 10 min schedule TOML; `{STOP_MIN}` is the stop table's only stop time.
+/// A 10 m / 10 min schedule TOML with a 1-min stop at 3 m (left at 12.7 min); `{STOP_MIN}` is
+/// the stop table's only stop time (1.0 agrees with the legs).
 const SCHEDULE: &str = r#"label = "t"
 surface_pressure_pa = 101325.0
 pa_per_m = 9985.0
@@ -72,14 +73,28 @@ gas = "air"
 [[legs]]
 kind = "ascent"
 start_depth_m = {DEPTH}
-end_depth_m = 0.0
+end_depth_m = 3.0
+duration_s = 42.0
+gas = "air"
+
+[[legs]]
+kind = "stop"
+start_depth_m = 3.0
+end_depth_m = 3.0
 duration_s = 60.0
+gas = "air"
+
+[[legs]]
+kind = "ascent"
+start_depth_m = 3.0
+end_depth_m = 0.0
+duration_s = 18.0
 gas = "air"
 
 [[stops]]
 depth_m = 3.0
 stop_min = {STOP_MIN}
-runtime_min = 12.0
+runtime_min = 12.7
 gas = "air"
 "#;
 
@@ -305,7 +320,7 @@ fn numbers_that_would_be_written_wrong_are_refused() {
         )
         .unwrap_err();
         assert_eq!(e.field.as_deref(), Some("stops.stop_min"), "{bad}: {e}");
-        assert_eq!(e.line, Some(27), "{e}"); // the [[stops]] table
+        assert_eq!(e.line, Some(41), "{e}"); // the [[stops]] table
     }
     // depth 1e17 m in a schedule
     let e = decophantom::algorithm::Schedule::from_toml_str(
@@ -1511,9 +1526,14 @@ fn output_places_are_checked_before_the_run() {
 #[test]
 fn a_schedule_without_stops_has_zero_stop_time() {
     use decophantom::algorithm::Schedule;
+    // the legs up to the bottom, then straight up: no stop leg and no [[stops]]
     let text = schedule("10.0", "1.0");
-    let cut = text.find("[[stops]]").unwrap();
-    let s = Schedule::from_toml_str(&text[..cut], Path::new("s.toml")).unwrap();
+    let cut = text.find("[[legs]]\nkind = \"ascent\"").unwrap();
+    let text = format!(
+        "{}[[legs]]\nkind = \"ascent\"\nstart_depth_m = 10.0\nend_depth_m = 0.0\nduration_s = 60.0\ngas = \"air\"\n",
+        &text[..cut]
+    );
+    let s = Schedule::from_toml_str(&text, Path::new("s.toml")).unwrap();
     assert!(s.stops.is_empty());
     assert!(s.stop_time_min() == 0.0 && s.stop_time_min().is_sign_positive());
     let json = serde_json::to_string(&decophantom::app::json::ScheduleJson::from(&s)).unwrap();
@@ -1640,4 +1660,121 @@ fn command_line_values_folders_and_vacuum_are_refused_up_front() {
     assert_refused(&sim(&dir, &[]), &["this is a folder, not a profile"]);
     assert_refused(&sim(&vacuum, &[]), &["vac.toml:4", "points", "1 kPa"]);
     assert!(!dir.join("out").exists());
+}
+
+/// Review D (defects A–E): each silently accepted input is refused through the binary with
+/// exit 2, the file, line and field named, and nothing run or written.
+#[test]
+fn contradictory_or_impossible_inputs_are_refused_by_the_binary() {
+    let dir = tempdir("hard-review-d");
+    let ph = write(&dir, "ph.toml", &good_phantom());
+    let seed = std::fs::read_to_string(root().join("tests/data/seeds/schedule.toml")).unwrap();
+    let evaluate = |schedule: &Path| {
+        run(&[
+            "evaluate".as_ref(),
+            "--schedule".as_ref(),
+            schedule.as_os_str(),
+            "--criteria".as_ref(),
+            criteria().as_os_str(),
+            "--phantom".as_ref(),
+            ph.as_os_str(),
+            "--out".as_ref(),
+            dir.join("eval").as_os_str(),
+        ])
+    };
+    // A: a 50-min stop in the table over a 5-min stop leg (the report showed 50 min)
+    let s7 = write(
+        &dir,
+        "s7.toml",
+        &seed.replace("stop_min = 5.0", "stop_min = 50.0"),
+    );
+    let o = evaluate(&s7);
+    assert_refused(&o, &["s7.toml:43:", "field 'stops.stop_min'", "50 min"]);
+    assert!(!dir.join("eval").exists());
+    // B: an ascent 30 m → 3 m in no time; a kind against the direction; waypoints at 2e6 m/min
+    // and starting at 20 m
+    let fast = write(
+        &dir,
+        "fast.toml",
+        &seed.replace("duration_s = 180.0", "duration_s = 0.0"),
+    );
+    assert_refused(
+        &evaluate(&fast),
+        &["fast.toml:20:", "field 'legs.duration_s'", "inf m/min"],
+    );
+    let kind = write(
+        &dir,
+        "kind.toml",
+        &seed.replacen("kind = \"descent\"", "kind = \"ascent\"", 1),
+    );
+    assert_refused(&evaluate(&kind), &["kind.toml:6:", "field 'legs.kind'"]);
+    let csv = write(
+        &dir,
+        "w.csv",
+        "time_min,depth_m,gas\n0,0,air\n0.0001,200,\n5,200,\n7,0,\n",
+    );
+    assert_refused(
+        &evaluate(&csv),
+        &["w.csv:3:", "field 'depth_m'", "2000000 m/min"],
+    );
+    let deep = write(&dir, "deep.csv", "time_min,depth_m\n0,20\n5,20\n7,0\n");
+    assert_refused(
+        &evaluate(&deep),
+        &["deep.csv:2:", "field 'depth_m'", "at 20 m"],
+    );
+    assert!(!dir.join("eval").exists());
+    // C: plan --out with an extension no schedule reader reads by, refused before planning
+    let alg = root().join("algorithms/zhl16c-gf30-85.toml");
+    for name in ["sch.txt", "sch"] {
+        let out = dir.join(name);
+        let o = run(&[
+            "plan".as_ref(),
+            "--algorithm".as_ref(),
+            alg.as_os_str(),
+            "--depth".as_ref(),
+            "30".as_ref(),
+            "--time".as_ref(),
+            "20".as_ref(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ]);
+        assert_refused(&o, &[name, "field '--out'", ".toml", ".csv"]);
+        assert!(o.stdout.is_empty() && !out.exists());
+    }
+    // D: a misspelled sd column, times out of order within a bubble, a radius of 0
+    let ex = fit_lab(&dir, "e1");
+    for (name, text, needles) in [
+        (
+            "sd.csv",
+            fit_rows(7).replace("sd_m", "sd"),
+            ["sd.csv:1:", "field 'sd'", "unknown column 'sd'"],
+        ),
+        (
+            "order.csv",
+            fit_rows(7).replace("e1,0,20,", "e1,0,5,"),
+            ["order.csv:4:", "field 'time_s'", "comes after 10 s"],
+        ),
+        (
+            "zero.csv",
+            fit_rows(7).replace("1.29e-4", "0"),
+            ["zero.csv:4:", "field 'radius_m'", "1 nm"],
+        ),
+    ] {
+        let m = write(&dir, name, &text);
+        let out = dir.join("fit");
+        let o = fit_cmd(&m, &ex, &["gases.n2.diffusivity"], &out);
+        assert_refused(&o, &needles);
+        assert!(!out.exists());
+    }
+    // E: a logged depth of -21.6 m mid-dive (was set to 0 m with a note)
+    let log = write(
+        &dir,
+        "log.ssrf",
+        "<divelog program='subsurface' version='3'>\n<dives>\n<dive number='1' date='2020-01-01' time='10:00:00'>\n<divecomputer>\n<sample time='0:00 min' depth='0.0 m' />\n<sample time='2:00 min' depth='20.0 m' />\n<sample time='12:34 min' depth='-21.6 m' />\n<sample time='20:00 min' depth='20.0 m' />\n<sample time='24:00 min' depth='0.0 m' />\n</divecomputer>\n</dive>\n</dives>\n</divelog>\n",
+    );
+    assert_refused(
+        &evaluate(&log),
+        &["log.ssrf:7:", "field 'sample.depth'", "-21.6 m at 754 s"],
+    );
+    assert!(!dir.join("eval").exists());
 }

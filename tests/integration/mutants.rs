@@ -359,8 +359,14 @@ fn divelog(p: &Path) -> Result<(), InputError> {
 fn legacy(p: &Path) -> Result<(), InputError> {
     use decophantom::profile::legacy::{read, LegacyUnits};
     use decophantom::units::{PressureUnit, TimeUnit};
-    read(p, &LegacyUnits::new(TimeUnit::Min, PressureUnit::Msw))?;
-    // and as a schedule (`check --schedule dive.txt`)
+    let units = LegacyUnits::new(TimeUnit::Min, PressureUnit::Msw);
+    let h = read(p, &units)?;
+    // and as a schedule (`check --schedule dive.txt`), when it is one: a schedule starts at
+    // the surface (a profile that starts saturated at depth, as sensitivity-30m.txt at 30 msw,
+    // is refused as a schedule at its line 1, and is read by `simulate --profile`)
+    if h.ambient_pa[0] > units.surface_pa {
+        return Ok(());
+    }
     let s = decophantom::algorithm::waypoints::read_legacy_schedule(p, &DECOTENGU, GasMix::AIR)?;
     s.to_pressure_history()
         .map_err(|m| InputError::new(m).in_file(p))?;
