@@ -1334,9 +1334,9 @@ fn discover_refuses_max_effects_zero() {
         only: Vec::new(),
         command: String::new(),
     };
-    let e = decophantom::app::discover::discover_journaled(&req, &|_, _| {})
-        .err()
-        .expect("refused");
+    let Err(e) = decophantom::app::discover::discover_journaled(&req, &|_, _| {}) else {
+        panic!("--max-effects 0 was not refused");
+    };
     let text = e.to_string();
     assert!(matches!(e, decophantom::error::Error::Input(_)), "{text}");
     assert!(
