@@ -121,7 +121,7 @@ pub struct SensitivityArgs {
     /// oat, morris or sobol.
     #[arg(long, default_value = "oat")]
     pub method: String,
-    /// Levels (oat), trajectories (morris) or base rows (sobol: N(k + 2) runs).
+    /// Levels (oat), trajectories (morris) or base rows (sobol: N ≥ 16, N(k + 2) runs).
     #[arg(long, default_value_t = 5)]
     pub samples: usize,
     /// Seed of the design (same seed, same design: resumable and shardable).

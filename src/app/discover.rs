@@ -129,15 +129,21 @@ pub fn summary_text(d: &Discovery) -> String {
             crate::discover::report::p_text(a.p_value),
             a.parameters
                 .iter()
-                .map(|e| format!(
-                    "{} = {} {}",
-                    e.name,
-                    sig(e.value, 4),
-                    match crate::fit::report::estimate_stats(e, d.final_fit.inference.singular).1 {
-                        Ok(c) => format!("[{}, {}]", sig(c[0], 4), sig(c[1], 4)),
-                        Err(m) => format!("(interval {m})"),
-                    }
-                ))
+                .map(|e| {
+                    // the reader's words (symbol, unit), as the report names them
+                    let (symbol, unit) = crate::fit::paths::describe_in(&e.name, None);
+                    let unit = unit.map_or(String::new(), |u| format!(" {u}"));
+                    format!(
+                        "{symbol} = {}{unit} {}",
+                        sig(e.value, 4),
+                        match crate::fit::report::estimate_stats(e, d.final_fit.inference.singular)
+                            .1
+                        {
+                            Ok(c) => format!("[{}, {}]", sig(c[0], 4), sig(c[1], 4)),
+                            Err(m) => format!("(interval {m})"),
+                        }
+                    )
+                })
                 .collect::<Vec<_>>()
                 .join("; ")
         ));

@@ -166,7 +166,7 @@ pub fn summary_text(r: &Results) -> String {
                 }
             })
             .collect();
-        // a Sobol' estimate or interval outside [0, 1] is flagged, not printed as an index
+        // a Sobol' estimate outside [0, 1] is flagged, not printed as an index
         let out = if r.spec.method == Method::Sobol {
             crate::sweep::report::sobol_outside_unit(&v)
         } else {
@@ -285,13 +285,13 @@ mod tests {
         assert_eq!((idx[0].2[0], idx[0].2[3]), (2.0, 2.0), "{idx:?}");
         let s = summary_text(&res);
         assert!(
-            s.contains("(S1, ST: estimator outside [0, 1]: N too small)"),
+            s.contains("(S1, ST: estimate outside [0, 1]: estimator noise)"),
             "{s}"
         );
         assert!(
             notes
                 .iter()
-                .any(|n| n.starts_with("r_max / a.x: estimator outside [0, 1]: N too small: S1 and ST from 2 usable base rows")),
+                .any(|n| n.starts_with("r_max / a.x: estimate outside [0, 1]: estimator noise: S1 and ST from 2 usable base rows")),
             "{notes:?}"
         );
         // inside [0, 1] nothing is flagged; NaN (undefined) has notes of its own
@@ -299,7 +299,10 @@ mod tests {
         assert!(crate::sweep::report::sobol_outside_unit(&ok).is_empty());
         let nan = [f64::NAN; 6];
         assert!(crate::sweep::report::sobol_outside_unit(&nan).is_empty());
-        let low = [0.01, -0.02, 0.05, 0.5, 0.2, 0.9];
-        assert_eq!(crate::sweep::report::sobol_outside_unit(&low), ["S1"]);
+        // an index near 0 whose interval straddles 0 is not flagged; an estimate below 0 is
+        let near_zero = [0.01, -0.02, 0.05, 0.5, 0.2, 0.9];
+        assert!(crate::sweep::report::sobol_outside_unit(&near_zero).is_empty());
+        let low = [-0.01, -0.04, 0.02, 1.2, 0.7, 1.9];
+        assert_eq!(crate::sweep::report::sobol_outside_unit(&low), ["S1", "ST"]);
     }
 }

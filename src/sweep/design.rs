@@ -227,7 +227,7 @@ pub fn morris_indices(points: &[Vec<f64>], y: &[f64], k: usize) -> Vec<MorrisInd
 /// numbers, not a
 /// recommendation (Saltelli et al. 2010 compare their estimators at far larger N), and
 /// estimates outside [0, 1] at any N are flagged in the report
-/// ("estimator outside [0, 1]: N too small"). `reproduce fig3 --quick` (N = 4, a smoke test of
+/// ("estimate outside [0, 1]: estimator noise"). `reproduce fig3 --quick` (N = 4, a smoke test of
 /// the figure's code) builds its design directly and is not held to it.
 pub const SOBOL_MIN_SAMPLES: usize = 16;
 

@@ -15,22 +15,23 @@ use crate::report::table::{Cell, Column, Table};
 /// One row of indices.csv: metric, parameter and the method's numbers.
 pub type IndexRow = (String, String, Vec<f64>);
 
-/// The flag of a Sobol' estimate or interval end outside [0, 1].
-pub const OUTSIDE_UNIT: &str = "estimator outside [0, 1]: N too small";
+/// The flag of a Sobol' estimate outside [0, 1].
+pub const OUTSIDE_UNIT: &str = "estimate outside [0, 1]: estimator noise";
 
-/// Which of a Sobol' row's indices (`S1`, `ST`) has its estimate or an end of its interval
-/// outside [0, 1] (numbers as in indices.csv: s1, s1_lo95, s1_hi95, st, st_lo95, st_hi95, …).
-/// The indices are fractions of a variance, so they lie in [0, 1]; their estimators do not, and
-/// at small N stray outside: such numbers are flagged, not printed as if they were indices.
-/// NaN (undefined) is not flagged here: it has its own notes.
+/// Which of a Sobol' row's indices (`S1`, `ST`) has its estimate outside [0, 1] (numbers as in
+/// indices.csv: s1, s1_lo95, s1_hi95, st, st_lo95, st_hi95, …). The indices are fractions of a
+/// variance, so they lie in [0, 1]; their estimators do not, and stray outside by their noise:
+/// such estimates are flagged, not printed as if they were indices. An interval end outside
+/// [0, 1] alone is not flagged: the interval of an index near 0 (or 1) straddles it by its
+/// width, as it should. NaN (undefined) is not flagged here: it has its own notes.
 pub fn sobol_outside_unit(v: &[f64]) -> Vec<&'static str> {
     let out = |x: &[f64]| x.iter().any(|x| x.is_finite() && !(0.0..=1.0).contains(x));
     let mut w = Vec::new();
     if v.len() >= 6 {
-        if out(&v[0..3]) {
+        if out(&v[0..1]) {
             w.push("S1");
         }
-        if out(&v[3..6]) {
+        if out(&v[3..4]) {
             w.push("ST");
         }
     }
@@ -215,7 +216,7 @@ pub fn indices_and_notes(res: &Results) -> (Vec<&'static str>, Vec<IndexRow>, Ve
                             format!("{} [{}, {}]", sig(x[0], 3), sig(x[1], 3), sig(x[2], 3))
                         };
                         notes.push(format!(
-                            "{what}: {OUTSIDE_UNIT}: {} from {} usable base rows (S1 {}, ST {}); the indices lie in [0, 1], these estimates or their 95 % intervals do not: run more --samples.",
+                            "{what}: {OUTSIDE_UNIT}: {} from {} usable base rows (S1 {}, ST {}); the indices lie in [0, 1], this estimate does not: the estimator's noise at this N, whose size its 95 % interval shows; more --samples narrow it.",
                             out.join(" and "),
                             ix.n_used,
                             show(&v[0..3]),
@@ -333,7 +334,7 @@ pub fn add_indices_and_report(
     page.text(match spec.method {
         Method::Oat => "One at a time (the paper's Fig. 3): each parameter over its range at the given levels, the others at the phantom's values. normalised_sensitivity = (metric at the highest level − at the lowest)/(highest − lowest) × base value / metric at base. A level whose metric is undefined is left out of metric_min and metric_max (noted below).".to_string(),
         Method::Morris => "Morris elementary effects (Morris 1991; μ* of Campolongo et al. 2007) on a 4-level grid, Δ = 2/3 of the range in the sampling coordinate (log for log-uniform parameters); μ*, μ and σ are in metric units per whole range of that coordinate. An elementary effect whose two runs do not both have the metric defined is left out: n_used effects (one per trajectory) give μ*, μ and σ, n_dropped are left out; NaN when none is left (σ when fewer than two).".to_string(),
-        Method::Sobol => format!("Sobol' indices from Saltelli's A, B, A_B^i design (Saltelli et al. 2010): first order S1 with their estimator (b), total ST with Jansen's (f); 95 % percentile intervals from {BOOTSTRAP} bootstrap resamples of the N base rows. A base row j counts for parameter i only when f(A)_j, f(B)_j and f(A_B^i)_j are all defined: n_used rows give the index (the total variance too), n_dropped are left out, and every bootstrap resample (N rows drawn from all N) leaves out its unusable rows the same way. With fewer than {SOBOL_MIN_ROWS} usable rows the index is NaN; an interval is given only when the index is defined in every resample. The indices lie in [0, 1], their estimators not always: an estimate or interval end outside it is noted below (\"{OUTSIDE_UNIT}\")."),
+        Method::Sobol => format!("Sobol' indices from Saltelli's A, B, A_B^i design (Saltelli et al. 2010): first order S1 with their estimator (b), total ST with Jansen's (f); 95 % percentile intervals from {BOOTSTRAP} bootstrap resamples of the N base rows. A base row j counts for parameter i only when f(A)_j, f(B)_j and f(A_B^i)_j are all defined: n_used rows give the index (the total variance too), n_dropped are left out, and every bootstrap resample (N rows drawn from all N) leaves out its unusable rows the same way. With fewer than {SOBOL_MIN_ROWS} usable rows the index is NaN; an interval is given only when the index is defined in every resample. The indices lie in [0, 1], their estimators not always: an estimate outside it is noted below (\"{OUTSIDE_UNIT}\")."),
     });
     page.table(&t);
     if !notes.is_empty() {
