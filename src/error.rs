@@ -231,12 +231,54 @@ pub fn line_of_key(text: &str, key: &str) -> Option<usize> {
         .map(|i| i + 1)
 }
 
+/// Largest input file read, bytes (1 GiB: far above any profile, phantom, schedule, dive log or
+/// measurement file; a larger one is a mistake, such as a device or a wrong path).
+pub const MAX_INPUT_BYTES: u64 = 1 << 30;
+
+/// The bytes of an input file named `what` ("the phantom file"): refused (file named) if it is
+/// not a regular file — a folder, a device such as /dev/zero, a pipe that may never end — or is
+/// larger than [`MAX_INPUT_BYTES`], where reading it would exhaust the memory or hang.
+pub fn read_input(path: &Path, what: &str) -> Result<Vec<u8>, InputError> {
+    use std::io::Read;
+    let cannot =
+        |e: std::io::Error| InputError::new(format!("cannot read {what}: {e}")).in_file(path);
+    let meta = std::fs::metadata(path).map_err(cannot)?;
+    if !meta.is_file() {
+        let kind = if meta.is_dir() {
+            "a folder"
+        } else {
+            "not a regular file (a device, pipe or socket)"
+        };
+        return Err(
+            InputError::new(format!("{what} is {kind}; give the path of a file")).in_file(path),
+        );
+    }
+    if meta.len() > MAX_INPUT_BYTES {
+        return Err(InputError::new(format!(
+            "{what} is {} bytes, more than the {} an input file may have",
+            meta.len(),
+            MAX_INPUT_BYTES
+        ))
+        .in_file(path));
+    }
+    let mut bytes = Vec::with_capacity(meta.len() as usize);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(MAX_INPUT_BYTES + 1).read_to_end(&mut bytes))
+        .map_err(cannot)?;
+    if bytes.len() as u64 > MAX_INPUT_BYTES {
+        return Err(InputError::new(format!(
+            "{what} grew beyond the {MAX_INPUT_BYTES} bytes an input file may have while it was read"
+        ))
+        .in_file(path));
+    }
+    Ok(bytes)
+}
+
 /// Read a text file for a reader. A file that cannot be read is named with the I/O error
 /// (`cannot read <what>: ...`); one that is not UTF-8 is named with the line of its first
 /// invalid byte.
 pub fn read_text(path: &Path, what: &str) -> Result<String, InputError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| InputError::new(format!("cannot read {what}: {e}")).in_file(path))?;
+    let bytes = read_input(path, what)?;
     String::from_utf8(bytes).map_err(|e| {
         let at = e.utf8_error().valid_up_to();
         let line = e.as_bytes()[..at].iter().filter(|&&b| b == b'\n').count() + 1;
@@ -296,6 +338,35 @@ pub type Result<T, E = Error> = std::result::Result<T, E>;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Only regular files are read: a folder, a device that never ends (/dev/zero) and a pipe
+    /// with no writer (which would block forever) are refused by name, before any read.
+    #[test]
+    fn only_regular_files_are_read() {
+        let dir =
+            std::env::temp_dir().join(format!("decophantom-read-input-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("ok.toml");
+        std::fs::write(&file, "a = 1\n").unwrap();
+        assert_eq!(read_text(&file, "the file").unwrap(), "a = 1\n");
+        let e = read_input(&dir, "the phantom file").unwrap_err();
+        assert!(e.to_string().contains("is a folder"), "{e}");
+        let zero = Path::new("/dev/zero");
+        if zero.exists() {
+            let e = read_input(zero, "the profile").unwrap_err();
+            assert!(e.to_string().contains("not a regular file"), "{e}");
+        }
+        let fifo = dir.join("pipe.toml");
+        let made = std::process::Command::new("mkfifo")
+            .arg(&fifo)
+            .status()
+            .is_ok_and(|s| s.success());
+        if made {
+            let e = read_input(&fifo, "the profile").unwrap_err();
+            assert!(e.to_string().contains("not a regular file"), "{e}");
+        }
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 
     #[test]
     fn toml_field_paths() {

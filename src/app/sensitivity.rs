@@ -63,9 +63,7 @@ pub fn run(
         metrics: Vec::new(),
     }
     .check_samples()?;
-    let text = std::fs::read_to_string(&req.phantom).map_err(|e| {
-        InputError::new(format!("cannot read the phantom: {e}")).in_file(&req.phantom)
-    })?;
+    let text = crate::error::read_text(&req.phantom, "the phantom")?;
     let doc: toml::Table = text
         .parse()
         .map_err(|e| InputError::new(format!("not valid TOML: {e}")).in_file(&req.phantom))?;

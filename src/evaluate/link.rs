@@ -111,9 +111,7 @@ impl PhantomSpec {
     pub fn load(path: Option<&Path>, grid_step_m: Option<f64>) -> Result<PhantomSpec, InputError> {
         match path {
             Some(p) => {
-                let text = std::fs::read_to_string(p).map_err(|e| {
-                    InputError::new(format!("cannot read phantom file: {e}")).in_file(p)
-                })?;
+                let text = crate::error::read_text(p, "the phantom file")?;
                 PhantomSpec::from_text(&text, p, &p.display().to_string(), grid_step_m)
             }
             None => PhantomSpec::from_text(

@@ -163,9 +163,7 @@ impl ImportedDive {
 
 /// Read every dive in a Subsurface XML or UDDF file.
 pub fn read(path: &Path) -> Result<Vec<ImportedDive>, InputError> {
-    let bytes = std::fs::read(path).map_err(|e| {
-        InputError::new(format!("cannot read the dive log: {e}; check the path")).in_file(path)
-    })?;
+    let bytes = crate::error::read_input(path, "the dive log")?;
     let text = String::from_utf8_lossy(&bytes);
     parse(&text, path)
 }

@@ -305,7 +305,7 @@ pub fn load_profile_or_schedule(
     let is_schedule = path
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
-        && std::fs::read_to_string(path)
+        && crate::error::read_text(path, "the profile")
             .ok()
             .and_then(|t| t.parse::<toml::Table>().ok())
             .is_some_and(|t| t.contains_key("legs"));
