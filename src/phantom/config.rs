@@ -383,6 +383,12 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
                             ),
                         )
                     })?;
+                if out.contains(&f) {
+                    return Err(err(
+                        "geometry.open_faces",
+                        format!("face '{name}' is listed twice; list each open face once"),
+                    ));
+                }
                 out.push(f);
             }
             out

@@ -165,6 +165,28 @@ fn bad_input_exits_2_names_the_place_and_writes_nothing() {
         &["typo.toml", "surface_tensoin"],
         &out,
     );
+    // an open face listed twice
+    let twice = write(
+        &d,
+        "twice.toml",
+        &SMALL_PHANTOM.replace(
+            "grid_step_m = 100e-6",
+            "grid_step_m = 100e-6\nopen_faces = [\"top\", \"top\"]",
+        ),
+    );
+    expect_input_error(
+        &[
+            "simulate",
+            "--profile",
+            &s(&pr),
+            "--phantom",
+            &s(&twice),
+            "--out",
+            o,
+        ],
+        &["twice.toml:7:", "geometry.open_faces", "listed twice"],
+        &out,
+    );
     // a bubble outside the phantom
     let outside = write(
         &d,
