@@ -90,6 +90,51 @@ fn stat_cell(v: &Result<f64, String>) -> Cell {
     }
 }
 
+/// The estimates whose 95 % interval reaches beyond what the phantom reader accepts for the
+/// parameter: each end written into the model's phantom documents (as the fit writes a value,
+/// [`crate::fit::model::set_shared`]) and the documents read again, as `fit --param` checks its
+/// bounds. Such an end is not a value the model could take (a surface tension above 1 N/m, a
+/// bubble outside the phantom): the data do not bound the parameter there, and the interval's
+/// symmetric form says nothing beyond it. One sentence per such estimate (empty: none).
+pub fn intervals_beyond_accepted(
+    docs: &[toml::Table],
+    est: &[Estimate],
+    singular: bool,
+) -> Vec<String> {
+    let refused = |v: f64, path: &str| -> Option<String> {
+        let mut d = docs.to_vec();
+        if let Err(m) = crate::fit::model::set_shared(&mut d, path, v) {
+            return Some(m);
+        }
+        d.iter().find_map(|doc| {
+            crate::fit::data::build_params(doc, std::path::Path::new("phantom"))
+                .err()
+                .map(|e| e.message)
+        })
+    };
+    est.iter()
+        .filter_map(|e| {
+            let Ok(ci) = estimate_stats(e, singular).1 else {
+                return None;
+            };
+            let ends: Vec<String> = [("lower", ci[0]), ("upper", ci[1])]
+                .into_iter()
+                .filter(|(_, v)| v.is_finite())
+                .filter_map(|(which, v)| {
+                    refused(v, &e.name).map(|why| format!("its {which} end, {}, is refused: {why}", sig(v, 4)))
+                })
+                .collect();
+            (!ends.is_empty()).then(|| {
+                format!(
+                    "{}: the 95 % interval reaches beyond what the phantom accepts ({}); the data do not bound the parameter there, so read the interval as open on that side, or fit with --param bounds",
+                    super::paths::label(&e.name),
+                    ends.join("; ")
+                )
+            })
+        })
+        .collect()
+}
+
 /// Table of estimates with standard errors and 95 % intervals (`singular`: the fit's Jacobian
 /// was singular, so neither is given).
 pub fn estimates_table(title: &str, est: &[Estimate], singular: bool) -> Result<Table, Error> {
@@ -853,6 +898,14 @@ pub fn fit_outputs(
     if f.inference.singular {
         page.text("**The Jacobian is singular**: some parameter (or combination) is not determined by these data; no standard error, interval or correlation is given.");
     }
+    let beyond =
+        intervals_beyond_accepted(&f.model.docs, &f.inference.estimates, f.inference.singular);
+    if !beyond.is_empty() {
+        page.text(format!(
+            "**Intervals beyond what the model accepts.** {}.",
+            beyond.join(". ")
+        ));
+    }
     let clipped: Vec<String> = f
         .inference
         .estimates
@@ -945,6 +998,40 @@ pub fn fit_outputs(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// An interval end the phantom reader refuses (γ above its 1 N/m) is named; one it
+    /// accepts is not; a bubble's position beyond the phantom is refused by the reader too.
+    #[test]
+    fn intervals_beyond_what_the_phantom_accepts_are_named() {
+        let doc: toml::Table = "[geometry]\nshape = \"box\"\nsize_m = [3.2e-3, 3.2e-3, 3.2e-3]\ngrid_step_m = 400e-6\n[material]\nsurface_tension = 0.07\n[gases.n2]\ndiffusivity = 2.5e-9\nostwald = 0.014\n[[bubbles]]\nposition_m = [1.6e-3, 1.6e-3, 1.6e-3]\ninitial_radius_m = 60e-6\n"
+            .parse()
+            .unwrap();
+        let est = |name: &str, value: f64, ci95: [f64; 2]| Estimate {
+            name: name.into(),
+            value,
+            std_error: (ci95[1] - ci95[0]) / 4.0,
+            ci95,
+            log: false,
+            at_bound: false,
+            clipped: false,
+        };
+        let all = [
+            est("material.surface_tension", 0.014, [3e-16, 6.3e11]),
+            est("material.surface_tension", 0.07, [0.05, 0.09]),
+            est("bubbles.0.position_m.0", 1.6e-3, [-1.0, 2.0e-3]),
+        ];
+        let notes = intervals_beyond_accepted(std::slice::from_ref(&doc), &all, false);
+        assert_eq!(notes.len(), 2, "{notes:?}");
+        assert!(
+            notes[0].contains("upper end, 6.3e11") || notes[0].contains("upper end, 6.300e11"),
+            "{}",
+            notes[0]
+        );
+        assert!(!notes[0].contains("lower end"), "{}", notes[0]);
+        assert!(notes[1].contains("lower end"), "{}", notes[1]);
+        // a singular fit gives no interval to judge
+        assert!(intervals_beyond_accepted(&[doc], &all, true).is_empty());
+    }
 
     fn est(se: f64, ci: [f64; 2]) -> Estimate {
         Estimate {
