@@ -57,11 +57,17 @@ pub fn run(
     };
     let phantom = load_phantom(&req.phantom)?;
     crate::phantom::config::require_bubbles(&phantom.params, &req.phantom)?;
-    // the bubbles' fixed gases against this profile, before anything runs
+    // the phantom's gases and the bubbles' fixed gases against this profile, before anything
+    // runs, placed in the phantom file
+    let in_phantom = |e| crate::phantom::config::in_phantom_file(e, &req.phantom);
+    phantom
+        .params
+        .check_gases_for(&profile)
+        .map_err(in_phantom)?;
     phantom
         .params
         .bubble_fixed_gases_for(&profile)
-        .map_err(|e| crate::phantom::config::in_phantom_file(e, &req.phantom))?;
+        .map_err(in_phantom)?;
     // checkpoints: the inputs as parsed, the checkpoint to resume checked against them, and the
     // place of this run's checkpoints, all before anything is simulated
     let identity = checkpoint::Inputs::new(&phantom.params, &profile);

@@ -64,6 +64,7 @@ pub fn run_matrix_journaled(
     let breathed = breathed_gas_params(&phantom.params, &criteria.protocol).map_err(located)?;
     // the bubbles' fixed gases against every schedule's pressures, before anything runs
     for cand in &candidates {
+        breathed.check_gases_for(&cand.history).map_err(located)?;
         breathed
             .bubble_fixed_gases_for(&cand.history)
             .map_err(located)?;

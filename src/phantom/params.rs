@@ -346,6 +346,26 @@ impl PhantomParams {
         self.gases.iter().find(|p| p.gas == g)
     }
 
+    /// Every gas the profile breathes has properties in the phantom (refused naming the
+    /// missing `gases.<name>` table), and the profile breathes at least one simulated gas.
+    pub fn check_gases_for(&self, profile: &PressureHistory) -> Result<(), InputError> {
+        let gases = profile.gases();
+        if gases.is_empty() {
+            return Err(InputError::new(
+                "the profile's gas contains no nitrogen, oxygen or helium",
+            ));
+        }
+        match gases.iter().find(|g| self.gas(**g).is_none()) {
+            Some(g) => Err(InputError::new(format!(
+                "the profile uses {} but the phantom lists no properties for it; add [gases.{}] with diffusivity and ostwald",
+                g.name(),
+                g.name()
+            ))
+            .field(format!("gases.{}", g.name()))),
+            None => Ok(()),
+        }
+    }
+
     /// The fixed partial pressure every bubble holds in a command's run of `profile`
     /// ([`crate::run::params_for`]), Pa: one water-vapour convention on both sides of the
     /// interface (issue 8). The open faces hold f_g·(P_amb − P_H2O) with
@@ -353,7 +373,8 @@ impl PhantomParams {
     /// [`PhantomParams::bubble_fixed_gases`] when it is set, else (0) the history's vapour. A
     /// value set below the vapour is refused (the interface would start P_H2O − p_fixed
     /// unsaturated), naming both settings. `evaluate`/`check` set p_fixed from the criteria's
-    /// `[protocol]` (P_H2O + P_CO2 + P_vO2 ≥ the P_H2O of their faces).
+    /// `[protocol]` (P_H2O + P_CO2 + P_vO2 ≥ the P_H2O of their faces). Refused too where
+    /// they would reach the profile's lowest ambient pressure.
     pub fn bubble_fixed_gases_for(&self, profile: &PressureHistory) -> Result<f64, InputError> {
         let fixed = self.paired_fixed_gases(profile)?;
         // the fixed gases alone at or above the ambient pressure would hold a bubble open at

@@ -790,3 +790,27 @@ fn fixed_gases_above_the_lowest_ambient_pressure_are_refused_before_the_run() {
     );
     assert!(!out.exists());
 }
+
+/// A profile that breathes a gas the phantom has no properties for is refused before the run
+/// with the phantom's file, its last line (where the table goes) and the missing table.
+#[test]
+fn a_gas_the_phantom_lacks_is_refused_in_the_phantom_file() {
+    let dir = tempdir("missing-gas");
+    let phantom = write(&dir, "no-he.toml", SMALL_PHANTOM);
+    let profile = write(
+        &dir,
+        "trimix.toml",
+        "time_unit = \"s\"\npressure_unit = \"psi-gauge\"\ngas = \"18/45\"\npoints = [[0, 0], [10, 20], [60, 20]]\n",
+    );
+    let out = dir.join("run");
+    let o = simulate(&profile, &phantom, &out);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("no-he.toml:")
+            && err.contains("field 'gases.he'")
+            && err.contains("add [gases.he]"),
+        "{err}"
+    );
+    assert!(!out.exists());
+}

@@ -274,22 +274,14 @@ impl<'a> Simulation<'a> {
     pub fn new(params: &'a PhantomParams, profile: &PressureHistory) -> Result<Self, Error> {
         let input = |m: String| Error::Input(crate::error::InputError::new(m));
         let grid = Grid::new(params.shape, params.grid_step, &params.open_faces).map_err(input)?;
+        params.check_gases_for(profile).map_err(Error::Input)?;
         let gases = profile.gases();
-        if gases.is_empty() {
-            return Err(input(
-                "the profile's gas contains no nitrogen, oxygen or helium".into(),
-            ));
-        }
         let mut diffusivity = Vec::new();
         let mut ostwald = Vec::new();
         for g in &gases {
-            let p = params.gas(*g).ok_or_else(|| {
-                input(format!(
-                    "the profile uses {} but the phantom lists no properties for it; add [gases.{}] with diffusivity and ostwald",
-                    g.name(),
-                    g.name()
-                ))
-            })?;
+            let p = params
+                .gas(*g)
+                .expect("every gas of the profile checked by check_gases_for");
             diffusivity.push(p.diffusivity);
             ostwald.push(p.ostwald);
         }
