@@ -164,7 +164,7 @@ pub fn parse(text: &str, path: &Path, units: &LegacyUnits) -> Result<PressureHis
                 n,
                 "value",
                 format!(
-                    "{v} in {:?} is {p} Pa absolute (surface {} Pa); absolute pressure must be positive: check --units",
+                    "{v} in {:?} is {p} Pa absolute (surface {} Pa); absolute pressure must be positive: check the unit the file is read in (`--units` for a legacy profile; a legacy schedule holds depths in metres of sea water, so this is a depth above the surface)",
                     units.pressure, units.surface_pa
                 ),
             ));

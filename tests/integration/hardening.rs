@@ -257,7 +257,20 @@ fn durations_beyond_thirty_days_are_refused() {
         "--repeat-after".as_ref(),
         "1e6".as_ref(),
     ]);
-    assert_refused(&o, &["--repeat-after"]);
+    assert_refused(&o, &["<command line>", "--repeat-after"]);
+    // the same through `evaluate`, which named the schedule file as the place of the option
+    let o = run(&[
+        "evaluate".as_ref(),
+        "--schedule".as_ref(),
+        sched.as_os_str(),
+        "--criteria".as_ref(),
+        criteria().as_os_str(),
+        "--repeat-after".as_ref(),
+        "0".as_ref(),
+        "--out".as_ref(),
+        dir.join("ev").as_os_str(),
+    ]);
+    assert_refused(&o, &["<command line>: field '--repeat-after'"]);
 }
 
 #[test]
