@@ -1266,7 +1266,15 @@ pub fn parse_interval(text: &str) -> Result<Duration, InputError> {
     };
     let v: f64 = num.parse().map_err(|_| err())?;
     let secs = v * factor;
-    if !(secs > 0.0 && secs <= 30.0 * 86_400.0) {
+    if secs > 30.0 * 86_400.0 && secs.is_finite() {
+        return Err(InputError::new(format!(
+            "'{text}' is {} s, longer than the 30 days a checkpoint interval may be",
+            crate::error::num(secs)
+        ))
+        .in_file("<command line>")
+        .field("--checkpoint-every"));
+    }
+    if !(secs > 0.0 && secs.is_finite()) {
         return Err(err());
     }
     Ok(Duration::from_secs_f64(secs))
@@ -1421,6 +1429,10 @@ mod tests {
             let e = parse_interval(bad).unwrap_err();
             assert_eq!(e.field.as_deref(), Some("--checkpoint-every"), "{bad}");
         }
+        // too long is said as such, not as a malformed interval
+        let e = parse_interval("1000000h").unwrap_err().to_string();
+        assert!(e.contains("longer than the 30 days"), "{e}");
+        assert!(s("720h").is_ok());
     }
 
     #[test]
