@@ -70,6 +70,15 @@ impl InputError {
         self.file = Some(file.as_ref().to_path_buf());
         self
     }
+    /// Attach the file unless the error already names one (an option's error names
+    /// `<command line>`, not the file being read when it was found).
+    pub fn or_in_file(self, file: impl AsRef<Path>) -> Self {
+        if self.file.is_some() {
+            self
+        } else {
+            self.in_file(file)
+        }
+    }
     /// Attach the 1-based line.
     pub fn at_line(mut self, line: usize) -> Self {
         self.line = Some(line);

@@ -66,14 +66,8 @@ pub fn run(
     let phantom = PhantomSpec::load(req.phantom.as_deref(), req.grid_step_m)?;
     let imp = read_schedule_with_notes(&req.schedule, &DECOTENGU, GasMix::AIR, req.dive)?;
     let schedule = imp.schedule;
-    let history =
-        dive_history(&schedule, &criteria.protocol, req.repeat_after_min).map_err(|e| {
-            if e.file.is_none() {
-                e.in_file(&req.schedule)
-            } else {
-                e
-            }
-        })?;
+    let history = dive_history(&schedule, &criteria.protocol, req.repeat_after_min)
+        .map_err(|e| e.or_in_file(&req.schedule))?;
     let law = phantom.own_law();
     let cand = Candidate {
         label: schedule.label.clone(),

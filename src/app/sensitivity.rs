@@ -189,13 +189,11 @@ mod tests {
     use super::*;
     use crate::sweep::run::Row;
 
-    #[test]
-    fn sweep_summary_of_a_shard_has_no_indices_and_counts_print_as_integers() {
-        // a Morris design of 1 parameter and 4 trajectories (8 runs), y = u: every elementary
-        // effect is Δ/Δ = 1, so μ* = μ = 1, σ = 0 from 4 effects, none dropped
-        let spec = StudySpec {
-            method: Method::Morris,
-            samples: 4,
+    /// A study of one parameter `a.x` over 0..1 and the metric `r_max`.
+    fn one_parameter(method: Method, samples: usize) -> StudySpec {
+        StudySpec {
+            method,
+            samples,
             seed: 1,
             params: vec![Param {
                 path: "a.x".into(),
@@ -205,7 +203,14 @@ mod tests {
                 base: 0.5,
             }],
             metrics: vec![Metric::parse("r_max").unwrap()],
-        };
+        }
+    }
+
+    #[test]
+    fn sweep_summary_of_a_shard_has_no_indices_and_counts_print_as_integers() {
+        // a Morris design of 1 parameter and 4 trajectories (8 runs), y = u: every elementary
+        // effect is Δ/Δ = 1, so μ* = μ = 1, σ = 0 from 4 effects, none dropped
+        let spec = one_parameter(Method::Morris, 4);
         let rows: Vec<Row> = spec
             .values()
             .into_iter()
@@ -246,19 +251,7 @@ mod tests {
     fn sweep_sobol_estimates_outside_the_unit_interval_are_flagged_not_printed_silently() {
         // N = 2 base rows of one parameter (rows A, B, A_B): f(A) = 0, 1; f(B) = 1, 0;
         // f(A_B) = f(B): the variance of {0, 1, 1, 0} is 1/4 and both estimators give 2
-        let spec = StudySpec {
-            method: Method::Sobol,
-            samples: 2,
-            seed: 1,
-            params: vec![Param {
-                path: "a.x".into(),
-                lo: 0.0,
-                hi: 1.0,
-                log: false,
-                base: 0.5,
-            }],
-            metrics: vec![Metric::parse("r_max").unwrap()],
-        };
+        let spec = one_parameter(Method::Sobol, 2);
         let y = [0.0, 1.0, 1.0, 1.0, 0.0, 0.0];
         let rows: Vec<Row> = spec
             .values()

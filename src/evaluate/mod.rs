@@ -157,14 +157,8 @@ pub fn schedule_candidates(
         // the dive number is for the logs among the schedules
         let d = if is_dive_log(path) { dive } else { None };
         let imp = read_schedule_with_notes(path, &DECOTENGU, crate::gas::GasMix::AIR, d)?;
-        let history = dive_history(&imp.schedule, protocol, repeat_after_min).map_err(|e| {
-            // an option's error names the command line, not the schedule
-            if e.file.is_none() {
-                e.in_file(path)
-            } else {
-                e
-            }
-        })?;
+        let history = dive_history(&imp.schedule, protocol, repeat_after_min)
+            .map_err(|e| e.or_in_file(path))?;
         let mut label = imp.schedule.label.clone();
         if taken.iter().chain(&out).any(|c| c.label == label) {
             label = format!("{label} ({})", path.display());

@@ -52,6 +52,16 @@ pub fn fingerprint(command: &str, parts: &[String]) -> String {
 /// The text of the measurements and experiments a fit works on, exact (f64 in round-trip
 /// notation), without the paths they were read from.
 pub fn work_text(experiments: &Experiments, data: &Measurements) -> String {
+    let mut s = experiments_text(experiments);
+    s.push_str(&format!("free {:?}\n", experiments.free));
+    s.push_str(&format!("measurements {:?}\n", data.series));
+    s
+}
+
+/// Each experiment's name, bubble count, profile and phantom document, exact, without the paths
+/// they were read from: what a fit's journal ([`work_text`]) and synthetic data's tag
+/// ([`crate::fit::synth::experiments_hash`]) identify experiments by.
+pub fn experiments_text(experiments: &Experiments) -> String {
     let mut s = String::new();
     for e in &experiments.list {
         s.push_str(&format!(
@@ -62,8 +72,6 @@ pub fn work_text(experiments: &Experiments, data: &Measurements) -> String {
             toml::to_string(&e.phantom).unwrap_or_else(|_| format!("{:?}", e.phantom))
         ));
     }
-    s.push_str(&format!("free {:?}\n", experiments.free));
-    s.push_str(&format!("measurements {:?}\n", data.series));
     s
 }
 

@@ -177,17 +177,7 @@ pub fn model_and_paths(
 /// [`super::data::SYNTHETIC_TAG`] line, so a report gives true values only for the
 /// experiments the data were made from.
 pub fn experiments_hash(experiments: &Experiments) -> u64 {
-    let mut s = String::new();
-    for e in &experiments.list {
-        s.push_str(&format!(
-            "experiment {:?} bubbles {}\nprofile {:?}\nphantom {}\n",
-            e.name,
-            e.bubbles,
-            e.profile,
-            toml::to_string(&e.phantom).unwrap_or_else(|_| format!("{:?}", e.phantom))
-        ));
-    }
-    crate::phantom::checkpoint::fnv1a(s.as_bytes())
+    crate::phantom::checkpoint::fnv1a(super::journal::experiments_text(experiments).as_bytes())
 }
 
 /// The [`super::data::SYNTHETIC_TAG`] line `synth` writes above its CSV's header (with its

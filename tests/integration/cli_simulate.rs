@@ -762,55 +762,55 @@ seed = 1
     assert!(!dir.join("ev.partial").exists());
 }
 
-/// Fixed gases at or above the profile's lowest ambient pressure can hold no bubble in Laplace
-/// balance: refused before the run (exit 2, the phantom file, line and field, the pressure and
-/// its time), where the run used to fail mid-way with exit 3 and no place named.
+/// Refused before the run, with exit 2, the phantom's file, line and field, and nothing
+/// written: fixed gases at or above the profile's lowest ambient pressure, which hold no
+/// bubble in Laplace balance (the run used to fail mid-way with exit 3 and no place named),
+/// and a gas the phantom has no properties for (named at the phantom's last line, where its
+/// table goes; before, no file was named).
 #[test]
-fn fixed_gases_above_the_lowest_ambient_pressure_are_refused_before_the_run() {
-    let dir = tempdir("fixed-above-ambient");
-    let phantom = write(
+fn a_phantom_the_profile_cannot_run_is_refused_in_the_phantom_file() {
+    let dir = tempdir("phantom-against-profile");
+    let out = dir.join("run");
+    let run = |profile: &Path, phantom: &Path, must_mention: &[&str]| {
+        let (pr, ph, o) = (
+            profile.to_str().unwrap(),
+            phantom.to_str().unwrap(),
+            out.to_str().unwrap(),
+        );
+        expect_input_error(
+            &["simulate", "--profile", pr, "--phantom", ph, "--out", o],
+            must_mention,
+            &out,
+        );
+    };
+    let fixed = write(
         &dir,
         "fixed.toml",
-        "[geometry]\nshape = \"box\"\nsize_m = [3.2e-3, 3.2e-3, 3.2e-3]\ngrid_step_m = 400e-6\n\n[material]\nbubble_fixed_gases_pa = 1e5\n\n[gases.n2]\ndiffusivity = 2.5e-9\nostwald = 0.014\n[gases.o2]\ndiffusivity = 2.5e-9\nostwald = 0.027\n\n[[bubbles]]\nposition_m = [1.6e-3, 1.6e-3, 1.6e-3]\ninitial_radius_m = 60e-6\n",
+        &SMALL_PHANTOM.replace("[material]\n", "[material]\nbubble_fixed_gases_pa = 1e5\n"),
     );
-    let profile = write(
+    let altitude = write(
         &dir,
         "altitude.toml",
         "time_unit = \"s\"\npressure_unit = \"pa\"\ngas = \"air\"\npoints = [[0, 101325], [10, 20000], [60, 20000]]\n",
     );
-    let out = dir.join("run");
-    let o = simulate(&profile, &phantom, &out);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains("fixed.toml:7:")
-            && err.contains("material.bubble_fixed_gases_pa")
-            && err.contains("20000 Pa at t = 10 s"),
-        "{err}"
+    run(
+        &altitude,
+        &fixed,
+        &[
+            "fixed.toml:8:",
+            "material.bubble_fixed_gases_pa",
+            "20000 Pa at t = 10 s",
+        ],
     );
-    assert!(!out.exists());
-}
-
-/// A profile that breathes a gas the phantom has no properties for is refused before the run
-/// with the phantom's file, its last line (where the table goes) and the missing table.
-#[test]
-fn a_gas_the_phantom_lacks_is_refused_in_the_phantom_file() {
-    let dir = tempdir("missing-gas");
-    let phantom = write(&dir, "no-he.toml", SMALL_PHANTOM);
-    let profile = write(
+    let no_he = write(&dir, "no-he.toml", SMALL_PHANTOM);
+    let trimix = write(
         &dir,
         "trimix.toml",
         "time_unit = \"s\"\npressure_unit = \"psi-gauge\"\ngas = \"18/45\"\npoints = [[0, 0], [10, 20], [60, 20]]\n",
     );
-    let out = dir.join("run");
-    let o = simulate(&profile, &phantom, &out);
-    let err = String::from_utf8_lossy(&o.stderr);
-    assert_eq!(o.status.code(), Some(2), "{err}");
-    assert!(
-        err.contains("no-he.toml:")
-            && err.contains("field 'gases.he'")
-            && err.contains("add [gases.he]"),
-        "{err}"
+    run(
+        &trimix,
+        &no_he,
+        &["no-he.toml:", "field 'gases.he'", "add [gases.he]"],
     );
-    assert!(!out.exists());
 }
