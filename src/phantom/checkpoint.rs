@@ -178,7 +178,7 @@ fn phantom_text(params: &PhantomParams) -> String {
 /// before the saturation was stated, so their checkpoints still match), then one line per
 /// breakpoint (time, absolute pressure, gas of the segment that starts there); its label left
 /// out.
-fn profile_text(profile: &PressureHistory) -> String {
+pub(crate) fn profile_text(profile: &PressureHistory) -> String {
     let mut s = format!(
         "vapour_pa: {:?}\ninert_only: {}\n",
         profile.vapour_pa, profile.inert_only

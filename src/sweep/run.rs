@@ -42,10 +42,11 @@ pub struct Study {
 ///   does, the grid step (`geometry.grid_step_m`) among them: `sensitivity` has no override
 ///   of its own. The swept parameters are overwritten in every run, but their phantom values are
 ///   the base values, part of the design anyway.
-/// - The profile: the pressure history as read and validated (breakpoint times, absolute
-///   pressures, the gas of each segment, water vapour, saturation; the `Debug` text, f64 in
-///   round-trip notation), so the same history in other units or another file format is the same
-///   profile; its label (the file's name) is left out, as no run reads it.
+/// - The profile: the pressure history as read and validated, in the text a checkpoint
+///   identifies it by ([`crate::phantom::checkpoint::profile_text`]: breakpoint times, absolute
+///   pressures, the gas of each segment, water vapour, saturation, f64 in round-trip notation),
+///   so the same history in other units or another file format is the same profile; its label
+///   (the file's name) is left out, as no run reads it.
 /// - The version: another build of the solver may give other numbers (`fit`'s journal keys on it
 ///   too).
 ///
@@ -64,13 +65,11 @@ impl InputsId {
     /// The identity of a study's inputs.
     pub fn of(doc: &toml::Table, profile: &PressureHistory) -> InputsId {
         let phantom = toml::to_string(doc).unwrap_or_else(|_| format!("{doc:?}"));
-        let history = PressureHistory {
-            label: String::new(),
-            ..profile.clone()
-        };
+        // the history as a checkpoint identifies it (its label left out)
+        let history = crate::phantom::checkpoint::profile_text(profile);
         InputsId {
             phantom: format!("{:032x}", fnv1a_128(phantom.as_bytes())),
-            profile: format!("{:032x}", fnv1a_128(format!("{history:?}").as_bytes())),
+            profile: format!("{:032x}", fnv1a_128(history.as_bytes())),
             version: env!("CARGO_PKG_VERSION").to_string(),
         }
     }
