@@ -340,6 +340,37 @@ pub struct ParamSpec {
     pub start: f64,
 }
 
+/// Whether phantom documents `docs` (read from `files`) refuse `value` at `path`, written where a
+/// fit writes it ([`crate::fit::model::set_shared`]: in every document that holds the path, or in
+/// all when none does) and each document read again by the phantom reader, so the field's own
+/// accepted range applies (a negative diffusivity, a surface tension above 1 N/m, a bubble
+/// outside the gel): the first refusing document's index and the reader's reason.
+pub fn refused_value(
+    docs: &[toml::Table],
+    files: &[&std::path::Path],
+    path: &str,
+    value: f64,
+) -> Option<(usize, String)> {
+    let any = docs.iter().any(|d| holds(d, path));
+    docs.iter()
+        .zip(files)
+        .enumerate()
+        .filter(|(_, (doc, _))| !any || holds(doc, path))
+        .find_map(|(i, (doc, file))| {
+            let mut t = doc.clone();
+            let reason = match apply(&mut t, path, value) {
+                Err(m) => Some(m),
+                Ok(()) => crate::fit::data::build_params(&t, file)
+                    .err()
+                    .map(|e| match e.field {
+                        Some(f) => format!("field '{f}': {}", e.message),
+                        None => e.message,
+                    }),
+            };
+            reason.map(|r| (i, r))
+        })
+}
+
 impl ParamSpec {
     /// Parse `NAME` or `NAME=LO..HI` (the command-line form). The start is the value in the
     /// phantom (`base`), else the geometric (log) or arithmetic mean of the bounds.
@@ -426,35 +457,15 @@ impl ParamSpec {
         if let Some(hi) = self.upper {
             values.push(("the upper bound", hi));
         }
-        // written where a fit writes it (`fit::model::set_shared`): in every phantom that holds
-        // the path, or in all when none does
-        let any = docs.iter().any(|d| holds(d, &self.path));
         for (what, v) in values {
-            for (doc, file) in docs.iter().zip(files) {
-                if any && !holds(doc, &self.path) {
-                    continue;
-                }
-                let mut t = doc.clone();
-                let reason = match apply(&mut t, &self.path, v) {
-                    Err(m) => Some(m),
-                    Ok(()) => {
-                        crate::fit::data::build_params(&t, file)
-                            .err()
-                            .map(|e| match e.field {
-                                Some(f) => format!("field '{f}': {}", e.message),
-                                None => e.message,
-                            })
-                    }
-                };
-                if let Some(reason) = reason {
-                    return Err(InputError::new(format!(
-                        "'{given}': {what}, {}, is not accepted in {}: {reason}",
-                        crate::error::num(v),
-                        file.display()
-                    ))
-                    .in_file("<command line>")
-                    .field("--param"));
-                }
+            if let Some((i, reason)) = refused_value(docs, files, &self.path, v) {
+                return Err(InputError::new(format!(
+                    "'{given}': {what}, {}, is not accepted in {}: {reason}",
+                    crate::error::num(v),
+                    files[i].display()
+                ))
+                .in_file("<command line>")
+                .field("--param"));
             }
         }
         Ok(())

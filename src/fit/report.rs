@@ -101,16 +101,9 @@ pub fn intervals_beyond_accepted(
     est: &[Estimate],
     singular: bool,
 ) -> Vec<String> {
+    let files = vec![std::path::Path::new("phantom"); docs.len()];
     let refused = |v: f64, path: &str| -> Option<String> {
-        let mut d = docs.to_vec();
-        if let Err(m) = crate::fit::model::set_shared(&mut d, path, v) {
-            return Some(m);
-        }
-        d.iter().find_map(|doc| {
-            crate::fit::data::build_params(doc, std::path::Path::new("phantom"))
-                .err()
-                .map(|e| e.message)
-        })
+        super::paths::refused_value(docs, &files, path, v).map(|(_, why)| why)
     };
     est.iter()
         .filter_map(|e| {
