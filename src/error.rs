@@ -187,11 +187,7 @@ pub fn toml_field_at(text: &str, offset: usize, message: &str) -> Option<String>
         }
         pos += line.len();
     }
-    let named = ["unknown field `", "missing field `"]
-        .iter()
-        .find_map(|p| message.trim().strip_prefix(p))
-        .and_then(|r| r.split_once('`'))
-        .map(|(k, _)| vec![k.to_string()]);
+    let named = named_key(message).map(|k| vec![k.to_string()]);
     let key = named.or_else(|| {
         let body = &text[body_start.min(offset)..offset];
         // the nearest `key =` before the value, skipping comments
@@ -204,6 +200,44 @@ pub fn toml_field_at(text: &str, offset: usize, message: &str) -> Option<String>
     });
     let path: Vec<String> = table.into_iter().chain(key.unwrap_or_default()).collect();
     (!path.is_empty()).then(|| path.join("."))
+}
+
+/// The key serde names in its message (`unknown field `x`, expected ...`, `missing field `x``).
+fn named_key(message: &str) -> Option<&str> {
+    ["unknown field `", "missing field `"]
+        .iter()
+        .find_map(|p| message.trim().strip_prefix(p))
+        .and_then(|r| r.split_once('`'))
+        .map(|(k, _)| k)
+}
+
+/// Deserialize a table read earlier from a file (an algorithm's `[params]`, a criterion's
+/// entry, kept as a `toml` value until its kind was known) into its raw struct. The error
+/// starts with the key it is about, dotted within the table (`gf_low: invalid type: string
+/// "30", expected f64`), as the registries' builders start theirs: serde names the key of an
+/// unknown or missing field, but a value of the wrong type in a parsed table has no place, so
+/// the table is written back as TOML text and read again, and the key is the one at the error's
+/// span there ([`toml_field_at`]). Without a key (the value is not a table) the message is
+/// serde's alone.
+pub fn table_into<T: serde::de::DeserializeOwned>(table: toml::Value) -> Result<T, String> {
+    let err = match T::deserialize(table.clone()) {
+        Ok(v) => return Ok(v),
+        Err(e) => e,
+    };
+    let msg = without_type_names(err.message().trim());
+    if let Some(k) = named_key(&msg) {
+        return Err(format!("{k}: {msg}"));
+    }
+    // the same table as text: the same keys in the same order, hence the same first error
+    let located = toml::to_string(&table).ok().and_then(|text| {
+        let again = toml::from_str::<T>(&text).err()?;
+        let key = toml_field_at(&text, again.span()?.start, again.message())?;
+        Some(format!(
+            "{key}: {}",
+            without_type_names(again.message().trim())
+        ))
+    });
+    Err(located.unwrap_or(msg))
 }
 
 /// The table path of a `[a.b]` or `[[a]]` header line, `None` for any other line.

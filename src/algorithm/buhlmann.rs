@@ -340,15 +340,7 @@ pub fn build(
     params: toml::Value,
     conventions: Conventions,
 ) -> Result<Box<dyn DecoAlgorithm>, String> {
-    let raw: RawParams = params.try_into().map_err(|e: toml::de::Error| {
-        let msg = e.message().trim().to_string();
-        match msg.split('`').nth(1) {
-            Some(f) if msg.starts_with("unknown field") || msg.starts_with("missing field") => {
-                format!("{f}: {msg}")
-            }
-            _ => msg,
-        }
-    })?;
+    let raw: RawParams = crate::error::table_into(params)?;
     let variant = Variant::parse(&raw.model).ok_or_else(|| {
         format!(
             "model: unknown ZH-L16 variant '{}'; write zh-l16a, zh-l16b or zh-l16c",

@@ -18,7 +18,7 @@
 
 use super::conventions::{Conventions, GfLowAnchor, StopRounding};
 use super::{registry, DecoAlgorithm};
-use crate::error::{line_of_key, toml_error, InputError};
+use crate::error::{line_of_key, toml_error_with_path, InputError};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -195,20 +195,8 @@ impl Overrides {
             ("--descent-rate", self.descent_rate_m_min),
             ("--ascent-rate", self.ascent_rate_m_min),
         ] {
-            if let Some(v) = v {
-                // the floor: 1000 m in the 30 days a history may last
-                // ([`super::conventions::MIN_TRAVEL_RATE_M_MIN`])
-                let lo = super::conventions::MIN_TRAVEL_RATE_M_MIN;
-                let hi = super::conventions::MAX_TRAVEL_RATE_M_MIN;
-                if !(v.is_finite() && v >= lo && v <= hi) {
-                    return cmd(
-                        opt,
-                        format!(
-                            "rate {} m/min is outside {lo:.4}..{hi} m/min (at {lo:.4} m/min 1000 m take the whole 30 days a history may last)",
-                            crate::error::num(v)
-                        ),
-                    );
-                }
+            if let Some(why) = v.and_then(super::conventions::travel_rate_refusal) {
+                return cmd(opt, why);
             }
         }
         if let Some(v) = self.last_stop_m {
@@ -260,7 +248,8 @@ fn parse_algorithm_unlined(
     path: &Path,
     overrides: &Overrides,
 ) -> Result<LoadedAlgorithm, InputError> {
-    let mut raw: RawAlgorithmFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+    let mut raw: RawAlgorithmFile =
+        toml::from_str(text).map_err(|e| toml_error_with_path(path, text, &e))?;
     if overrides.gf_low.is_some() || overrides.gf_high.is_some() {
         let has_gf = raw
             .params

@@ -98,6 +98,27 @@ pub const MIN_TRAVEL_RATE_M_MIN: f64 =
 /// of the file (a misplaced decimal, seconds given as minutes), not a dive.
 pub const MAX_TRAVEL_RATE_M_MIN: f64 = 100.0;
 
+/// Why a descent or ascent rate of `v` m/min is refused (not a positive number, or outside
+/// [`MIN_TRAVEL_RATE_M_MIN`]..=[`MAX_TRAVEL_RATE_M_MIN`]), `None` when it is accepted: the one
+/// check of an algorithm file's `descent_rate_m_min` / `ascent_rate_m_min` and of
+/// `--descent-rate` / `--ascent-rate`.
+pub fn travel_rate_refusal(v: f64) -> Option<String> {
+    let v_text = crate::error::num(v);
+    if !(v.is_finite() && v > 0.0) {
+        Some(format!("must be a positive number of m/min, got {v_text}"))
+    } else if v < MIN_TRAVEL_RATE_M_MIN {
+        Some(format!(
+            "{v_text} m/min is slower than {MIN_TRAVEL_RATE_M_MIN:.4} m/min, at which 1000 m take the whole 30 days a history may last"
+        ))
+    } else if v > MAX_TRAVEL_RATE_M_MIN {
+        Some(format!(
+            "{v_text} m/min is faster than the accepted {MAX_TRAVEL_RATE_M_MIN} m/min (the presets travel at 9–20 m/min); give the rate in m/min"
+        ))
+    } else {
+        None
+    }
+}
+
 /// Whether `v` lies in the closed range `r` (a NaN never does).
 pub fn within(v: f64, r: (f64, f64)) -> bool {
     v >= r.0 && v <= r.1
@@ -261,8 +282,6 @@ impl Conventions {
         };
         pos("surface_pressure_pa", self.surface_pressure_pa)?;
         pos("pa_per_m", self.pa_per_m)?;
-        pos("descent_rate_m_min", self.descent_rate_m_min)?;
-        pos("ascent_rate_m_min", self.ascent_rate_m_min)?;
         pos("stop_spacing_m", self.stop_spacing_m)?;
         pos("last_stop_m", self.last_stop_m)?;
         let (sp_lo, sp_hi) = SURFACE_PRESSURE_RANGE_PA;
@@ -289,14 +308,8 @@ impl Conventions {
             ("descent_rate_m_min", self.descent_rate_m_min),
             ("ascent_rate_m_min", self.ascent_rate_m_min),
         ] {
-            if v < MIN_TRAVEL_RATE_M_MIN {
-                return Err((
-                    name.into(),
-                    format!(
-                        "{} m/min is slower than {MIN_TRAVEL_RATE_M_MIN:.4} m/min, at which 1000 m take the whole 30 days a history may last",
-                        crate::error::num(v)
-                    ),
-                ));
+            if let Some(why) = travel_rate_refusal(v) {
+                return Err((name.into(), why));
             }
         }
         if !(self.water_vapour_pa.is_finite()

@@ -19,7 +19,11 @@
 //!   −[`SURFACE_NOISE_DEPTH_M`] (−1 m, sensor noise at the surface) clamped to 0 (noted) and
 //!   deeper negative ones refused naming the sample's line and time; a sample or waypoint without a time or a depth is skipped (noted with its line);
 //!   if the first sample is not at time 0, a surface point (0 s, 0 m) is prepended (recorded in
-//!   [`ImportedDive::notes`]).
+//!   [`ImportedDive::notes`]). A dive whose first sample lies deeper than
+//!   [`FIRST_SAMPLE_DEPTH_M`] (3 m) at time 0, or that changes depth between two samples
+//!   (the prepended point included) faster than [`MAX_LOGGED_RATE_M_MIN`] (600 m/min), is
+//!   refused naming the dive, the sample's line, time and depth; changes faster than the
+//!   schedules' 100 m/min are read and noted with the fastest.
 //! - Surface pressure and water density are taken from the file when present and plausible
 //!   (0.5–1.1 bar, 990–1040 kg/m³), else 101 325 Pa and 1030 kg/m³ (Subsurface's sea-water
 //!   default), noted. A UDDF altitude without a surface pressure gives the ISA pressure.
@@ -586,14 +590,35 @@ impl Skipped {
     }
 }
 
+/// Deepest a dive's first sample may lie when it is at time 0, m. A dive computer starts a dive
+/// when it passes its start depth, about 1–1.5 m, and its first sample may lie a second or two
+/// of descent deeper: the first samples of the real logs in `../shared/dive-files` lie at
+/// 2.335–2.68 m (Subsurface's `test40-42.xml`, `ostc.xml`). Deeper at time 0 the descent was
+/// not logged, and the history would compress the phantom from the surface in no time: refused.
+pub const FIRST_SAMPLE_DEPTH_M: f64 = 3.0;
+
+/// Fastest change of depth accepted between two consecutive samples of a dive log, m/min
+/// (10 m/s): faster than a diver moves, so a sensor glitch, a time in the wrong unit or a
+/// missed descent, refused naming the sample. It
+/// lies well above the fastest change in the real logs of `../shared/dive-files`, 210 m/min
+/// (`kenozooid__ostc-dump-02.uddf` dive 2: 8 m at 10 s to 43 m at 20 s); the project's own logs
+/// reach 63.15 m/min (`tests/data/divelogs/repetitive-logged.xml` dive 2, from the prepended
+/// surface point). Changes faster than the schedules' [`MAX_TRAVEL_RATE_M_MIN`] but within this
+/// are read, and noted.
+///
+/// [`MAX_TRAVEL_RATE_M_MIN`]: crate::algorithm::conventions::MAX_TRAVEL_RATE_M_MIN
+pub const MAX_LOGGED_RATE_M_MIN: f64 = 600.0;
+
 /// Sort (noting samples earlier than the one before them, with the line of the first),
 /// merge duplicate times (last wins), clamp negative depths (at most
 /// [`SURFACE_NOISE_DEPTH_M`] above the surface: [`check_sample`] refuses the others), prepend
-/// the surface.
+/// the surface, and check the rates between samples ([`FIRST_SAMPLE_DEPTH_M`],
+/// [`MAX_LOGGED_RATE_M_MIN`]). Refusals name dive `number` (1-based, as `--dive`), the sample's
+/// line and `depth_field`.
 fn normalise(
     mut samples: Vec<(f64, f64, usize)>,
     cx: &Cx,
-    dive: &Node,
+    (dive, number, depth_field): (&Node, usize, &str),
     notes: &mut Vec<String>,
 ) -> Result<Vec<(f64, f64)>, InputError> {
     if let Some(&(t, _, off)) = samples.iter().find(|s| s.0 < 0.0) {
@@ -624,10 +649,10 @@ fn normalise(
         ));
     }
     samples.sort_by(|a, b| a.0.total_cmp(&b.0));
-    let mut out: Vec<(f64, f64)> = Vec::with_capacity(samples.len());
+    let mut out: Vec<(f64, f64, usize)> = Vec::with_capacity(samples.len());
     let mut merged = 0;
     let mut clamped = 0;
-    for (t, d, _) in samples {
+    for (t, d, off) in samples {
         let d = if d < 0.0 {
             clamped += 1;
             0.0
@@ -636,10 +661,10 @@ fn normalise(
         };
         match out.last_mut() {
             Some(last) if last.0 == t => {
-                *last = (t, d);
+                *last = (t, d, off);
                 merged += 1;
             }
-            _ => out.push((t, d)),
+            _ => out.push((t, d, off)),
         }
     }
     if merged > 0 {
@@ -652,6 +677,14 @@ fn normalise(
             "{clamped} negative depth(s) (within {SURFACE_NOISE_DEPTH_M} m of the surface: sensor noise) set to 0 m"
         ));
     }
+    let refuse = |off: usize, msg: String| {
+        InputError::new(format!("dive {number}: {msg}"))
+            .in_file(cx.path)
+            .at_line(line_at(cx.text, off))
+            .field(depth_field)
+    };
+    let rate_text = crate::algorithm::schedule::rate_text;
+    let n = crate::error::num;
     match out.first() {
         None => {
             return Err(cx.err(
@@ -660,18 +693,65 @@ fn normalise(
                 "the dive has no samples with both time and depth",
             ))
         }
-        Some(&(t, d)) if t > 0.0 => {
-            notes.push(format!(
-                "first sample at {t} s and {d} m; a surface point (0 s, 0 m) was prepended"
-            ));
-            out.insert(0, (0.0, 0.0));
+        Some(&(t, d, off)) if t > 0.0 => {
+            let rate = d / (t / 60.0);
+            if rate > MAX_LOGGED_RATE_M_MIN * (1.0 + 1e-9) {
+                return Err(refuse(off, format!(
+                    "the first sample is at {} m at {} s: reaching it from the surface takes {} m/min, faster than a diver moves (at most {MAX_LOGGED_RATE_M_MIN} m/min are accepted); the log misses the descent: add its samples or choose another dive",
+                    n(d), n(t), rate_text(rate)
+                )));
+            }
+            notes.push(if d > FIRST_SAMPLE_DEPTH_M {
+                format!(
+                    "first sample at {} s and {} m, deeper than the {FIRST_SAMPLE_DEPTH_M} m by which dive computers start recording: the descent was not logged; a surface point (0 s, 0 m) was prepended (a descent at {} m/min)",
+                    n(t), n(d), rate_text(rate)
+                )
+            } else {
+                format!("first sample at {t} s and {d} m; a surface point (0 s, 0 m) was prepended")
+            });
+            out.insert(0, (0.0, 0.0, off));
         }
-        Some(&(_, d)) if d > 0.0 => {
+        Some(&(_, d, off)) if d > FIRST_SAMPLE_DEPTH_M => {
+            return Err(refuse(off, format!(
+                "the dive starts at {} m at 0 s, deeper than the {FIRST_SAMPLE_DEPTH_M} m by which dive computers start recording: the descent was not logged, and the phantom would be compressed from the surface in no time; add the descent's samples (from 0 m at 0 s) or choose another dive",
+                n(d)
+            )));
+        }
+        Some(&(_, d, _)) if d > 0.0 => {
             notes.push(format!("the dive starts at {d} m (first sample at time 0)"));
         }
         _ => {}
     }
-    Ok(out)
+    // the rate between consecutive samples (times strictly increase after the merge); a
+    // relative 1e-9 for times written in minutes, as for schedules
+    // ([`crate::algorithm::schedule::too_fast`])
+    let max_travel = crate::algorithm::conventions::MAX_TRAVEL_RATE_M_MIN;
+    let mut fast = 0;
+    let mut fastest: Option<(f64, usize)> = None;
+    for k in 1..out.len() {
+        let ((t0, d0, _), (t1, d1, off)) = (out[k - 1], out[k]);
+        let rate = (d1 - d0).abs() / ((t1 - t0) / 60.0);
+        if rate > MAX_LOGGED_RATE_M_MIN * (1.0 + 1e-9) {
+            return Err(refuse(off, format!(
+                "the depth goes from {} m at {} s to {} m at {} s, {} m/min: faster than a diver moves (at most {MAX_LOGGED_RATE_M_MIN} m/min are accepted); a sensor glitch or a wrong time: correct or remove the sample",
+                n(d0), n(t0), n(d1), n(t1), rate_text(rate)
+            )));
+        }
+        if crate::algorithm::schedule::too_fast(d1 - d0, t1 - t0).is_some() {
+            fast += 1;
+            if fastest.is_none_or(|(r, _)| rate > r) {
+                fastest = Some((rate, k));
+            }
+        }
+    }
+    if let Some((rate, k)) = fastest {
+        let ((t0, d0, _), (t1, d1, off)) = (out[k - 1], out[k]);
+        notes.push(format!(
+            "{fast} change(s) of depth faster than the {max_travel} m/min accepted in schedules, the fastest {} m/min ({} m at {} s to {} m at {} s, line {}): read as logged; check the log for a sensor glitch",
+            rate_text(rate), n(d0), n(t0), n(d1), n(t1), line_at(cx.text, off)
+        ));
+    }
+    Ok(out.into_iter().map(|(t, d, _)| (t, d)).collect())
 }
 
 /// Gas switches in time order; those at or before the first real sample set the initial gas.
@@ -774,7 +854,7 @@ fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
         }
         skipped.note(cx, "sample(s) without a time or a depth", &mut notes);
         let first_sample = raw.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
-        let samples = normalise(raw, cx, dive, &mut notes)?;
+        let samples = normalise(raw, cx, (dive, n + 1, "sample.depth"), &mut notes)?;
 
         let mut events = Vec::new();
         for ev in src.children_named("event") {
@@ -1045,7 +1125,7 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
         }
         skipped.note(cx, "waypoint(s) without a divetime or a depth", &mut notes);
         let first_sample = raw.iter().map(|s| s.0).fold(f64::INFINITY, f64::min);
-        let samples = normalise(raw, cx, dive, &mut notes)?;
+        let samples = normalise(raw, cx, (dive, n + 1, "waypoint.depth"), &mut notes)?;
         if !first_switch_on_first_wp && !no_gasdefs && gases.len() > 1 {
             notes.push(format!(
                 "no gas switch on the first waypoint; starting on the first mix '{}'",

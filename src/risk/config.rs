@@ -17,7 +17,7 @@
 //! ```
 
 use super::{build, kinds, score, RiskCriterion, RunData, Score};
-use crate::error::{line_of_key, toml_error, InputError};
+use crate::error::{line_of_key, toml_error_with_path, InputError};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -184,7 +184,8 @@ fn line_in_block(text: &str, n: usize, key: &str) -> Option<usize> {
 
 /// Parse and validate criteria TOML text (`path` names it in errors).
 pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError> {
-    let raw: RawCriteriaFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+    let raw: RawCriteriaFile =
+        toml::from_str(text).map_err(|e| toml_error_with_path(path, text, &e))?;
     let top = |key: &str, msg: String| {
         let leaf = key.rsplit('.').next().unwrap_or(key);
         let mut e = InputError::new(msg).in_file(path).field(key);
@@ -296,34 +297,17 @@ pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError
             Some(_) => return Err(err("label", "must be a string".into())),
             None => kind.clone(),
         };
-        let params = t.clone();
         let criterion = build(&kind, t).map_err(|m| {
             if m.starts_with("unknown criterion") {
                 return err("kind", m);
             }
-            let quoted = m
-                .split_once('`')
-                .and_then(|(_, r)| r.split_once('`'))
-                .map(|(f, _)| f.to_string());
-            // serde: "unknown variant `moon`, expected ..." names the value, not the key: the
-            // field is the key that holds that text
-            if m.starts_with("unknown variant") {
-                let key = quoted.as_deref().and_then(|v| {
-                    params
-                        .iter()
-                        .find(|(_, x)| x.as_str() == Some(v))
-                        .map(|(k, _)| k.clone())
-                });
-                return err(key.as_deref().unwrap_or("kind"), m);
-            }
-            // serde: "unknown field `x`, expected ..." / "missing field `x`"; builders: "x: ..."
-            let field = quoted
-                .or_else(|| {
-                    m.split_once(": ")
-                        .map(|(f, _)| f.to_string())
-                        .filter(|f| !f.contains(' '))
-                })
-                .unwrap_or_else(|| "kind".into());
+            // builders and serde (through `params`) start with the key: "threshold_mm3: ..."
+            let field = m
+                .split_once(": ")
+                .map(|(f, _)| f)
+                .filter(|f| !f.is_empty() && !f.contains(' '))
+                .unwrap_or("kind")
+                .to_string();
             err(&field, m)
         })?;
         // a limit so small or large that value/limit overflows is not a limit (1e-308 gave -inf

@@ -135,9 +135,10 @@ pub fn build(kind: &str, params: toml::Table) -> Result<Box<dyn RiskCriterion>, 
     b(params)
 }
 
-/// Deserialize a criterion's parameter table into its raw struct (`deny_unknown_fields`).
+/// Deserialize a criterion's parameter table into its raw struct (`deny_unknown_fields`); the
+/// error starts with the key it is about ([`crate::error::table_into`]).
 pub(crate) fn params<T: serde::de::DeserializeOwned>(t: toml::Table) -> Result<T, String> {
-    T::deserialize(toml::Value::Table(t)).map_err(|e| e.message().trim().to_string())
+    crate::error::table_into(toml::Value::Table(t))
 }
 
 /// A criterion's score on one run.

@@ -1193,3 +1193,197 @@ fn plan_rates_and_runtime_stay_within_thirty_days() {
         );
     }
 }
+
+/// Every `key = value` line of a TOML file whose value is a number, a boolean or a one-line
+/// string, with that value given the wrong type (a string quoted, anything else as the string
+/// `"x"` — `1` for a string): (1-based line, dotted field, the file's text with that change).
+fn wrong_type_variants(text: &str) -> Vec<(usize, String, String)> {
+    let lines: Vec<&str> = text.lines().collect();
+    let mut table = String::new();
+    let mut out = Vec::new();
+    for (i, l) in lines.iter().enumerate() {
+        let t = l.trim();
+        if let Some(h) = t.strip_prefix('[') {
+            table = h.trim_matches(|c| c == '[' || c == ']').to_string();
+            continue;
+        }
+        let Some((key, rest)) = t.split_once(" = ") else {
+            continue;
+        };
+        if t.starts_with('#') || rest.starts_with('[') || rest.starts_with('{') {
+            continue;
+        }
+        let (value, tail) = match rest.strip_prefix('"') {
+            Some(r) => match r.split_once('"') {
+                Some((v, tail)) => (format!("\"{v}\""), tail),
+                None => continue,
+            },
+            None => {
+                let v = rest.split('#').next().unwrap().trim();
+                (v.to_string(), &rest[v.len()..])
+            }
+        };
+        let wrong = if value.starts_with('"') {
+            "1".to_string()
+        } else if value == "true" || value == "false" {
+            "\"x\"".to_string()
+        } else {
+            format!("\"{value}\"")
+        };
+        let mut changed = lines.clone();
+        let line = format!("{key} = {wrong}{tail}");
+        changed[i] = &line;
+        let field = if table.is_empty() {
+            key.to_string()
+        } else {
+            format!("{table}.{key}")
+        };
+        out.push((i + 1, field, changed.join("\n") + "\n"));
+    }
+    out
+}
+
+/// A value of the wrong type anywhere in an algorithm file names the key's own line and its
+/// dotted field, for every key of every committed algorithm file (ZH-L16 and VPM-B): the
+/// `[params]` table is read by the algorithm's builder once `kind` is known, and before
+/// session 31 its type errors named the table (`gf.toml:10: field 'params': invalid type:
+/// string "30", expected f64` for `gf_low = "30"` on line 12 of zhl16c-gf30-85.toml; VPM-B:
+/// `field 'params.params'`). Through the binary for that reported case.
+#[test]
+fn algorithm_file_type_errors_name_the_key_and_its_line() {
+    use decophantom::algorithm::config::parse_algorithm;
+    let mut files = 0;
+    let mut cases = 0;
+    for entry in std::fs::read_dir(root().join("algorithms")).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().and_then(|e| e.to_str()) != Some("toml") {
+            continue;
+        }
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(parse_algorithm(&text, &path).is_ok(), "{}", path.display());
+        files += 1;
+        for (line, field, bad) in wrong_type_variants(&text) {
+            let e = parse_algorithm(&bad, &path).unwrap_err();
+            assert_eq!(
+                (e.line, e.field.as_deref(), e.file.as_deref()),
+                (Some(line), Some(field.as_str()), Some(path.as_path())),
+                "{}: {e}",
+                path.display()
+            );
+            cases += 1;
+        }
+    }
+    // 15 files; every one has kind, label, preset and two or three [params] keys
+    assert_eq!(files, 15);
+    assert!(cases >= 15 * 5, "{cases}");
+
+    let dir = crate::common::tempdir("plan-type-errors");
+    let text = std::fs::read_to_string(root().join("algorithms/zhl16c-gf30-85.toml")).unwrap();
+    let f = dir.join("gf.toml");
+    std::fs::write(&f, text.replace("gf_low = 30", "gf_low = \"30\"")).unwrap();
+    let (code, out, err) = plan(&[
+        "--algorithm",
+        f.to_str().unwrap(),
+        "--depth",
+        "30",
+        "--time",
+        "20",
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(out.is_empty(), "{out}");
+    assert!(
+        err.contains(
+            "gf.toml:12: field 'params.gf_low': invalid type: string \"30\", expected f64"
+        ),
+        "{err}"
+    );
+}
+
+/// The same for the committed criteria files (`algorithms/criteria/`): a wrong type in
+/// `[protocol]` or in a `[[criterion]]` entry names the key's own line and field. Before
+/// session 31 a criterion's own parameter (`threshold_mm3 = "0.008133"`) was blamed on
+/// `criterion.kind` at the entry's `kind` line, and `[protocol]` type errors named no field.
+#[test]
+fn criteria_file_type_errors_name_the_key_and_its_line() {
+    use decophantom::risk::config::parse_criteria;
+    let mut cases = 0;
+    for entry in std::fs::read_dir(root().join("algorithms/criteria")).unwrap() {
+        let path = entry.unwrap().path();
+        let text = std::fs::read_to_string(&path).unwrap();
+        assert!(parse_criteria(&text, &path).is_ok(), "{}", path.display());
+        for (line, field, bad) in wrong_type_variants(&text) {
+            let e = parse_criteria(&bad, &path).unwrap_err();
+            assert_eq!(
+                (e.line, e.field.as_deref(), e.file.as_deref()),
+                (Some(line), Some(field.as_str()), Some(path.as_path())),
+                "{}: {e}",
+                path.display()
+            );
+            cases += 1;
+        }
+    }
+    // default.toml: description, 5 [protocol] keys, 6 criteria of 3–4 keys each
+    assert!(cases >= 25, "{cases}");
+}
+
+/// Descent and ascent rates above [`MAX_TRAVEL_RATE_M_MIN`] (100 m/min, the top of the range
+/// schedules accept) are refused in an algorithm file's `[conventions]`, naming file, line
+/// and field (before session 31 a file's `descent_rate_m_min = 500` planned with exit 0), as
+/// they are on the command line; exactly 100 m/min plans.
+///
+/// [`MAX_TRAVEL_RATE_M_MIN`]: decophantom::algorithm::conventions::MAX_TRAVEL_RATE_M_MIN
+#[test]
+fn algorithm_file_travel_rates_above_100_m_min_are_refused() {
+    let dir = crate::common::tempdir("plan-fast-rates");
+    let run = |key: &str, v: &str| {
+        let f = dir.join("a.toml");
+        std::fs::write(
+            &f,
+            format!("kind = \"zhl16\"\n[conventions]\npreset = \"decotengu\"\n{key} = {v}\n[params]\nmodel = \"zh-l16c\"\ngf_low = 30\ngf_high = 85\n"),
+        )
+        .unwrap();
+        plan(&[
+            "--algorithm",
+            f.to_str().unwrap(),
+            "--depth",
+            "30",
+            "--time",
+            "10",
+        ])
+    };
+    for (key, v) in [
+        ("descent_rate_m_min", "500"),
+        ("ascent_rate_m_min", "100.5"),
+    ] {
+        let (code, out, err) = run(key, v);
+        assert_eq!(code, 2, "{key} = {v}: {err}");
+        assert!(out.is_empty(), "{out}");
+        assert!(
+            err.contains(&format!("a.toml:4: field 'conventions.{key}': {v} m/min is faster than the accepted 100 m/min")),
+            "{err}"
+        );
+    }
+    for key in ["descent_rate_m_min", "ascent_rate_m_min"] {
+        let (code, _, err) = run(key, "100");
+        assert_eq!(code, 0, "{key} = 100: {err}");
+    }
+    for opt in ["--descent-rate", "--ascent-rate"] {
+        let (code, _, err) = plan(&[
+            "--algorithm",
+            "algorithms/zhl16c-gf30-85.toml",
+            "--depth",
+            "30",
+            "--time",
+            "10",
+            opt,
+            "101",
+        ]);
+        assert_eq!(code, 2, "{err}");
+        assert!(
+            err.contains(&format!(
+                "field '{opt}': 101 m/min is faster than the accepted 100 m/min"
+            )),
+            "{err}"
+        );
+    }
+}

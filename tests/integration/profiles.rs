@@ -938,3 +938,145 @@ fn vapour_option_and_folder_profiles_name_their_source() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A dive log whose descent was not logged (first sample deeper than
+/// [`divelog::FIRST_SAMPLE_DEPTH_M`], 3 m, at time 0, or reached from the prepended surface
+/// point faster than [`divelog::MAX_LOGGED_RATE_M_MIN`], 600 m/min) or whose depth jumps between
+/// two samples faster than that is refused naming the file, the dive (1-based, as `--dive`),
+/// the sample's line, its time and the depth field, in both formats; before session 31 each ran
+/// with exit 0 (a 30 m dive from time 0 compressed the phantom from the surface in no time).
+/// A first sample deeper than 3 m reached at a diver's pace is read, with a note that the
+/// descent was not logged; a change faster than the schedules' 100 m/min is read, noted (the
+/// real OSTC log `kenozooid__ostc-dump-02.uddf` goes from 8 m at 10 s to 43 m at 20 s,
+/// 210 m/min, in dive 2), and so is the real logs' start at 2.68 m at time 0
+/// (`subsurface__test40-42.xml` dive 3, within the 3 m).
+///
+/// [`divelog::FIRST_SAMPLE_DEPTH_M`]: decophantom::profile::divelog::FIRST_SAMPLE_DEPTH_M
+/// [`divelog::MAX_LOGGED_RATE_M_MIN`]: decophantom::profile::divelog::MAX_LOGGED_RATE_M_MIN
+#[test]
+fn dive_logs_without_their_descent_or_with_impossible_rates_are_refused() {
+    use decophantom::profile::divelog;
+    let p = Path::new("log.ssrf");
+    // dive 2 of a two-dive log carries the samples (lines 7..): dive 1 is a plain 20 m dive
+    let ssrf = |samples: &[(&str, &str)]| {
+        let rows: String = samples
+            .iter()
+            .map(|(t, d)| format!("<sample time='{t}' depth='{d} m' />\n"))
+            .collect();
+        format!(
+            "<divelog program='subsurface' version='3'>\n<dives>\n<dive number='1'><divecomputer>\n<sample time='0:00 min' depth='0 m' /><sample time='2:00 min' depth='20 m' /><sample time='20:00 min' depth='0 m' />\n</divecomputer></dive>\n<dive number='2'><divecomputer>\n{rows}</divecomputer></dive>\n</dives>\n</divelog>\n"
+        )
+    };
+    let refused = |samples: &[(&str, &str)], line: usize, words: &[&str]| {
+        let e = divelog::parse(&ssrf(samples), p).unwrap_err();
+        assert_eq!(
+            (e.file.as_deref(), e.line, e.field.as_deref()),
+            (Some(p), Some(line), Some("sample.depth")),
+            "{e}"
+        );
+        assert!(e.message.starts_with("dive 2: "), "{e}");
+        for w in words {
+            assert!(e.message.contains(w), "{w}: {e}");
+        }
+    };
+    let tail = [("20:00 min", "30"), ("24:00 min", "0")];
+    // 30 m at 0:00: no descent
+    refused(
+        &[("0:00 min", "30"), tail[0], tail[1]],
+        7,
+        &["starts at 30 m at 0 s", "descent was not logged"],
+    );
+    // 30 m at 0:02: 900 m/min from the surface
+    refused(
+        &[("0:02 min", "30"), tail[0], tail[1]],
+        7,
+        &["30 m at 2 s", "900 m/min", "misses the descent"],
+    );
+    // a glitch to the surface and back within a second, 20 m/s = 1200 m/min
+    refused(
+        &[
+            ("0:00 min", "0"),
+            ("2:00 min", "20"),
+            ("10:00 min", "20"),
+            ("10:01 min", "0"),
+            ("10:02 min", "20"),
+            ("24:00 min", "0"),
+        ],
+        10,
+        &["from 20 m at 600 s to 0 m at 601 s", "1200 m/min"],
+    );
+    // the limits themselves are read: 3 m at 0:00, 600 m/min (20 m in 2 s)
+    let ok = |samples: &[(&str, &str)]| {
+        let mut ds = divelog::parse(&ssrf(samples), p).unwrap();
+        ds.remove(1)
+    };
+    let d = ok(&[
+        ("0:00 min", "3"),
+        ("2:00 min", "20"),
+        ("2:02 min", "0"),
+        ("3:00 min", "0"),
+    ]);
+    assert!(
+        d.notes.iter().any(|n| n.contains("starts at 3 m"))
+            && d.notes.iter().any(|n| n.contains(
+                "1 change(s) of depth faster than the 100 m/min accepted in schedules, the fastest 600 m/min (20 m at 120 s to 0 m at 122 s, line 9)"
+            )),
+        "{:?}",
+        d.notes
+    );
+    // 20 m at 1:00 (20 m/min from the surface): read, the missing descent noted
+    let d = ok(&[("1:00 min", "20"), tail[0], tail[1]]);
+    assert_eq!(d.samples[0], (0.0, 0.0));
+    assert!(
+        d.notes
+            .iter()
+            .any(|n| n.contains("the descent was not logged") && n.contains("20 m/min")),
+        "{:?}",
+        d.notes
+    );
+    // UDDF: the waypoint's line and field
+    let uddf = "<uddf><profiledata><repetitiongroup><dive><samples>\n<waypoint><depth>0</depth><divetime>0</divetime></waypoint>\n<waypoint><depth>40</depth><divetime>3</divetime></waypoint>\n<waypoint><depth>0</depth><divetime>1200</divetime></waypoint>\n</samples></dive></repetitiongroup></profiledata></uddf>";
+    let e = divelog::parse(uddf, Path::new("u.uddf")).unwrap_err();
+    assert_eq!(
+        (e.line, e.field.as_deref()),
+        (Some(3), Some("waypoint.depth")),
+        "{e}"
+    );
+    assert!(
+        e.message.starts_with("dive 1: ") && e.message.contains("800 m/min"),
+        "{e}"
+    );
+
+    // through the binary: exit 2, the file, line and field on stderr, nothing run
+    let dir = crate::common::tempdir("divelog-rates");
+    let f = dir.join("deep.ssrf");
+    std::fs::write(&f, ssrf(&[("0:00 min", "30"), tail[0], tail[1]])).unwrap();
+    let o = std::process::Command::new(crate::common::bin())
+        .args(["check", "--schedule"])
+        .arg(&f)
+        .args(["--dive", "2", "--criteria"])
+        .arg(crate::common::root().join("algorithms/criteria/default.toml"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("deep.ssrf:7: field 'sample.depth': dive 2: the dive starts at 30 m at 0 s"),
+        "{err}"
+    );
+
+    // the real logs: read, the fast change noted
+    if let Some(dir) = shared("dive-files") {
+        let ds = divelog::read(&dir.join("kenozooid__ostc-dump-02.uddf")).unwrap();
+        assert!(
+            ds[1]
+                .notes
+                .iter()
+                .any(|n| n.contains("the fastest 210 m/min (8 m at 10 s to 43 m at 20 s")),
+            "{:?}",
+            ds[1].notes
+        );
+        let ds = divelog::read(&dir.join("subsurface__test40-42.xml")).unwrap();
+        assert_eq!(ds[2].samples[0], (0.0, 2.68));
+    }
+}

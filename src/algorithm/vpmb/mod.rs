@@ -339,9 +339,7 @@ pub fn build(
     params: toml::Value,
     conventions: Conventions,
 ) -> Result<Box<dyn DecoAlgorithm>, String> {
-    let raw: RawVpmbParams = params
-        .try_into()
-        .map_err(|e: toml::de::Error| format!("params: {}", e.message().trim()))?;
+    let raw: RawVpmbParams = crate::error::table_into(params)?;
     let p = raw.validate()?;
     Ok(Box::new(VpmB::new(label, p, conventions)?))
 }
