@@ -17,7 +17,7 @@
 //! ```
 
 use super::{build, kinds, score, RiskCriterion, RunData, Score};
-use crate::error::{line_of_key, toml_error, InputError};
+use crate::error::{line_of_key, toml_error_with_path, InputError};
 use serde::Deserialize;
 use std::path::Path;
 
@@ -184,7 +184,8 @@ fn line_in_block(text: &str, n: usize, key: &str) -> Option<usize> {
 
 /// Parse and validate criteria TOML text (`path` names it in errors).
 pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError> {
-    let raw: RawCriteriaFile = toml::from_str(text).map_err(|e| toml_error(path, text, &e))?;
+    let raw: RawCriteriaFile =
+        toml::from_str(text).map_err(|e| toml_error_with_path(path, text, &e))?;
     let top = |key: &str, msg: String| {
         let leaf = key.rsplit('.').next().unwrap_or(key);
         let mut e = InputError::new(msg).in_file(path).field(key);
@@ -244,7 +245,10 @@ pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError
             if !(v.is_finite() && (0.0..20_000.0).contains(&v)) {
                 return Err(top(
                     key,
-                    format!("must be in 0..20000 Pa ({typical}) (got {v})"),
+                    format!(
+                        "must be in 0..20000 Pa ({typical}) (got {})",
+                        crate::error::num(v)
+                    ),
                 ));
             }
             *slot = v;
