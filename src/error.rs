@@ -115,7 +115,7 @@ pub fn toml_error(path: &Path, text: &str, err: &toml::de::Error) -> InputError 
     let line = err
         .span()
         .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
-    let msg = without_type_names(err.message().trim());
+    let msg = serde_message(err.message());
     // serde names the offending key as "unknown field `x`"; surface it as the field.
     let field = msg
         .strip_prefix("unknown field `")
@@ -129,6 +129,23 @@ pub fn toml_error(path: &Path, text: &str, err: &toml::de::Error) -> InputError 
         e = e.field(f);
     }
     e
+}
+
+/// A serde message as a file's reader shows it: without the code's type names
+/// ([`without_type_names`]) and with an absurd number as [`num`] writes it (serde writes the
+/// float 1e308 of `invalid type: floating point `1e308`` in 309 digits).
+pub(crate) fn serde_message(msg: &str) -> String {
+    let msg = without_type_names(msg.trim());
+    let mut parts: Vec<String> = msg.split('`').map(str::to_string).collect();
+    // the odd parts are the quoted ones
+    for quoted in parts.iter_mut().skip(1).step_by(2) {
+        if quoted.len() > 20 {
+            if let Ok(v) = quoted.parse::<f64>() {
+                *quoted = num(v);
+            }
+        }
+    }
+    parts.join("`")
 }
 
 /// A serde message in the words of the file, not of the code: serde names the Rust type a
@@ -264,6 +281,53 @@ fn toml_key_path(k: &str) -> Option<Vec<String>> {
     (!parts.iter().any(|p| p.is_empty() || p.contains(' '))).then_some(parts)
 }
 
+/// 1-based line of the field `path` (dotted: `gases.o2.diffusivity`) in TOML text, for errors
+/// found after parsing: its `key =` line in its own table — in the `nth` table (0-based) of an
+/// array of tables such as `[[bubbles]]`, 0 for a plain table — else the line of the table
+/// `[path]` / `[[path]]` itself. Unlike [`line_of_key`], a key of the same name in another table
+/// (`[gases.n2] diffusivity` for `gases.o2.diffusivity`) or in a multi-line string is not it.
+pub fn line_of_field(text: &str, path: &str, nth: usize) -> Option<usize> {
+    let want: Vec<&str> = path.split('.').collect();
+    let mut table: Vec<String> = Vec::new();
+    // how many times each table header has been seen: the array index of the current table
+    let mut seen: std::collections::HashMap<Vec<String>, usize> = Default::default();
+    let mut index = 0;
+    let mut table_line = None;
+    let mut in_string = false;
+    for (i, line) in text.lines().enumerate() {
+        let quotes = line.matches("\"\"\"").count() + line.matches("'''").count();
+        if in_string {
+            in_string = quotes % 2 == 0;
+            continue;
+        }
+        in_string = quotes % 2 == 1;
+        if let Some(t) = toml_header(line) {
+            let n = seen.entry(t.clone()).or_insert(0);
+            index = *n;
+            *n += 1;
+            table = t;
+            if table == want && index == nth && table_line.is_none() {
+                table_line = Some(i + 1);
+            }
+            continue;
+        }
+        if index != nth {
+            continue;
+        }
+        let lhs = line.split('#').next().unwrap_or("");
+        let Some((key, _)) = lhs.split_once('=') else {
+            continue;
+        };
+        let Some(key) = toml_key_path(key.trim()) else {
+            continue;
+        };
+        if table.iter().chain(&key).eq(want.iter().copied()) {
+            return Some(i + 1);
+        }
+    }
+    table_line
+}
+
 /// 1-based line of the first occurrence of `key =` in TOML text, for errors found after parsing.
 pub fn line_of_key(text: &str, key: &str) -> Option<usize> {
     text.lines()
@@ -339,9 +403,10 @@ pub fn last_line(text: &str) -> usize {
     text.lines().count().max(1)
 }
 
-/// An error found after parsing, given a line when it has none: the line of its field's key
-/// (the leaf `key =`, else the table `[a.b]` / `[[a]]`, trying the field's parents in turn),
-/// else the last line of the file. Every refusal of a file then names a line.
+/// An error found after parsing, given a line when it has none: the line of its field
+/// ([`line_of_field`], trying the field's parents in turn), else of the leaf `key =` anywhere or
+/// the table `[a.b]` / `[[a]]` (again trying the parents), else the last line of the file. Every
+/// refusal of a file then names a line.
 pub fn ensure_line(e: InputError, text: &str) -> InputError {
     // a command-line option (`--gf`) is not in the file
     if e.line.is_some() || e.field.as_deref().is_some_and(|f| f.starts_with("--")) {
@@ -349,15 +414,20 @@ pub fn ensure_line(e: InputError, text: &str) -> InputError {
     }
     let field_line = e.field.as_deref().and_then(|f| {
         let parts: Vec<&str> = f.split('.').collect();
-        (0..parts.len()).rev().find_map(|k| {
-            line_of_key(text, parts[k]).or_else(|| {
-                let table = parts[..=k].join(".");
-                text.lines()
-                    .position(|l| {
-                        let t = l.split('#').next().unwrap_or("").trim();
-                        t == format!("[{table}]") || t == format!("[[{table}]]")
-                    })
-                    .map(|i| i + 1)
+        let own = (0..parts.len())
+            .rev()
+            .find_map(|k| line_of_field(text, &parts[..=k].join("."), 0));
+        own.or_else(|| {
+            (0..parts.len()).rev().find_map(|k| {
+                line_of_key(text, parts[k]).or_else(|| {
+                    let table = parts[..=k].join(".");
+                    text.lines()
+                        .position(|l| {
+                            let t = l.split('#').next().unwrap_or("").trim();
+                            t == format!("[{table}]") || t == format!("[[{table}]]")
+                        })
+                        .map(|i| i + 1)
+                })
             })
         })
     });
@@ -433,6 +503,44 @@ mod tests {
         let text = "[p]\npoints = [\n  [0, 0], # t = 0\n  [1, 2, 3],\n]\n";
         let off = text.find("[1, 2, 3]").unwrap();
         assert_eq!(toml_field_at(text, off, "x").as_deref(), Some("p.points"));
+    }
+
+    /// A key's line in its own table (the `nth` of an array of tables), not at a key of the
+    /// same name in another table or in a multi-line string.
+    #[test]
+    fn field_lines_are_found_in_their_own_table() {
+        let text = "d = \"\"\"\ndiffusivity = 1\n\"\"\"\n[gases.n2]\ndiffusivity = 2\n[gases.o2]\n\
+                    diffusivity = 3\n[[b]]\nr = 1\n[[b]]\nr = 2\n[gases]\nhe.diffusivity = 4\n";
+        let at = |path: &str, nth: usize| line_of_field(text, path, nth);
+        assert_eq!(at("gases.n2.diffusivity", 0), Some(5));
+        assert_eq!(at("gases.o2.diffusivity", 0), Some(7));
+        assert_eq!(at("gases.he.diffusivity", 0), Some(13));
+        assert_eq!(at("gases.o2", 0), Some(6));
+        assert_eq!(
+            (at("b.r", 0), at("b.r", 1), at("b", 1)),
+            (Some(9), Some(11), Some(10))
+        );
+        assert_eq!((at("diffusivity", 0), at("b.r", 2)), (None, None));
+        // ensure_line: the field's own line, not the first key of that name
+        let e = ensure_line(InputError::new("x").field("gases.o2.diffusivity"), text);
+        assert_eq!(e.line, Some(7));
+    }
+
+    /// serde writes the float 1e308 in 309 digits; a reader sees it as written.
+    #[test]
+    fn serde_messages_write_absurd_numbers_short() {
+        let big = format!("{}", 1e308);
+        assert!(big.len() > 300);
+        assert_eq!(
+            serde_message(&format!(
+                "invalid type: floating point `{big}`, expected u64"
+            )),
+            "invalid type: floating point `1e308`, expected u64"
+        );
+        assert_eq!(
+            serde_message("invalid value: integer `-1`, expected u64"),
+            "invalid value: integer `-1`, expected u64"
+        );
     }
 
     /// The binary prints an error with its chain (`{:#}`): an I/O error's OS text once

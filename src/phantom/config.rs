@@ -7,7 +7,7 @@ use super::elasticity;
 use super::grid::{Face, Shape};
 use super::params::{BubblePlacement, GasProperties, Numerics, PhantomParams};
 use super::surface;
-use crate::error::{line_of_key, num, toml_error_with_path, InputError};
+use crate::error::{line_of_field, line_of_key, num, toml_error_with_path, InputError};
 use crate::gas::Gas;
 use crate::profile::MAX_DURATION_S;
 use serde::Deserialize;
@@ -197,20 +197,6 @@ pub fn require_bubbles(params: &PhantomParams, source: &Path) -> Result<(), Inpu
     Ok(())
 }
 
-/// 1-based lines of the `[[name]]` table headers in `text`, in order.
-fn table_lines(text: &str, name: &str) -> Vec<usize> {
-    text.lines()
-        .enumerate()
-        .filter(|(_, l)| {
-            let t = l.split('#').next().unwrap_or("").trim();
-            t.strip_prefix("[[")
-                .and_then(|t| t.strip_suffix("]]"))
-                .is_some_and(|t| t.trim() == name)
-        })
-        .map(|(i, _)| i + 1)
-        .collect()
-}
-
 /// A loaded phantom: the parameters and the description from the file.
 #[derive(Debug, Clone)]
 pub struct LoadedPhantom {
@@ -246,20 +232,21 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
     let err = |key: &str, msg: String| {
         let leaf = key.rsplit('.').next().unwrap_or(key);
         let mut e = InputError::new(msg).in_file(path).field(key);
-        // a key's own line, else the line of a table of that name ([material.elasticity],
-        // [[bubbles]], [population])
-        let table_line = || {
-            text.lines()
-                .position(|l| {
-                    let t = l.trim().trim_start_matches('[').trim_end_matches(']');
-                    l.trim_start().starts_with('[') && t == key
-                })
-                .map(|i| i + 1)
-        };
-        if let Some(l) = line_of_key(text, leaf).or_else(table_line) {
+        // the key's own line or its table's ([material.elasticity], [[bubbles]], [population]),
+        // else a key of that name (`terms[1].shear_modulus`, which no table header spells)
+        if let Some(l) = line_of_field(text, key, 0).or_else(|| line_of_key(text, leaf)) {
             e = e.at_line(l);
         }
         e
+    };
+    // an error about bubble i: the line of its field in the i-th [[bubbles]] table, else of
+    // that table
+    let at = |i: usize, e: InputError| {
+        let own = e.field.as_deref().and_then(|f| line_of_field(text, f, i));
+        match own.or_else(|| line_of_field(text, "bubbles", i)) {
+            Some(l) => e.at_line(l),
+            None => e,
+        }
     };
     let positive = |key: &str, v: f64| -> Result<f64, InputError> {
         if v > 0.0 && v.is_finite() {
@@ -404,7 +391,7 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
     if !(surface_tension >= 0.0) {
         return Err(err(
             "material.surface_tension",
-            format!("must be ≥ 0 N/m (got {surface_tension})"),
+            format!("must be ≥ 0 N/m (got {})", num(surface_tension)),
         ));
     }
     in_range("material.surface_tension", surface_tension, 0.0, 1.0, "N/m")?;
@@ -412,7 +399,10 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
     if !(bubble_fixed_gases >= 0.0 && bubble_fixed_gases.is_finite()) {
         return Err(err(
             "material.bubble_fixed_gases_pa",
-            format!("must be a finite pressure ≥ 0 Pa (got {bubble_fixed_gases})"),
+            format!(
+                "must be a finite pressure ≥ 0 Pa (got {})",
+                num(bubble_fixed_gases)
+            ),
         ));
     }
     in_range(
@@ -426,7 +416,10 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
     if !(perfusion_rate >= 0.0 && perfusion_rate.is_finite()) {
         return Err(err(
             "perfusion.rate_per_s",
-            format!("must be a finite rate ≥ 0 per second (got {perfusion_rate})"),
+            format!(
+                "must be a finite rate ≥ 0 per second (got {})",
+                num(perfusion_rate)
+            ),
         ));
     }
     in_range("perfusion.rate_per_s", perfusion_rate, 0.0, 10.0, "1/s")?;
@@ -502,7 +495,7 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
         Some(r) => {
             return Err(err(
                 "nuclei.min_radius_m",
-                format!("must be ≥ 0 m (got {r})"),
+                format!("must be ≥ 0 m (got {})", num(r)),
             ))
         }
         // activated micronuclei (µm) must exchange gas to grow: no impermeable skin by default
@@ -570,12 +563,6 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
                     ),
                 ));
             }
-            // the line of each [[bubbles]] table, for messages about one bubble
-            let lines = table_lines(text, "bubbles");
-            let at = |i: usize, e: InputError| match lines.get(i) {
-                Some(&l) => e.at_line(l),
-                None => e,
-            };
             for (i, b) in raw.bubbles.iter().enumerate() {
                 let Ok(position) = <[f64; 3]>::try_from(b.position_m.as_slice()) else {
                     return Err(at(
@@ -590,19 +577,25 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
                     ));
                 };
                 if let Some(v) = position.iter().find(|v| !v.is_finite()) {
-                    return Err(err(
-                        "bubbles.position_m",
-                        format!("bubble {i}: position {v} m is not a finite number"),
+                    return Err(at(
+                        i,
+                        err(
+                            "bubbles.position_m",
+                            format!("bubble {i}: position {v} m is not a finite number"),
+                        ),
                     ));
                 }
-                let r0 = positive("bubbles.initial_radius_m", b.initial_radius_m)?;
-                in_range(
-                    "bubbles.initial_radius_m",
-                    r0,
-                    MIN_BUBBLE_RADIUS_M,
-                    1e-2,
-                    "m",
-                )?;
+                let r0 = positive("bubbles.initial_radius_m", b.initial_radius_m)
+                    .and_then(|r0| {
+                        in_range(
+                            "bubbles.initial_radius_m",
+                            r0,
+                            MIN_BUBBLE_RADIUS_M,
+                            1e-2,
+                            "m",
+                        )
+                    })
+                    .map_err(|e| at(i, e))?;
                 list.push((position, r0));
             }
             // bubbles that touch or overlap at t = 0 would count the shared volume twice and
@@ -613,8 +606,7 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
                     let d = (0..3).map(|k| (p[k] - q[k]).powi(2)).sum::<f64>().sqrt();
                     if d <= ri + rj {
                         let line = |k: usize| {
-                            lines
-                                .get(k)
+                            line_of_field(text, "bubbles", k)
                                 .map_or(String::new(), |l| format!(" (line {l})"))
                         };
                         return Err(at(
@@ -790,7 +782,7 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
         if v > 0.5 {
             return Err(err(
                 key,
-                format!("{v} per step is unstable for the explicit bubble coupling; use at most 0.1 (default {})", if key.ends_with("pressure_change") { d.max_pressure_change } else { d.max_content_change }),
+                format!("{} per step is unstable for the explicit bubble coupling; use at most 0.1 (default {})", num(v), if key.ends_with("pressure_change") { d.max_pressure_change } else { d.max_content_change }),
             ));
         }
     }
@@ -821,6 +813,17 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
     // error points at the file
     let grid = super::grid::Grid::new(params.shape, params.grid_step, &params.open_faces)
         .map_err(|e| err("geometry.grid_step_m", e))?;
+    // each placed bubble at the line of its own position
+    if let BubblePlacement::Explicit(list) = &params.bubbles {
+        for (i, &(p, r0)) in list.iter().enumerate() {
+            if let Some(why) = super::sim::bubble_outside(&grid, p, r0) {
+                return Err(at(
+                    i,
+                    err("bubbles.position_m", format!("bubble {i} {why}")),
+                ));
+            }
+        }
+    }
     super::sim::place_bubbles(&params, &grid).map_err(|e| match e {
         crate::error::Error::Input(ie) => {
             let key = if raw.population.is_some() {
@@ -833,10 +836,12 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
         other => err("bubbles", other.to_string()),
     })?;
     // draw the nuclei once here too, so that a population that cannot be placed (or is too
-    // large) is an error pointing at the file
+    // large), or skins no stronger than the surface tension, are an error pointing at the file
     params
         .nucleation
         .nuclei(&grid)
+        .map_err(|e| err(&e.field, e.message))?;
+    super::nucleation::skin_factors(surface_tension, params.nucleation.skin_compression())
         .map_err(|e| err(&e.field, e.message))?;
     Ok(LoadedPhantom {
         params,

@@ -3,6 +3,7 @@
 
 use crate::error::{Error, InputError};
 use crate::phantom::bubble::Balance;
+use crate::phantom::config::MIN_BUBBLE_RADIUS_M;
 use crate::phantom::elasticity::{law_names, AllLawParams};
 
 /// Inputs of the comparison (SI units).
@@ -26,55 +27,56 @@ pub type ElasticityRow = (f64, &'static str, Option<f64>);
 /// Final radius for every R0 and every form: the gas content n is fixed by the Laplace
 /// balance at (P0, R0); R_f solves the same balance at P_f.
 pub fn compare(req: &ElasticityRequest) -> Result<Vec<ElasticityRow>, Error> {
-    let bad = |f: &str, m: String| Error::Input(InputError::new(m).field(f));
-    for (f, v) in [("p0", req.p0), ("pf", req.pf)] {
-        if !(v > 0.0 && v.is_finite()) {
-            return Err(bad(
-                f,
-                format!("pressure must be positive absolute Pa (got {v})"),
-            ));
-        }
-    }
-    if !(req.gamma >= 0.0) {
-        return Err(bad(
-            "gamma",
-            format!("surface tension must be ≥ 0 (got {})", req.gamma),
+    // every option against the physical ranges of the phantom files
+    // (profiles/phantoms/README.md), named as typed: `--p0`, not the field `p0`
+    let option =
+        |f: &str, m: String| Error::Input(InputError::new(m).in_file("<command line>").field(f));
+    if req.r0.is_empty() {
+        return Err(option(
+            "--r0",
+            "give the initial radii in m, comma-separated".into(),
         ));
     }
-    if req.r0.is_empty() || req.r0.iter().any(|r| !(*r > 0.0)) {
-        return Err(bad(
-            "r0",
-            "give positive initial radii in m, comma-separated".into(),
-        ));
-    }
-    // the physical ranges of the phantom files (profiles/phantoms/README.md)
+    let p_max = crate::profile::MAX_AMBIENT_PA;
     let mut ranged = vec![
-        ("--p0", req.p0, 1.0, crate::profile::MAX_AMBIENT_PA),
-        ("--pf", req.pf, 1.0, crate::profile::MAX_AMBIENT_PA),
-        ("--gamma", req.gamma, 0.0, 1.0),
-        ("--mu", req.laws.shear_modulus, 0.0, 1e7),
-        ("--m", req.laws.bulk_modulus_per_volume, 0.0, 1e22),
-        ("--k", req.laws.bulk_modulus, 1e3, 1e12),
+        ("--p0", req.p0, 1.0, p_max, "Pa"),
+        ("--pf", req.pf, 1.0, p_max, "Pa"),
+        ("--gamma", req.gamma, 0.0, 1.0, "N/m"),
+        ("--mu", req.laws.shear_modulus, 0.0, 1e7, "Pa"),
+        ("--m", req.laws.bulk_modulus_per_volume, 0.0, 1e22, "Pa/m³"),
+        ("--k", req.laws.bulk_modulus, 1e3, 1e12, "Pa"),
     ];
-    ranged.extend(req.r0.iter().map(|r| ("--r0", *r, 1e-7, 1e-2)));
-    for (f, v, lo, hi) in ranged {
+    ranged.extend(
+        req.r0
+            .iter()
+            .map(|r| ("--r0", *r, MIN_BUBBLE_RADIUS_M, 1e-2, "m")),
+    );
+    for (f, v, lo, hi, unit) in ranged {
         if !(v.is_finite() && v >= lo && v <= hi) {
-            return Err(Error::Input(
-                InputError::new(format!(
-                    "{} is outside the accepted range {} ..= {}",
+            // the pressures are absolute (a gauge pressure of 0 is not a vacuum)
+            let note = if matches!(f, "--p0" | "--pf") {
+                " (absolute pressure)"
+            } else {
+                ""
+            };
+            return Err(option(
+                f,
+                format!(
+                    "{} {unit} is outside the accepted range {} ..= {} {unit}{note}",
                     crate::error::num(v),
                     crate::error::num(lo),
-                    crate::error::num(hi)
-                ))
-                .in_file("<command line>")
-                .field(f),
+                    crate::error::num(hi),
+                ),
             ));
         }
     }
     let mut rows = Vec::new();
     for &r0 in &req.r0 {
         for name in law_names() {
-            let law = req.laws.build(name).map_err(|e| bad("form", e))?;
+            let law = req
+                .laws
+                .build(name)
+                .map_err(|e| option("--mu/--m/--k", format!("law {name}: {e}")))?;
             let at = |p: f64| Balance {
                 ambient: p,
                 surface_tension: req.gamma,

@@ -245,7 +245,10 @@ pub fn parse_criteria(text: &str, path: &Path) -> Result<CriteriaSet, InputError
             if !(v.is_finite() && (0.0..20_000.0).contains(&v)) {
                 return Err(top(
                     key,
-                    format!("must be in 0..20000 Pa ({typical}) (got {v})"),
+                    format!(
+                        "must be in 0..20000 Pa ({typical}) (got {})",
+                        crate::error::num(v)
+                    ),
                 ));
             }
             *slot = v;

@@ -1791,3 +1791,298 @@ fn contradictory_or_impossible_inputs_are_refused_by_the_binary() {
     );
     assert!(!dir.join("eval").exists());
 }
+
+/// A phantom with two gases, three bubbles and nuclei with VPM skins, where keys of the same
+/// name stand in several tables (`diffusivity`, `position_m`, `seed`), for the sweep below.
+const SWEEP_PHANTOM: &str = r#"[geometry]
+shape = "box"
+size_m = [2e-3, 2e-3, 2e-3]
+grid_step_m = 2e-4
+[material]
+surface_tension = 0.07
+[gases.n2]
+diffusivity = 2.5e-9
+ostwald = 0.014
+[gases.o2]
+diffusivity = 2.4e-9
+ostwald = 0.027
+[nucleation]
+model = "critical-radius"
+number_density_per_m3 = 1e9
+slope_per_m = 2e6
+seed = 3
+skin_compression = 0.257
+[[bubbles]]
+position_m = [0.5e-3, 1e-3, 1e-3]
+initial_radius_m = 5e-5
+[[bubbles]]
+position_m = [1.0e-3, 1e-3, 1e-3]
+initial_radius_m = 6e-5
+[[bubbles]]
+position_m = [1.5e-3, 1e-3, 1e-3]
+initial_radius_m = 7e-5
+[numerics]
+max_step_s = 1.0
+"#;
+
+/// Session 31's sweep of every numeric phantom field set to -1, 1e308 and "x": each refusal
+/// names the field at the line of its own key, not at a key of the same name in another table
+/// (`gases.o2.diffusivity` at n2's line, bubble 2 at bubble 0's, a wrong type in `[nucleation]`
+/// as `nucleation.model`, `seed = -1` as the field `nucleation.-1`), and writes an absurd number
+/// as 1e308, not in 309 digits. `to` is unique in the edited text: its line is the one named.
+#[test]
+fn every_phantom_field_is_named_at_its_own_line() {
+    assert!(parse_phantom(SWEEP_PHANTOM, Path::new("p.toml")).is_ok());
+    let cases = [
+        (
+            "diffusivity = 2.4e-9",
+            "diffusivity = -1",
+            "gases.o2.diffusivity",
+        ),
+        ("ostwald = 0.027", "ostwald = 1e308", "gases.o2.ostwald"),
+        (
+            "initial_radius_m = 7e-5",
+            "initial_radius_m = -1",
+            "bubbles.initial_radius_m",
+        ),
+        (
+            "initial_radius_m = 6e-5",
+            "initial_radius_m = 1e308",
+            "bubbles.initial_radius_m",
+        ),
+        (
+            "[1.5e-3, 1e-3, 1e-3]",
+            "[1e308, 1e-3, 1e-3]",
+            "bubbles.position_m",
+        ),
+        (
+            "[1.5e-3, 1e-3, 1e-3]",
+            "[-1, 1e-3, 1e-3]",
+            "bubbles.position_m",
+        ),
+        (
+            "[1.0e-3, 1e-3, 1e-3]",
+            "[nan, 1e-3, 1e-3]",
+            "bubbles.position_m",
+        ),
+        ("seed = 3", "seed = -1", "nucleation.seed"),
+        ("seed = 3", "seed = 1e308", "nucleation.seed"),
+        ("seed = 3", "seed = \"x\"", "nucleation.seed"),
+        (
+            "slope_per_m = 2e6",
+            "slope_per_m = \"x\"",
+            "nucleation.slope_per_m",
+        ),
+        (
+            "slope_per_m = 2e6",
+            "slope_per_m = 1e308",
+            "nucleation.slope_per_m",
+        ),
+        (
+            "number_density_per_m3 = 1e9",
+            "number_density_per_m3 = 1e308",
+            "nucleation.number_density_per_m3",
+        ),
+        (
+            "skin_compression = 0.257",
+            "skin_compression = \"x\"",
+            "nucleation.skin_compression",
+        ),
+        (
+            "skin_compression = 0.257",
+            "skin_compression = 1e308",
+            "nucleation.skin_compression",
+        ),
+        (
+            "max_step_s = 1.0",
+            "max_pressure_change = 1e308",
+            "numerics.max_pressure_change",
+        ),
+        (
+            "max_step_s = 1.0",
+            "max_content_change = 1e308",
+            "numerics.max_content_change",
+        ),
+        (
+            "surface_tension = 0.07",
+            "surface_tension = -1e308",
+            "material.surface_tension",
+        ),
+    ];
+    for (from, to, field) in cases {
+        let text = SWEEP_PHANTOM.replacen(from, to, 1);
+        assert_eq!(text.matches(to).count(), 1, "{to}");
+        let line = text.lines().position(|l| l.contains(to)).unwrap() + 1;
+        let e = parse_phantom(&text, Path::new("p.toml")).unwrap_err();
+        assert_eq!(
+            (e.field.as_deref(), e.line),
+            (Some(field), Some(line)),
+            "{to}: {e}"
+        );
+        assert!(e.file.is_some(), "{e}");
+        assert!(!e.message.contains("00000000"), "{to}: {e}");
+    }
+    // a population's integers given as a float: serde's message, the number written short
+    let text = SWEEP_PHANTOM
+        .split("[[bubbles]]")
+        .next()
+        .unwrap()
+        .to_string()
+        + "[population]\ncount = 1e308\ninitial_radius_m = 5e-5\nseed = 1\n";
+    let e = parse_phantom(&text, Path::new("p.toml")).unwrap_err();
+    assert_eq!(e.field.as_deref(), Some("population.count"), "{e}");
+    assert!(e.message.contains("`1e308`"), "{e}");
+}
+
+/// VPM skins no stronger than the gel's surface tension (γc ≤ γ, Yount 1979) were refused only
+/// when the simulation built its nuclei, without the phantom file or line; a skin compression of
+/// the wrong type was blamed on `nucleation.model`; `[nuclei]` holds no skin compression.
+#[test]
+fn skin_compression_is_refused_at_its_line_in_the_phantom_file() {
+    let dir = tempdir("hard-skin");
+    let profile = write(&dir, "p.toml", SHORT_PROFILE);
+    let line = SWEEP_PHANTOM
+        .lines()
+        .position(|l| l.starts_with("skin_compression"))
+        .unwrap()
+        + 1;
+    let nuclei_line = SWEEP_PHANTOM.lines().count() + 2;
+    for (text, needles) in [
+        (
+            SWEEP_PHANTOM.replace("skin_compression = 0.257", "skin_compression = 0.05"),
+            vec![
+                format!("ph.toml:{line}:"),
+                "field 'nucleation.skin_compression'".into(),
+                "γc = 0.05 N/m must exceed".into(),
+                "γ = 0.07 N/m".into(),
+            ],
+        ),
+        (
+            SWEEP_PHANTOM.replace("skin_compression = 0.257", "skin_compression = \"x\""),
+            vec![
+                format!("ph.toml:{line}:"),
+                "field 'nucleation.skin_compression'".into(),
+                "expected f64".into(),
+            ],
+        ),
+        (
+            SWEEP_PHANTOM.replace("skin_compression = 0.257", "skin_compression = -1"),
+            vec![
+                format!("ph.toml:{line}:"),
+                "field 'nucleation.skin_compression'".into(),
+                "-1 N/m is outside the accepted range 0.001 ..= 10 N/m".into(),
+            ],
+        ),
+        (
+            format!("{SWEEP_PHANTOM}[nuclei]\nskin_compression = 0.257\n"),
+            vec![
+                format!("ph.toml:{nuclei_line}:"),
+                "field 'nuclei.skin_compression'".into(),
+                "unknown field".into(),
+            ],
+        ),
+    ] {
+        let ph = write(&dir, "ph.toml", &text);
+        let out = dir.join("out");
+        let o = simulate_into(&dir, &profile, &ph, &out);
+        let needles: Vec<&str> = needles.iter().map(String::as_str).collect();
+        assert_refused(&o, &needles);
+        assert!(!out.exists());
+    }
+}
+
+/// `[protocol] oxygen_at_faces` of a criteria file given as a number or a word: the file and
+/// line were named but not the field; an absurd pressure beside it was written in 309 digits.
+#[test]
+fn criteria_protocol_values_name_the_field() {
+    let dir = tempdir("hard-oxygen");
+    let s = write(&dir, "s.toml", &schedule("10.0", "1.0"));
+    let base = std::fs::read_to_string(criteria()).unwrap();
+    let key_line = |text: &str, key: &str| {
+        text.lines()
+            .position(|l| l.starts_with(&format!("{key} =")))
+            .unwrap()
+            + 1
+    };
+    for (key, value, needle) in [
+        ("oxygen_at_faces", "1", "expected a boolean"),
+        ("oxygen_at_faces", "\"yes\"", "expected a boolean"),
+        ("water_vapour_pa", "1e308", "(got 1e308)"),
+    ] {
+        let text: String = base
+            .lines()
+            .map(|l| {
+                if l.starts_with(&format!("{key} =")) {
+                    format!("{key} = {value}\n")
+                } else {
+                    format!("{l}\n")
+                }
+            })
+            .collect();
+        let c = write(&dir, "c.toml", &text);
+        let out = dir.join("out");
+        let o = run(&[
+            "check".as_ref(),
+            "--schedule".as_ref(),
+            s.as_os_str(),
+            "--criteria".as_ref(),
+            c.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ]);
+        let line = key_line(&text, key);
+        assert_refused(
+            &o,
+            &[
+                &format!("c.toml:{line}:"),
+                &format!("field 'protocol.{key}'"),
+                needle,
+            ],
+        );
+        assert!(!String::from_utf8_lossy(&o.stderr).contains("00000000"));
+        assert!(!out.exists());
+    }
+}
+
+/// `elasticity`: every option's bad value names the option as typed (`--p0`, not the field
+/// `p0`), on the command line, with its unit and range.
+#[test]
+fn elasticity_options_are_named_as_typed() {
+    for (flag, v, needle) in [
+        (
+            "--p0",
+            "-1",
+            "-1 Pa is outside the accepted range 1 ..= 2e7 Pa (absolute pressure)",
+        ),
+        ("--p0", "0", "0 Pa is outside"),
+        ("--pf", "nan", "NaN Pa is outside"),
+        ("--pf", "inf", "inf Pa is outside"),
+        (
+            "--gamma",
+            "-1",
+            "-1 N/m is outside the accepted range 0 ..= 1 N/m",
+        ),
+        ("--gamma", "nan", "NaN N/m is outside"),
+        (
+            "--mu",
+            "-40",
+            "-40 Pa is outside the accepted range 0 ..= 1e7 Pa",
+        ),
+        ("--m", "1e308", "1e308 Pa/m³ is outside"),
+        (
+            "--k",
+            "1",
+            "1 Pa is outside the accepted range 1000 ..= 1e12 Pa",
+        ),
+        (
+            "--r0",
+            "1e-4,-1",
+            "-1 m is outside the accepted range 1e-7 ..= 0.01 m",
+        ),
+        ("--r0", "0", "0 m is outside"),
+    ] {
+        let o = run(&["elasticity".as_ref(), flag.as_ref(), v.as_ref()]);
+        assert_refused(&o, &["<command line>", &format!("field '{flag}'"), needle]);
+        assert!(o.stdout.is_empty());
+    }
+}

@@ -34,6 +34,7 @@
 //! ```
 
 use super::{raw, NucleationError, NucleationModel, Nucleus};
+use crate::error::num;
 use crate::phantom::grid::Grid;
 use rand::distributions::Open01;
 use rand::{Rng, SeedableRng};
@@ -187,7 +188,12 @@ pub fn build(t: toml::Table) -> Result<Box<dyn NucleationModel>, NucleationError
         } else {
             Err(NucleationError::new(
                 key,
-                format!("{v} {unit} is outside the accepted range {lo:e} ..= {hi:e} {unit}"),
+                format!(
+                    "{} {unit} is outside the accepted range {} ..= {} {unit}",
+                    num(v),
+                    num(lo),
+                    num(hi)
+                ),
             ))
         }
     };

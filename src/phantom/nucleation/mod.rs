@@ -120,17 +120,26 @@ pub fn build(name: &str, params: toml::Table) -> Result<Box<dyn NucleationModel>
 }
 
 /// Deserialize a model's parameter table into its raw struct (`deny_unknown_fields`); the
-/// error names the field when serde does.
+/// error names the field: the table is read as TOML text, whose errors have a place
+/// ([`crate::error::toml_field_at`]: the key of a wrong type, `unknown field `x``, `missing
+/// field `x``), else the whole `nucleation` table.
 pub(crate) fn raw<T: serde::de::DeserializeOwned>(t: toml::Table) -> Result<T, NucleationError> {
-    T::deserialize(toml::Value::Table(t)).map_err(|e| {
-        let msg = e.message().trim().to_string();
-        // serde's "unknown field `x`" / "missing field `x`": point at x
-        let key = msg
-            .split('`')
-            .nth(1)
-            .map(str::to_string)
-            .unwrap_or_else(|| "model".into());
-        NucleationError::new(&key, msg)
+    let text = toml::to_string(&t).map_err(|e| NucleationError {
+        field: "nucleation".into(),
+        message: e.to_string(),
+    })?;
+    toml::from_str(&text).map_err(|e: toml::de::Error| {
+        let message = crate::error::serde_message(e.message());
+        // a missing field has no span: its name is in the message
+        let at = e.span().map_or(0, |s| s.start);
+        let key = crate::error::toml_field_at(&text, at, e.message());
+        match key {
+            Some(key) => NucleationError::new(&key, message),
+            None => NucleationError {
+                field: "nucleation".into(),
+                message,
+            },
+        }
     })
 }
 
@@ -148,6 +157,28 @@ pub struct PoolEntry {
     /// bubble dissolves; one whose bubble merged into another is consumed (its gas is in the
     /// survivor) and keeps the id of the merged bubble.
     pub bubble: Option<usize>,
+}
+
+/// The threshold factor (γc − γ)/γc and the crushing gain γ/γc of nuclei with skins of
+/// compression γc (N/m) in a gel of surface tension γ (N/m); (1, 0) without skins. A skin no
+/// stronger than γ holds nothing (VPM needs γc > γ): refused, naming
+/// `nucleation.skin_compression`.
+pub fn skin_factors(
+    surface_tension: f64,
+    skin_compression: Option<f64>,
+) -> Result<(f64, f64), NucleationError> {
+    match skin_compression {
+        None => Ok((1.0, 0.0)),
+        Some(gc) if gc > surface_tension => {
+            Ok(((gc - surface_tension) / gc, surface_tension / gc))
+        }
+        Some(gc) => Err(NucleationError::new(
+            "skin_compression",
+            format!(
+                "the skin compression γc = {gc} N/m must exceed the gel's surface tension γ = {surface_tension} N/m (material.surface_tension; VPM: a skin holds only while γc > γ)"
+            ),
+        )),
+    }
 }
 
 /// The nuclei of a run and their state, sorted by (cell, threshold) so that a step reads one
@@ -182,21 +213,7 @@ impl NucleusPool {
             field: "nucleation".into(),
             message: m,
         };
-        // threshold factor (γc − γ)/γc and crushing gain γ/γc
-        let (factor, crush_gain) = match skin_compression {
-            None => (1.0, 0.0),
-            Some(gc) if gc > surface_tension => {
-                ((gc - surface_tension) / gc, surface_tension / gc)
-            }
-            Some(gc) => {
-                return Err(NucleationError::new(
-                    "skin_compression",
-                    format!(
-                        "the skin compression γc = {gc} N/m must exceed the gel's surface tension γ = {surface_tension} N/m (VPM: a skin holds only while γc > γ)"
-                    ),
-                ))
-            }
-        };
+        let (factor, crush_gain) = skin_factors(surface_tension, skin_compression)?;
         let mut entries = Vec::with_capacity(nuclei.len());
         for (i, n) in nuclei.iter().enumerate() {
             let cell = cell_of(grid, n.position)

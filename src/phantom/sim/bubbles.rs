@@ -5,6 +5,18 @@ use super::*;
 use crate::phantom::nucleation::Nucleus;
 use rand::{Rng, SeedableRng};
 
+/// Why a bubble at `p` with initial radius `r0` cannot start in `grid` ("at (x, y, z) m with
+/// R0 = ... is outside the phantom or touches its x+ face ..."), `None` when it can.
+pub fn bubble_outside(grid: &Grid, p: [f64; 3], r0: f64) -> Option<String> {
+    // NaN positions are outside too
+    let (face, d) = grid.distance_to_faces(p).find(|(_, d)| !(*d > r0))?;
+    let e = grid.extent();
+    Some(format!(
+        "at ({:.3e}, {:.3e}, {:.3e}) m with R0 = {r0:.3e} m is outside the phantom or touches its {} face (distance {d:.3e} m); the modelled phantom spans {:.3e} × {:.3e} × {:.3e} m",
+        p[0], p[1], p[2], face.name(), e[0], e[1], e[2]
+    ))
+}
+
 /// Place the bubbles of `params` in `grid`: explicit positions are checked; a random
 /// population is drawn with ChaCha8 from the seed, rejecting centres closer than the spacing.
 pub fn place_bubbles(params: &PhantomParams, grid: &Grid) -> Result<Vec<([f64; 3], f64)>, Error> {
@@ -17,14 +29,8 @@ pub fn place_bubbles(params: &PhantomParams, grid: &Grid) -> Result<Vec<([f64; 3
                         "bubble {i}: initial radius must be positive (got {r0} m)"
                     )));
                 }
-                if let Some((face, d)) = grid.distance_to_faces(*p).find(|(_, d)| !(*d > *r0))
-                // NaN positions are outside too
-                {
-                    let e = grid.extent();
-                    return Err(input(format!(
-                        "bubble {i} at ({:.3e}, {:.3e}, {:.3e}) m with R0 = {r0:.3e} m is outside the phantom or touches its {} face (distance {d:.3e} m); the modelled phantom spans {:.3e} × {:.3e} × {:.3e} m",
-                        p[0], p[1], p[2], face.name(), e[0], e[1], e[2]
-                    )));
+                if let Some(why) = bubble_outside(grid, *p, *r0) {
+                    return Err(input(format!("bubble {i} {why}")));
                 }
             }
             Ok(list.clone())

@@ -32,7 +32,7 @@ mod gel;
 mod record;
 mod step_control;
 
-pub use bubbles::place_bubbles;
+pub use bubbles::{bubble_outside, place_bubbles};
 pub(super) use exchange::StepExchange;
 use exchange::{FluxRound, WorstExchange};
 use gel::OUT_OF_PLACE_BYTES;
