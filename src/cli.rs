@@ -163,7 +163,7 @@ pub struct FitArgs {
     /// experiments.toml: [[experiment]] name, profile, phantom; optional [fit] free.
     #[arg(long)]
     pub experiments: std::path::PathBuf,
-    /// Parameter to fit: a phantom TOML path, optionally with bounds NAME=LO..HI; repeatable.
+    /// Parameter to fit: a numeric phantom TOML path, optionally with bounds NAME=LO..HI; repeatable; added to the experiments file's [fit] free (a path in both is refused).
     #[arg(long = "param")]
     pub params: Vec<String>,
     /// Output folder (replaced whole); finished simulations are kept in OUT.partial/ until then, and a restart of the same fit reads them back.
@@ -184,7 +184,7 @@ pub struct SynthArgs {
     /// Standard deviation of the Gaussian noise added to every radius, m.
     #[arg(long = "noise-sd", allow_hyphen_values = true)]
     pub noise_sd: f64,
-    /// Sampling interval, s.
+    /// Sampling interval, s: every bubble is sampled at least twice, so at most the shortest experiment's duration.
     #[arg(long, default_value_t = 5.0, allow_hyphen_values = true)]
     pub every: f64,
     /// Seed of the noise.

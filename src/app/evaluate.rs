@@ -66,6 +66,8 @@ pub fn run(
                 .into(),
         );
     }
+    crate::evaluate::each_file_once(&req.algorithms, "--algorithm")?;
+    crate::evaluate::each_file_once(&req.schedules, "--schedule")?;
     let planned = if req.algorithms.is_empty() {
         // the dive options only plan with an algorithm: a schedule keeps its own depths and
         // gases, so they would be dropped silently

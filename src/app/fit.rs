@@ -20,7 +20,8 @@ pub struct FitRequest {
     pub measured: PathBuf,
     /// experiments.toml.
     pub experiments: PathBuf,
-    /// `NAME` or `NAME=LO..HI`, each a phantom TOML path (added to `[fit] free`).
+    /// `NAME` or `NAME=LO..HI`, each a phantom TOML path holding a number (added to `[fit]
+    /// free`; a path given there too is refused).
     pub params: Vec<String>,
     /// Output folder.
     pub out: PathBuf,
@@ -65,27 +66,48 @@ pub fn fit_journaled(req: &FitRequest) -> Result<(Fitted, Experiments, Measureme
     let experiments = read_experiments(&req.experiments)?;
     check_against(&data, &experiments)?;
     let mut model = Model::baseline(&experiments)?;
+    let files: Vec<&std::path::Path> = experiments
+        .list
+        .iter()
+        .map(|e| e.phantom_path.as_path())
+        .collect();
+    let refused = |m: String| -> Error {
+        InputError::new(m)
+            .in_file("<command line>")
+            .field("--param")
+            .into()
+    };
+    let in_file = model.free.len();
     for p in &req.params {
         let path = p.split_once('=').map_or(p.as_str(), |x| x.0).trim();
+        if let Some(m) = paths::not_a_number(&model.docs, &files, path) {
+            return Err(refused(m));
+        }
         let base = if path.starts_with(paths::SCALE_PREFIX) {
             Some(1.0)
         } else {
             model.docs.iter().find_map(|d| paths::get(d, path))
         };
         let spec = ParamSpec::parse(p, base)?;
+        if model.free[..in_file].iter().any(|s| s.path == spec.path) {
+            return Err(refused(format!(
+                "'{}' is also in [fit] free of {}{}; a parameter is fitted once: give it in one place (--param to give it bounds)",
+                spec.path,
+                experiments.file.display(),
+                experiments
+                    .free_line
+                    .map(|l| format!(" (line {l})"))
+                    .unwrap_or_default()
+            )));
+        }
         if model.free.iter().any(|s| s.path == spec.path) {
-            return Err(InputError::new(format!("'{}' is given twice", spec.path))
-                .in_file("<command line>")
-                .field("--param")
-                .into());
+            return Err(refused(format!(
+                "'{}' is given twice on the command line; give each --param once",
+                spec.path
+            )));
         }
         // the start and both bounds must be values the phantom reader accepts at this path:
         // tried on the phantoms now, before any simulation
-        let files: Vec<&std::path::Path> = experiments
-            .list
-            .iter()
-            .map(|e| e.phantom_path.as_path())
-            .collect();
         spec.check_settable(p.trim(), &model.docs, &files)?;
         model.free.push(spec);
     }

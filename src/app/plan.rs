@@ -7,7 +7,7 @@ use crate::algorithm::schedule::{gas_text, ScheduleSummary};
 use crate::algorithm::{DivePlan, LoadedAlgorithm, Schedule};
 use crate::error::InputError;
 use crate::gas::GasMix;
-use crate::report::output::{write_new_file, CommentStyle};
+use crate::report::output::{same_file, write_new_file, CommentStyle};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
@@ -480,14 +480,6 @@ fn same_place(a: &std::path::Path, b: &std::path::Path) -> bool {
         d.canonicalize().unwrap_or(d)
     };
     a.file_name() == b.file_name() && folder(a) == folder(b)
-}
-
-/// Whether two paths name the same existing file.
-fn same_file(a: &std::path::Path, b: &std::path::Path) -> bool {
-    match (a.canonicalize(), b.canonicalize()) {
-        (Ok(x), Ok(y)) => x == y,
-        _ => false,
-    }
 }
 
 /// The schedule as the waypoint CSV `check` reads: `time_min,depth_m,gas`, one row per leg

@@ -131,6 +131,27 @@ pub fn plan_candidates(
     Ok(out)
 }
 
+/// Refuse (exit 2, naming `<command line>` and `flag`) a file given twice to a repeatable option
+/// (`--schedule`, `--algorithm`), however spelt (`X`, `./X`, a symlink to it): it would be run
+/// twice and ranked against itself, two identical rows that tie.
+pub fn each_file_once(files: &[PathBuf], flag: &str) -> Result<(), InputError> {
+    for (i, f) in files.iter().enumerate() {
+        if let Some(first) = files[..i]
+            .iter()
+            .find(|g| *g == f || crate::report::output::same_file(g, f))
+        {
+            return Err(InputError::new(format!(
+                "'{}' is the same file as '{}' given before; give each file once (it would be run twice and ranked against itself)",
+                f.display(),
+                first.display()
+            ))
+            .in_file("<command line>")
+            .field(flag));
+        }
+    }
+    Ok(())
+}
+
 /// Candidates from schedule files (plan --out TOML, waypoint CSV, legacy .txt, or a dive of a
 /// Subsurface/UDDF log, `dive` 1-based), in DecoTengu conventions where the file states none;
 /// each watched after surfacing as the protocol says. Labels are made unique with the file

@@ -555,6 +555,8 @@ pub struct Experiments {
     pub list: Vec<Experiment>,
     /// Baseline free parameters (`[fit] free`).
     pub free: Vec<String>,
+    /// 1-based line of `free =` in the file, for messages.
+    pub free_line: Option<usize>,
 }
 
 impl Experiments {
@@ -728,7 +730,20 @@ pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
             largest_radius_m: largest_radius(&params),
         });
     }
-    for f in &raw.fit.free {
+    let docs: Vec<toml::Table> = list.iter().map(|x| x.phantom.clone()).collect();
+    let files: Vec<&Path> = list.iter().map(|x| x.phantom_path.as_path()).collect();
+    for (i, f) in raw.fit.free.iter().enumerate() {
+        // one parameter twice would be fitted as two, and neither determined
+        if raw.fit.free[..i].contains(f) {
+            return Err(err(
+                "fit.free",
+                format!("'{f}' is listed twice; list each parameter once"),
+            )
+            .into());
+        }
+        if let Some(m) = crate::fit::paths::not_a_number(&docs, &files, f) {
+            return Err(err("fit.free", m).into());
+        }
         if list
             .iter()
             .all(|x| !crate::fit::paths::holds(&x.phantom, f))
@@ -744,6 +759,7 @@ pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
         file: path.to_path_buf(),
         list,
         free: raw.fit.free,
+        free_line: line_of_key(&text, "free"),
     })
 }
 

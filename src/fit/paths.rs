@@ -37,8 +37,8 @@ fn as_number(v: &toml::Value) -> Option<f64> {
     v.as_float().or(v.as_integer().map(|i| i as f64))
 }
 
-/// The number at `path` in `doc`, if the path exists and holds a number.
-pub fn get(doc: &toml::Table, path: &str) -> Option<f64> {
+/// The value at `path` in `doc`, if the path exists.
+fn value_at<'a>(doc: &'a toml::Table, path: &str) -> Option<&'a toml::Value> {
     let segs = segments(path).ok()?;
     let mut cur: &toml::Value = doc.get(match &segs[0] {
         Segment::Key(k) => k.as_str(),
@@ -50,7 +50,46 @@ pub fn get(doc: &toml::Table, path: &str) -> Option<f64> {
             Segment::Index(i) => cur.as_array()?.get(*i)?,
         };
     }
-    as_number(cur)
+    Some(cur)
+}
+
+/// The number at `path` in `doc`, if the path exists and holds a number.
+pub fn get(doc: &toml::Table, path: &str) -> Option<f64> {
+    value_at(doc, path).and_then(as_number)
+}
+
+/// Why `path` cannot be a parameter of phantom documents `docs` (read from `files`) although
+/// it is there: it holds something other than a number (the elasticity law's name, a table, a
+/// list) in the first document that has it, named with what it holds and, for a list, how to
+/// name one of its numbers. `None` when the path holds a number or is absent (a setting at its
+/// default, which bounds can give a start).
+pub fn not_a_number(
+    docs: &[toml::Table],
+    files: &[&std::path::Path],
+    path: &str,
+) -> Option<String> {
+    if path.starts_with(SCALE_PREFIX) {
+        return None;
+    }
+    let (v, file) = docs
+        .iter()
+        .zip(files)
+        .find_map(|(d, f)| value_at(d, path).map(|v| (v, f)))?;
+    if as_number(v).is_some() {
+        return None;
+    }
+    let (kind, hint) = match v {
+        toml::Value::Array(a) if a.first().and_then(as_number).is_some() => (
+            "a list of numbers".to_string(),
+            format!(" (name one of them by its 0-based index, e.g. '{path}.0')"),
+        ),
+        toml::Value::Array(_) => ("a list".to_string(), String::new()),
+        other => (format!("a {}", other.type_str()), String::new()),
+    };
+    Some(format!(
+        "'{path}' holds {kind} in {}, not a number: only a numeric field of the phantom can be fitted{hint}",
+        file.display()
+    ))
 }
 
 /// Write `value` at `path`, creating missing tables on the way (a setting left at its default
@@ -416,7 +455,7 @@ impl ParamSpec {
             (None, Some(lo), Some(hi)) => 0.5 * (lo + hi),
             _ => {
                 return Err(bad(format!(
-                    "'{path}' is not set in the phantom file (it is at its default): write a starting value there, or give bounds NAME=LO..HI"
+                    "'{path}' is not in the phantom files (a setting left at its default, or a misspelt path): write its starting value there, or give bounds NAME=LO..HI"
                 )))
             }
         };
@@ -617,6 +656,43 @@ mod tests {
         "[gases.n2]\ndiffusivity = 2.5e-9\nostwald = 0.014\n[[bubbles]]\nposition_m = [1.0, 2.0, 3.0]\ninitial_radius_m = 1e-4\n"
             .parse()
             .unwrap()
+    }
+
+    /// A path that holds something other than a number is named with what it holds and the
+    /// file (the first document that has it); a number, an absent path (a setting at its
+    /// default) and a `scale:` pattern are not refused here.
+    #[test]
+    fn a_path_that_holds_no_number_says_what_it_holds() {
+        let d: toml::Table = "name = \"x\"\n[geometry]\nsize_m = [1e-3, 2e-3]\n[material.elasticity]\nlaw = \"none\"\n[[bubbles]]\ninitial_radius_m = 1e-4\n"
+            .parse()
+            .unwrap();
+        let docs = [toml::Table::new(), d];
+        let files = [
+            std::path::Path::new("a.toml"),
+            std::path::Path::new("b.toml"),
+        ];
+        let why = |p: &str| not_a_number(&docs, &files, p);
+        for (p, holds) in [
+            ("material.elasticity.law", "holds a string in b.toml"),
+            ("name", "holds a string in b.toml"),
+            ("geometry.size_m", "holds a list of numbers in b.toml"),
+            ("bubbles", "holds a list in b.toml"),
+            ("material", "holds a table in b.toml"),
+        ] {
+            let m = why(p).unwrap_or_else(|| panic!("{p}"));
+            assert!(m.contains(&format!("'{p}' {holds}, not a number")), "{m}");
+        }
+        assert!(why("geometry.size_m")
+            .unwrap()
+            .contains("'geometry.size_m.0'"));
+        for ok in [
+            "geometry.size_m.1",
+            "bubbles.0.initial_radius_m",
+            "perfusion.rate_per_s",
+            "scale:gases.*.ostwald",
+        ] {
+            assert_eq!(why(ok), None, "{ok}");
+        }
     }
 
     #[test]

@@ -143,8 +143,35 @@ pub fn estimates_table_with_truth(
     singular: bool,
     truth: &BTreeMap<String, f64>,
 ) -> Result<Table, Error> {
+    estimates_table_named(title, est, singular, truth, false)
+}
+
+/// [`estimates_table_with_truth`] of estimates named by their phantom paths (`fit`'s): each
+/// parameter in a reader's words ([`super::paths::label`]: `D_N2 (m²/s)`), then its path as
+/// `--param` takes it (`gases.n2.diffusivity`) in a column of its own.
+pub fn estimates_table_with_paths(
+    title: &str,
+    est: &[Estimate],
+    singular: bool,
+    truth: &BTreeMap<String, f64>,
+) -> Result<Table, Error> {
+    estimates_table_named(title, est, singular, truth, true)
+}
+
+/// The estimates table; `with_paths`: the names are phantom paths, given as labels and paths.
+fn estimates_table_named(
+    title: &str,
+    est: &[Estimate],
+    singular: bool,
+    truth: &BTreeMap<String, f64>,
+    with_paths: bool,
+) -> Result<Table, Error> {
     let with_truth = est.iter().any(|e| truth.contains_key(&e.name));
-    let mut cols = vec![Column::plain("parameter"), Column::plain("estimate")];
+    let mut cols = vec![Column::plain("parameter")];
+    if with_paths {
+        cols.push(Column::plain("TOML path (--param)"));
+    }
+    cols.push(Column::plain("estimate"));
     if with_truth {
         cols.push(Column::plain("true value (synth)"));
     }
@@ -165,7 +192,15 @@ pub fn estimates_table_with_truth(
         if e.clipped && ci.is_ok() {
             notes.push("interval clipped to the bounds given");
         }
-        let mut row = vec![Cell::text(&e.name), cell(e.value)];
+        let mut row = if with_paths {
+            vec![
+                Cell::text(super::paths::label(&e.name)),
+                Cell::text(&e.name),
+            ]
+        } else {
+            vec![Cell::text(&e.name)]
+        };
+        row.push(cell(e.value));
         if with_truth {
             row.push(
                 truth
@@ -187,74 +222,34 @@ pub fn estimates_table_with_truth(
     Ok(t)
 }
 
-/// TOML text with every float outside strings whose size is below 1e-4 or from 1e16 on
-/// rewritten in exponent form (`2.308896500918035e-161` rather than 160 zeros and then the
-/// digits; `2.6826799216733474e-5` rather than `0.000026826799216733474`): the `toml` crate
-/// writes every float in positional notation. The digits are Rust's shortest round-trip ones,
-/// so every value reads back bit for bit; the text is returned unchanged if the rewrite would
-/// not read back to the same document.
+/// TOML text with every float whose size is below 1e-4 or from 1e16 on rewritten in exponent
+/// form (`2.308896500918035e-161` rather than 160 zeros and then the digits;
+/// `2.6826799216733474e-5` rather than `0.000026826799216733474`): the `toml` crate writes every
+/// float in positional notation and has no option for it. The text is read as a document by
+/// `toml_edit` (the `toml` crate's own writer, so everything else is written back as it was:
+/// strings, keys, comments, layout) and each such float is given the notation of Rust's `{:e}`,
+/// whose shortest round-trip digits read back bit for bit. Text that is not TOML is returned
+/// unchanged.
 pub fn exponent_floats(text: &str) -> String {
-    let b = text.as_bytes();
-    let mut out = String::with_capacity(text.len());
-    let mut i = 0;
-    let mut last = 0;
-    while i < b.len() {
-        match b[i] {
-            // strings are skipped whole: triple-quoted, basic (with escapes) and literal
-            q @ (b'"' | b'\'') => {
-                let close: &[u8] = if q == b'"' { b"\"\"\"" } else { b"'''" };
-                if b[i..].starts_with(close) {
-                    i += 3;
-                    while i < b.len() && !b[i..].starts_with(close) {
-                        i += if q == b'"' && b[i] == b'\\' { 2 } else { 1 };
-                    }
-                    i += 3;
-                } else {
-                    i += 1;
-                    while i < b.len() && b[i] != q && b[i] != b'\n' {
-                        i += if q == b'"' && b[i] == b'\\' { 2 } else { 1 };
-                    }
-                    i += 1;
+    use toml_edit::visit_mut::VisitMut;
+    struct Exponent;
+    impl VisitMut for Exponent {
+        fn visit_float_mut(&mut self, node: &mut toml_edit::Formatted<f64>) {
+            let v = *node.value();
+            if v.is_finite() && v != 0.0 && !(1e-4..1e16).contains(&v.abs()) {
+                if let Ok(toml_edit::Value::Float(mut f)) = format!("{v:e}").parse() {
+                    *f.decor_mut() = node.decor().clone();
+                    *node = f;
                 }
             }
-            b'#' => {
-                while i < b.len() && b[i] != b'\n' {
-                    i += 1;
-                }
-            }
-            c if (c.is_ascii_digit() || c == b'-' || c == b'+')
-                && (i == 0 || matches!(b[i - 1], b' ' | b'=' | b'[' | b',' | b'\n')) =>
-            {
-                let start = i;
-                while i < b.len()
-                    && matches!(b[i], b'0'..=b'9' | b'.' | b'-' | b'+' | b'e' | b'E' | b'_')
-                {
-                    i += 1;
-                }
-                let tok = &text[start..i];
-                let ends_value = i == b.len() || matches!(b[i], b'\n' | b',' | b']' | b' ');
-                if ends_value && tok.contains('.') && !tok.contains(['e', 'E', '_']) {
-                    if let Ok(v) = tok.parse::<f64>() {
-                        if v != 0.0 && !(1e-4..1e16).contains(&v.abs()) {
-                            out.push_str(&text[last..start]);
-                            out.push_str(&format!("{v:e}"));
-                            last = i;
-                        }
-                    }
-                }
-            }
-            _ => i += 1,
         }
     }
-    out.push_str(&text[last.min(text.len())..]);
-    let same = match (text.parse::<toml::Table>(), out.parse::<toml::Table>()) {
-        (Ok(a), Ok(b)) => a == b,
-        _ => false,
-    };
-    if same {
-        out
-    } else {
-        text.to_string()
+    match text.parse::<toml_edit::DocumentMut>() {
+        Ok(mut doc) => {
+            Exponent.visit_document_mut(&mut doc);
+            doc.to_string()
+        }
+        Err(_) => text.to_string(),
     }
 }
 
@@ -775,14 +770,14 @@ pub fn fit_stats(f: &Fitted) -> Result<FitStats, Error> {
     })
 }
 
-/// `fit.toml` text.
+/// `fit.toml` text; `info`: where the data came from ([`data_info`]).
 pub fn fit_toml(
     f: &Fitted,
     experiments: &Experiments,
     data: &Measurements,
     growth: &[GrowthRow],
+    info: &DataInfo,
 ) -> Result<String, Error> {
-    let info = data_info(data, experiments, &f.model);
     let st = fit_stats(f)?;
     let mut absent = BTreeMap::new();
     let mut keep = |key: &'static str, v: &Result<f64, String>| match v {
@@ -865,8 +860,9 @@ pub fn fit_outputs(
     command: &str,
 ) -> Result<OutputSet, Error> {
     let growth = growth_rows(experiments, data, &f.predicted);
+    let info = data_info(data, experiments, &f.model);
     let mut set = OutputSet::new();
-    set.add("fit.toml", fit_toml(f, experiments, data, &growth)?);
+    set.add("fit.toml", fit_toml(f, experiments, data, &growth, &info)?);
     let mut page = Page::new("Fit of the phantom model to measured bubble radii");
     page.text(format!(
         "{} observations of {} bubbles in {} experiments; {} free parameter(s). Weighted least squares ({}), Levenberg–Marquardt (`levenberg-marquardt` crate) with a forward-difference Jacobian.\n\nAssumptions of the intervals: independent Gaussian measurement errors with the given relative weights, and a model close to linear in its parameters near the optimum (asymptotic intervals from the Jacobian, Student t with n − p = {} degrees of freedom; log-space parameters get asymmetric intervals).",
@@ -878,11 +874,10 @@ pub fn fit_outputs(
         f.dof()
     ));
     page.pre(command.to_string());
-    let info = data_info(data, experiments, &f.model);
     page.text(info.paragraph.clone());
     let st = fit_stats(f)?;
     page.section("Estimates");
-    page.table(&estimates_table_with_truth(
+    page.table(&estimates_table_with_paths(
         "Estimates",
         &f.inference.estimates,
         f.inference.singular,
@@ -908,7 +903,7 @@ pub fn fit_outputs(
         .filter_map(|(e, s)| {
             Some(format!(
                 "{} to {}..{}",
-                e.name,
+                super::paths::label(&e.name),
                 crate::error::num(s.lower?),
                 crate::error::num(s.upper?)
             ))
@@ -924,10 +919,11 @@ pub fn fit_outputs(
         match &st.correlation {
             Ok(corr) => {
                 let mut cols = vec![Column::plain("")];
-                cols.extend(f.inference.estimates.iter().map(|e| Column::plain(&e.name)));
+                let label = |i: usize| super::paths::label(&f.inference.estimates[i].name);
+                cols.extend((0..corr.len()).map(|i| Column::plain(label(i))));
                 let mut t = Table::new("Correlation of the estimates", cols);
                 for (i, row) in corr.iter().enumerate() {
-                    let mut r = vec![Cell::text(&f.inference.estimates[i].name)];
+                    let mut r = vec![Cell::text(label(i))];
                     r.extend(row.iter().map(|c| Cell::fixed(*c, 3)));
                     t.push(r).map_err(Error::Solver)?;
                 }
@@ -1064,9 +1060,12 @@ mod tests {
     }
 
     /// Floats below 1e-4 (and from 1e16) are written in exponent form with their shortest
-    /// round-trip digits, so they read back to the same bits; strings holding such numbers and
-    /// keys with digits are left alone; ordinary sizes keep positional notation. Reference:
-    /// the values put in, and the text the `toml` crate writes for them.
+    /// round-trip digits, so they read back to the same bits (both texts parsed back by `toml`
+    /// give the same document); strings and comments holding such numbers and keys with digits
+    /// are left alone; ordinary sizes keep positional notation. Reference: the values put in,
+    /// and the text the `toml` crate writes for them. (`toml_edit` rewrites the floats in place
+    /// of the hand-written scanner before it, byte for byte as the scanner did on
+    /// `reports/discover/discover.toml`, two fit.toml files and these cases.)
     #[test]
     fn tiny_floats_are_written_in_exponent_form() {
         #[derive(Serialize)]
@@ -1102,5 +1101,17 @@ mod tests {
         assert_eq!(back["p_value"].as_float(), Some(2.308896500918035e-161));
         assert_eq!(back["big"].as_float(), Some(6.225223095758606e16));
         assert_eq!(back, raw.parse::<toml::Table>().unwrap());
+        // comments, inline tables and layout kept; text that is not TOML is left as it is
+        let text = "# p = 0.00001\n[a]\nb = { c = 0.00003, d = \"0.00001\" } # 0.00001\ne = [\n  0.0000002,\n  1.5,\n]\n";
+        let out = exponent_floats(text);
+        assert_eq!(
+            out,
+            "# p = 0.00001\n[a]\nb = { c = 3e-5, d = \"0.00001\" } # 0.00001\ne = [\n  2e-7,\n  1.5,\n]\n"
+        );
+        assert_eq!(
+            out.parse::<toml::Table>().unwrap(),
+            text.parse::<toml::Table>().unwrap()
+        );
+        assert_eq!(exponent_floats("a = [0.00001"), "a = [0.00001");
     }
 }

@@ -277,6 +277,11 @@ pub fn true_values(
 /// series). Checked before any simulation from each profile's duration.
 pub const MAX_ROWS: usize = 1_000_000;
 
+/// Fewest samples `synth` plans for each bubble: 2, the radius at t = 0 (its starting radius,
+/// which no parameter changes) and at least one later. Checked before any simulation from the
+/// shortest experiment's duration (a bubble that dissolves early still gives fewer).
+pub const MIN_SAMPLES_PER_BUBBLE: usize = 2;
+
 /// Synthesise `measurements.csv` text, its first line the settings ([`provenance_line`]):
 /// every bubble of every experiment sampled at 0, `every`,
 /// 2·`every`, … s while it exists, with N(0, `noise_sd`²) added (clamped at the smallest
@@ -286,7 +291,8 @@ pub const MAX_ROWS: usize = 1_000_000;
 /// `synth` writes `fit` reads as written. Refused before any simulation (exit 2, naming
 /// `<command line>` and the option): a noise sd outside the range `measurements.csv` accepts
 /// for `sd_m` (1 nm ..= 1 cm, [`super::data::MIN_SD_M`]), an interval `every` that is not a
-/// positive number or would give more than [`MAX_ROWS`] rows.
+/// positive number, would give a bubble fewer than [`MIN_SAMPLES_PER_BUBBLE`] samples (longer
+/// than an experiment) or more than [`MAX_ROWS`] rows.
 pub fn synthesize(
     experiments: &Experiments,
     effects: &[EffectSetting],
@@ -313,6 +319,29 @@ pub fn synthesize(
             "--every",
             format!("must be a positive time in s (got {every})"),
         ));
+    }
+    // the shortest experiment must be sampled after its start: at t = 0 alone a bubble has its
+    // starting radius, which no parameter changes
+    if let Some(short) = experiments
+        .list
+        .iter()
+        .min_by(|a, b| a.profile.duration_s().total_cmp(&b.profile.duration_s()))
+    {
+        let duration = short.profile.duration_s();
+        let samples = (duration / every + 1e-9).floor() + 1.0;
+        if samples < MIN_SAMPLES_PER_BUBBLE as f64 {
+            return Err(bad(
+                "--every",
+                format!(
+                    "sampling every {} s gives each bubble of experiment '{}' (its profile lasts {} s) {} sample(s), at t = 0 only: its starting radius, which no parameter changes; a bubble needs at least {MIN_SAMPLES_PER_BUBBLE}: choose --every ≤ {} s",
+                    crate::error::num(every),
+                    short.name,
+                    crate::error::num(duration),
+                    samples,
+                    crate::error::num(duration)
+                ),
+            ));
+        }
     }
     // the most rows: every bubble sampled over its whole profile (a run that ends early, or a
     // bubble that dissolves, writes fewer)

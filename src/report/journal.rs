@@ -23,6 +23,28 @@ pub fn dir_of(out: &Path) -> PathBuf {
     out.with_file_name(format!("{name}.partial"))
 }
 
+/// The text of journal file `path`, `None` if it is missing. One that cannot be read as text
+/// ([`crate::error::read_text`]: not a regular file, not UTF-8) is not a journal decophantom
+/// wrote as it stands: refused naming it (and the line of the first invalid byte), with what to
+/// do (`afresh`) in place of the reader's advice for an input.
+fn read_journal_file(path: &Path, afresh: &str) -> Result<Option<String>, Error> {
+    if let Err(e) = std::fs::symlink_metadata(path) {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            return Ok(None);
+        }
+    }
+    crate::error::read_text(path, "the journal file")
+        .map(Some)
+        .map_err(|e| {
+            let why = e.message.split("; ").next().unwrap_or_default().to_string();
+            InputError {
+                message: format!("{why}: not a journal decophantom wrote as it stands; {afresh}"),
+                ..e
+            }
+            .into()
+        })
+}
+
 /// An open journal, appended to as runs finish (from several threads).
 #[derive(Debug)]
 pub struct Journal {
@@ -35,7 +57,11 @@ impl Journal {
     /// What an earlier, unfinished run of the same work left in the journal of `out`: the text
     /// of each of the files `names` (the first without its fingerprint line; a missing file is
     /// empty), or `None` without a journal. A journal whose first line is not `fingerprint`
-    /// belongs to other work (`what`: "study", "evaluation", "fit", "discovery") and is refused.
+    /// belongs to other work (`what`: "study", "evaluation", "fit", "discovery") and is refused
+    /// (exit 2, naming its file and line 1), and so is a journal folder that decophantom did not
+    /// make as it stands (a file in its place, a folder with other files but no journal, a
+    /// journal file that is not UTF-8 text); each refusal says what to do: resume with the same
+    /// work, or delete the folder to start afresh, or give another `--out`.
     pub fn previous(
         out: &Path,
         fingerprint: &str,
@@ -43,23 +69,58 @@ impl Journal {
         what: &str,
     ) -> Result<Option<Vec<String>>, Error> {
         let dir = dir_of(out);
-        let Ok(first) = std::fs::read_to_string(dir.join(names[0])) else {
-            return Ok(None);
+        let afresh = format!(
+            "delete the folder '{}' to start afresh, or give another --out",
+            dir.display()
+        );
+        match std::fs::metadata(&dir) {
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(None),
+            Err(e) => return Err(Error::io(&dir, e)),
+            Ok(m) if !m.is_dir() => {
+                return Err(InputError::new(format!(
+                    "is where the journal of --out {} goes, and it is not a folder: move it away or give another --out",
+                    out.display()
+                ))
+                .in_file(&dir)
+                .into())
+            }
+            Ok(_) => {}
+        }
+        let first = dir.join(names[0]);
+        let Some(text) = read_journal_file(&first, &afresh)? else {
+            // a folder that holds something else than a journal is not ours to fill and remove
+            let empty = std::fs::read_dir(&dir)
+                .map_err(Error::io_at(&dir))?
+                .next()
+                .is_none();
+            if empty {
+                return Ok(None);
+            }
+            return Err(InputError::new(format!(
+                "holds files but no journal ({} is missing), so decophantom did not make it as it stands: move its files away, or {afresh}",
+                names[0]
+            ))
+            .in_file(&dir)
+            .into());
         };
-        let mut lines = first.splitn(2, '\n');
+        let mut lines = text.splitn(2, '\n');
         let head = lines.next().unwrap_or("");
         if head != fingerprint {
             return Err(InputError::new(format!(
-                "'{}' holds the journal of a different {what} ({}); resume with the same settings, or delete that folder to start afresh",
-                dir.display(),
-                if head.is_empty() { "no header" } else { head }
+                "holds the journal of a different {what} ({}); resume it with the same inputs and settings, or {afresh}",
+                if head.is_empty() {
+                    "no header".to_string()
+                } else {
+                    format!("its first line: {head}")
+                }
             ))
-            .field("--out")
+            .in_file(&first)
+            .at_line(1)
             .into());
         }
         let mut texts = vec![lines.next().unwrap_or("").to_string()];
         for name in &names[1..] {
-            texts.push(std::fs::read_to_string(dir.join(name)).unwrap_or_default());
+            texts.push(read_journal_file(&dir.join(name), &afresh)?.unwrap_or_default());
         }
         Ok(Some(texts))
     }

@@ -249,8 +249,10 @@ fn sync_dir(dir: &Path) {
 
 /// Check an output folder before any work is done (and again at commit): it must be a
 /// folder or absent, empty or written by decophantom, hold no file the tool did not write (its
-/// manifest), and be neither an input of the run nor hold one. Also removes debris of earlier
-/// interrupted commits beside it. Errors are bad input naming `--out` (exit 2).
+/// manifest), be neither an input of the run nor hold one, and not lie inside another output
+/// folder (whose next run would refuse the files it did not write, or hold another's). Also
+/// removes debris of earlier interrupted commits beside it. Errors are bad input naming `--out`
+/// (exit 2).
 ///
 /// The place is checked too (missing folders above it are created at the commit): the nearest
 /// existing folder above `dir` must be a folder, not a file, and one this process can create
@@ -271,6 +273,14 @@ pub fn check_target(dir: &Path, inputs: &[&Path]) -> Result<(), Error> {
     };
     clean_debris(&parent, &name);
     check_place(dir, "--out", true)?;
+    // an output folder inside another: that one's next run would find these files outside its
+    // manifest and be refused
+    if let Some(outer) = enclosing_output(dir) {
+        return Err(out_err(format!(
+            "lies inside '{}', the output folder of another run (it holds {MARKER}); the next run into it, which replaces it whole, would be refused with this folder inside: choose a folder outside it",
+            outer.display()
+        )));
+    }
     // an input is the output, or lies inside it (symlinks and `..` resolved)
     let canon = |p: &Path| std::fs::canonicalize(p).ok();
     if let Some(d) = canon(dir) {
@@ -317,11 +327,17 @@ pub fn check_target(dir: &Path, inputs: &[&Path]) -> Result<(), Error> {
             let entry = entry.map_err(|e| Error::io(&d, e))?;
             let path = entry.path();
             let is_dir = entry.file_type().map(|t| t.is_dir()).unwrap_or(false);
+            let rel = path.strip_prefix(dir).unwrap_or(&path);
+            if is_dir && path.join(MARKER).is_file() {
+                return Err(out_err(format!(
+                    "holds '{}', the output folder of another run (it has its own {MARKER}); a replaced folder would lose it: move it out or choose another folder",
+                    rel.display()
+                )));
+            }
             if is_dir {
                 stack.push(path);
                 continue;
             }
-            let rel = path.strip_prefix(dir).unwrap_or(&path);
             let rel_s = rel.to_string_lossy().replace('\\', "/");
             if rel_s != MARKER && !written.contains(rel_s.as_str()) {
                 return Err(out_err(format!(
@@ -331,6 +347,20 @@ pub fn check_target(dir: &Path, inputs: &[&Path]) -> Result<(), Error> {
         }
     }
     Ok(())
+}
+
+/// The nearest folder above `dir` that is an output folder (holds [`MARKER`]), with symlinks
+/// and `..` resolved in the part of the path that exists; `None` when there is none.
+fn enclosing_output(dir: &Path) -> Option<PathBuf> {
+    let abs = std::path::absolute(dir).ok()?;
+    let above = abs
+        .parent()?
+        .ancestors()
+        .find_map(|a| std::fs::canonicalize(a).ok())?;
+    above
+        .ancestors()
+        .find(|a| a.join(MARKER).is_file())
+        .map(Path::to_path_buf)
 }
 
 /// Whether process `pid` is alive; `None` where it cannot be told (no `/proc`).
@@ -668,6 +698,14 @@ pub fn write_new_file(
     let _ = std::fs::remove_file(&tmp);
     sync_dir(&dir);
     result
+}
+
+/// Whether two paths name the same existing file (symlinks, `.` and `..` resolved).
+pub fn same_file(a: &Path, b: &Path) -> bool {
+    match (a.canonicalize(), b.canonicalize()) {
+        (Ok(x), Ok(y)) => x == y,
+        _ => false,
+    }
 }
 
 /// Check an output file before any work: not a folder, not one of `inputs` (symlinks and `..`

@@ -1300,7 +1300,12 @@ fn fit_gives_the_true_value_of_a_synthetic_path_and_calls_other_data_measured() 
         "{t:?}"
     );
     assert_eq!(t["data"]["source"].as_str(), Some("synthetic"));
-    assert!(report.contains("| gases.n2.diffusivity |"), "{report}");
+    // the parameter in a reader's words, then its path as --param takes it
+    assert!(
+        report.contains("| parameter | TOML path (--param) | estimate |")
+            && report.contains("| D\\_N2 (m²/s) | gases.n2.diffusivity |"),
+        "{report}"
+    );
     assert!(
         report.contains("true value (synth)") && report.contains("| 2e-9 |"),
         "{report}"

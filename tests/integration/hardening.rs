@@ -2086,3 +2086,327 @@ fn elasticity_options_are_named_as_typed() {
         assert!(o.stdout.is_empty());
     }
 }
+
+// ---- bad-input review 3: fit, synth, evaluate and output folders ----
+
+/// A `fit` parameter at a path that holds no number (the elasticity law's name, the shape, the
+/// box's size list, a table) is refused as such, naming the path, what it holds and the
+/// phantom file, on the command line (`--param`) and in `[fit] free` (the experiments file's
+/// line). Before, `--param` said the path was "not set in the phantom file (it is at its
+/// default)", and with bounds that its start value was not accepted.
+#[test]
+fn fit_parameters_that_are_not_numbers_are_refused_as_such() {
+    let dir = tempdir("hard-fit-not-a-number");
+    let e = fit_lab(&dir, "e1");
+    let m = write(&dir, "m.csv", &fit_rows(7));
+    let out = dir.join("out");
+    for (param, holds) in [
+        ("material.elasticity.law", "holds a string"),
+        ("material.elasticity.law=1..2", "holds a string"),
+        ("geometry.shape", "holds a string"),
+        ("geometry.size_m", "holds a list of numbers"),
+        ("material", "holds a table"),
+    ] {
+        let o = fit_cmd(&m, &e, &[param], &out);
+        let path = param.split('=').next().unwrap();
+        assert_refused(
+            &o,
+            &[
+                "<command line>",
+                "field '--param'",
+                &format!("'{path}' {holds}"),
+                "phantom.toml",
+                "not a number",
+            ],
+        );
+        assert!(!String::from_utf8_lossy(&o.stderr).contains("default"));
+    }
+    let o = fit_cmd(&m, &e, &["geometry.size_m"], &out);
+    assert_refused(&o, &["e.g. 'geometry.size_m.0'"]);
+    // in [fit] free: the experiments file's line of `free`
+    let text = std::fs::read_to_string(&e).unwrap();
+    let e2 = write(
+        &dir,
+        "e2.toml",
+        &format!("{text}[fit]\nfree = [\"material.elasticity.law\"]\n"),
+    );
+    let o = fit_cmd(&m, &e2, &[], &out);
+    assert_refused(
+        &o,
+        &[
+            "e2.toml:6:",
+            "field 'fit.free'",
+            "holds a string",
+            "not a number",
+        ],
+    );
+    assert!(!out.exists() && !dir.join("out.partial").exists());
+}
+
+/// A parameter given both in `[fit] free` and as `--param` is refused naming both places (the
+/// experiments file and its line, and `--param`); one listed twice in `[fit] free` is refused
+/// at its line (before, it was fitted as two parameters: two estimates of one value and a
+/// singular Jacobian), and `--param` twice says it is the command line's.
+#[test]
+fn a_fit_parameter_is_given_in_one_place_once() {
+    let dir = tempdir("hard-fit-twice");
+    let e = fit_lab(&dir, "e1");
+    let m = write(&dir, "m.csv", &fit_rows(7));
+    let out = dir.join("out");
+    let text = std::fs::read_to_string(&e).unwrap();
+    let e2 = write(
+        &dir,
+        "e2.toml",
+        &format!("{text}[fit]\nfree = [\"gases.n2.diffusivity\"]\n"),
+    );
+    for param in ["gases.n2.diffusivity", "gases.n2.diffusivity=1e-10..1e-8"] {
+        let o = fit_cmd(&m, &e2, &[param], &out);
+        assert_refused(
+            &o,
+            &[
+                "<command line>",
+                "field '--param'",
+                "'gases.n2.diffusivity' is also in [fit] free of",
+                "e2.toml (line 6)",
+            ],
+        );
+    }
+    let e3 = write(
+        &dir,
+        "e3.toml",
+        &format!("{text}[fit]\nfree = [\"gases.n2.diffusivity\", \"gases.n2.diffusivity\"]\n"),
+    );
+    let o = fit_cmd(&m, &e3, &[], &out);
+    assert_refused(&o, &["e3.toml:6:", "field 'fit.free'", "listed twice"]);
+    let o = fit_cmd(
+        &m,
+        &e,
+        &["gases.n2.diffusivity", "gases.n2.diffusivity=1e-10..1e-8"],
+        &out,
+    );
+    assert_refused(&o, &["field '--param'", "given twice on the command line"]);
+    assert!(!out.exists() && !dir.join("out.partial").exists());
+}
+
+/// A journal `OUT.partial/` that cannot be resumed is refused naming its file (and line 1, or
+/// the line of a byte that is not UTF-8) and what to do: resume the same work, or delete the
+/// folder, or give another `--out`. A folder there with a user's file but no journal, or a
+/// file in its place, is refused and kept (a finished fit removes its journal folder whole).
+/// Before, the refusal named only the folder and `--out`; a journal that was not UTF-8 was
+/// overwritten, a user's folder filled and then removed, and a file there was exit 3.
+#[test]
+fn fit_journal_refusals_name_the_journal_file_and_what_to_do() {
+    let dir = tempdir("hard-fit-journal");
+    let e = fit_lab(&dir, "e1");
+    let m = write(&dir, "m.csv", &fit_rows(7));
+    let out = dir.join("out");
+    let jdir = dir.join("out.partial");
+    let journal = jdir.join(decophantom::fit::journal::FILE);
+    let fit = || fit_cmd(&m, &e, &["gases.n2.diffusivity"], &out);
+    std::fs::create_dir_all(&jdir).unwrap();
+    for (bytes, needles) in [
+        (
+            &b"# decophantom 0.1.0 fit 00\n"[..],
+            &[
+                "out.partial/simulations.txt:1:",
+                "journal of a different fit",
+                "its first line: # decophantom 0.1.0 fit 00",
+                "resume it with the same inputs",
+            ][..],
+        ),
+        (
+            &b""[..],
+            &[
+                "out.partial/simulations.txt:1:",
+                "journal of a different fit (no header)",
+            ][..],
+        ),
+        (
+            &b"# decophantom\nab\xff\n"[..],
+            &[
+                "out.partial/simulations.txt:2:",
+                "not UTF-8",
+                "not a journal decophantom wrote",
+            ][..],
+        ),
+    ] {
+        std::fs::write(&journal, bytes).unwrap();
+        let o = fit();
+        assert_refused(&o, needles);
+        assert_refused(&o, &["delete the folder", "out.partial", "another --out"]);
+        assert_eq!(
+            std::fs::read(&journal).unwrap(),
+            bytes,
+            "the journal was changed"
+        );
+    }
+    std::fs::remove_file(&journal).unwrap();
+    let mine = write(&jdir, "notes.txt", "mine\n");
+    assert_refused(
+        &fit(),
+        &["out.partial:", "no journal (simulations.txt is missing)"],
+    );
+    assert_eq!(std::fs::read_to_string(&mine).unwrap(), "mine\n");
+    std::fs::remove_dir_all(&jdir).unwrap();
+    write(&dir, "out.partial", "mine\n");
+    assert_refused(
+        &fit(),
+        &["out.partial:", "is not a folder", "another --out"],
+    );
+    assert_eq!(std::fs::read_to_string(&jdir).unwrap(), "mine\n");
+    assert!(!out.exists());
+}
+
+/// `evaluate` refuses a `--schedule` (or `--algorithm`) given twice, however spelt (`X`,
+/// `DIR/./X`, a symlink to it), naming the option: the file would be run twice and ranked
+/// against itself (before: two identical rows, tied at rank 1, exit 0).
+#[test]
+fn evaluate_refuses_a_file_given_twice() {
+    let dir = tempdir("hard-evaluate-twice");
+    let ph = write(&dir, "ph.toml", &good_phantom());
+    let fast = write(
+        &dir,
+        "fast.csv",
+        "time_min,depth_m\n0,0\n1.5,10\n5,10\n6,0\n",
+    );
+    let respelt = dir.join(".").join("fast.csv");
+    let out = dir.join("eval");
+    let crit = criteria();
+    let evaluate = |flag: &str, a: &Path, b: &Path, extra: &[&str]| {
+        let mut args: Vec<&std::ffi::OsStr> = vec![
+            "evaluate".as_ref(),
+            flag.as_ref(),
+            a.as_os_str(),
+            flag.as_ref(),
+            b.as_os_str(),
+            "--criteria".as_ref(),
+            crit.as_os_str(),
+            "--phantom".as_ref(),
+            ph.as_os_str(),
+            "--out".as_ref(),
+            out.as_os_str(),
+        ];
+        args.extend(extra.iter().map(std::ffi::OsStr::new));
+        run(&args)
+    };
+    for twice in [&fast, &respelt] {
+        let o = evaluate("--schedule", &fast, twice, &[]);
+        assert_refused(
+            &o,
+            &[
+                "<command line>",
+                "field '--schedule'",
+                "is the same file as",
+                "fast.csv",
+            ],
+        );
+    }
+    #[cfg(unix)]
+    {
+        let link = dir.join("link.csv");
+        std::os::unix::fs::symlink(&fast, &link).unwrap();
+        let o = evaluate("--schedule", &fast, &link, &[]);
+        assert_refused(&o, &["field '--schedule'", "link.csv' is the same file as"]);
+    }
+    let alg = root().join("algorithms/zhl16c-gf30-85.toml");
+    let again = root().join("algorithms/../algorithms/zhl16c-gf30-85.toml");
+    let o = evaluate(
+        "--algorithm",
+        &alg,
+        &again,
+        &["--depth", "10", "--time", "5"],
+    );
+    assert_refused(&o, &["field '--algorithm'", "is the same file as"]);
+    assert!(!out.exists() && !dir.join("eval.partial").exists());
+}
+
+/// `synth --every` longer than an experiment gives each of its bubbles one sample, at t = 0
+/// (the starting radius, which no parameter changes): refused before any simulation, naming
+/// `--every`, the experiment and its duration (before: 1 row per bubble, exit 0, and `fit`
+/// then ran on them). An interval equal to the duration gives 2 samples and is accepted.
+#[test]
+fn synth_every_must_sample_each_bubble_twice() {
+    let dir = tempdir("hard-synth-every");
+    let e = fit_lab(&dir, "e1");
+    let out = dir.join("m.csv");
+    for every in ["1e9", "60.5"] {
+        let o = synth_cmd(&e, &["--every", every], &out);
+        assert_refused(
+            &o,
+            &[
+                "<command line>",
+                "field '--every'",
+                "experiment 'e1' (its profile lasts 60 s)",
+                "at least 2",
+                "--every ≤ 60 s",
+            ],
+        );
+        assert!(!out.exists());
+    }
+    let o = synth_cmd(&e, &["--every", "60"], &out);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let m = decophantom::fit::data::read_measurements(&out).unwrap();
+    assert_eq!(m.len(), 2, "t = 0 and 60 s");
+}
+
+/// An output folder inside another run's output folder is refused before the run (exit 2,
+/// `--out`, the outer folder named): the outer run's next run would find it outside its
+/// manifest and be refused. A folder that holds another run's output folder is refused naming
+/// it as such (before: "which decophantom did not write"). Nothing is replaced or removed.
+#[test]
+fn an_output_folder_inside_another_is_refused() {
+    let dir = tempdir("hard-nested-out");
+    let ph = write(&dir, "ph.toml", &good_phantom());
+    let prof = write(&dir, "p.toml", SHORT_PROFILE);
+    let outer = dir.join("outer");
+    let ok = |o: Output| {
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}",
+            String::from_utf8_lossy(&o.stderr)
+        )
+    };
+    ok(simulate_into(&dir, &prof, &ph, &outer));
+    let before = std::fs::read(outer.join("bubbles.csv")).unwrap();
+    for inner in [
+        outer.join("inner"),
+        outer.join("a").join("..").join("inner"),
+    ] {
+        let o = simulate_into(&dir, &prof, &ph, &inner);
+        assert_refused(
+            &o,
+            &[
+                "field '--out'",
+                "lies inside",
+                "outer",
+                "the output folder of another run",
+            ],
+        );
+    }
+    assert!(!outer.join("inner").exists() && !outer.join("a").exists());
+    // beside it, through `..`: accepted
+    ok(simulate_into(
+        &dir,
+        &prof,
+        &ph,
+        &outer.join("..").join("beside"),
+    ));
+    // an output folder moved into another: the outer one is refused, naming it
+    std::fs::rename(dir.join("beside"), outer.join("moved")).unwrap();
+    let o = simulate_into(&dir, &prof, &ph, &outer);
+    assert_refused(
+        &o,
+        &[
+            "field '--out'",
+            "holds 'moved', the output folder of another run",
+        ],
+    );
+    assert_eq!(std::fs::read(outer.join("bubbles.csv")).unwrap(), before);
+    assert!(outer.join("moved").join("bubbles.csv").is_file());
+}
