@@ -83,7 +83,7 @@ pub fn read_divelog_schedule(
     dive: Option<crate::profile::sequence::DiveSelection>,
 ) -> Result<ScheduleImport, InputError> {
     use crate::profile::{divelog, select_dive};
-    let d = select_dive(path, divelog::read(path)?, dive)?;
+    let d = select_dive(path, divelog::read_each(path)?, dive)?;
     let h = d.history(0.0).map_err(|e| e.in_file(path))?;
     let pa_per_m = d.density_kg_m3 * crate::units::STANDARD_GRAVITY;
     let mut notes = d.notes.clone();

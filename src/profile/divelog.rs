@@ -165,15 +165,32 @@ impl ImportedDive {
     }
 }
 
-/// Read every dive in a Subsurface XML or UDDF file.
+/// Read every dive in a Subsurface XML or UDDF file; any dive the reader refuses is an error
+/// ([`read_each`] keeps the others).
 pub fn read(path: &Path) -> Result<Vec<ImportedDive>, InputError> {
-    let bytes = crate::error::read_input(path, "the dive log")?;
-    let text = String::from_utf8_lossy(&bytes);
-    parse(&text, path)
+    read_each(path)?.into_iter().collect()
 }
 
-/// Parse dive-log text; `path` names the file in errors and labels.
+/// Parse dive-log text; `path` names the file in errors and labels. Any dive the reader
+/// refuses is an error ([`parse_each`] keeps the others).
 pub fn parse(text: &str, path: &Path) -> Result<Vec<ImportedDive>, InputError> {
+    parse_each(text, path)?.into_iter().collect()
+}
+
+/// Read a Subsurface XML or UDDF file, each dive on its own: the outer error is the file's
+/// (unreadable, not a dive log, no dive with depth samples), an inner one that dive's (a sample
+/// refused), so one bad dive in a logbook of many does not keep the others from being run.
+pub fn read_each(path: &Path) -> Result<Vec<Result<ImportedDive, InputError>>, InputError> {
+    let bytes = crate::error::read_input(path, "the dive log")?;
+    let text = String::from_utf8_lossy(&bytes);
+    parse_each(&text, path)
+}
+
+/// [`read_each`] on text; `path` names the file in errors and labels.
+pub fn parse_each(
+    text: &str,
+    path: &Path,
+) -> Result<Vec<Result<ImportedDive, InputError>>, InputError> {
     let root = parse_xml(text, path)?;
     let stem = path
         .file_stem()
@@ -779,11 +796,11 @@ fn settle_switches(
 // ---------------------------------------------------------------------------------------------
 // Subsurface XML.
 
-fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
+fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<Result<ImportedDive, InputError>>, InputError> {
     let mut dive_nodes = Vec::new();
     root.find_all("dive", &mut dive_nodes);
-    let mut dives = Vec::new();
-    for (n, dive) in dive_nodes.into_iter().enumerate() {
+    // each dive on its own: a dive the reader refuses is an error only where it is chosen
+    let one = |n: usize, dive: &Node| -> Result<ImportedDive, InputError> {
         let mut notes = Vec::new();
         let mut gases = Vec::new();
         let mut diluent = None;
@@ -907,7 +924,7 @@ fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
             (Some(d), None) => Some(d.to_string()),
             _ => None,
         };
-        dives.push(ImportedDive {
+        Ok(ImportedDive {
             label: label(&cx.stem, n, start.as_deref()),
             format: Format::Subsurface,
             start,
@@ -924,9 +941,13 @@ fn subsurface(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
             stated_duration_s: dive.attr("duration").and_then(time_s),
             notes,
             line: line_at(cx.text, dive.offset),
-        });
-    }
-    Ok(dives)
+        })
+    };
+    Ok(dive_nodes
+        .into_iter()
+        .enumerate()
+        .map(|(n, d)| one(n, d))
+        .collect())
 }
 
 /// Attribute `key` of `node` with the node and the field name for messages.
@@ -980,7 +1001,7 @@ fn label(stem: &str, n: usize, start: Option<&str>) -> String {
 // ---------------------------------------------------------------------------------------------
 // UDDF.
 
-fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
+fn uddf(root: &Node, cx: &Cx) -> Result<Vec<Result<ImportedDive, InputError>>, InputError> {
     // Gas definitions: id -> index.
     let mut ids: Vec<String> = Vec::new();
     let mut gases: Vec<GasMix> = Vec::new();
@@ -1024,8 +1045,8 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
     for p in pd {
         p.find_all("dive", &mut dive_nodes);
     }
-    let mut dives = Vec::new();
-    for (n, dive) in dive_nodes.into_iter().enumerate() {
+    // each dive on its own: a dive the reader refuses is an error only where it is chosen
+    let one = |n: usize, dive: &Node| -> Result<ImportedDive, InputError> {
         let mut notes = Vec::new();
         let mut gases = gases.clone();
         if no_gasdefs {
@@ -1145,7 +1166,7 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
             let mi = t.and_then(|t| t.text_of("minute")).unwrap_or("0");
             Some(format!("{y}-{mo:0>2}-{da:0>2}T{h:0>2}:{mi:0>2}"))
         });
-        dives.push(ImportedDive {
+        Ok(ImportedDive {
             label: label(&cx.stem, n, start.as_deref()),
             format: Format::Uddf,
             start,
@@ -1162,9 +1183,13 @@ fn uddf(root: &Node, cx: &Cx) -> Result<Vec<ImportedDive>, InputError> {
             stated_duration_s: value_in(iad, "diveduration", Quantity::Time)?,
             notes,
             line: line_at(cx.text, dive.offset),
-        });
-    }
-    Ok(dives)
+        })
+    };
+    Ok(dive_nodes
+        .into_iter()
+        .enumerate()
+        .map(|(n, d)| one(n, d))
+        .collect())
 }
 
 #[cfg(test)]

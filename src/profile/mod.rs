@@ -87,7 +87,7 @@ pub fn is_dive_log(path: &Path) -> bool {
 /// ([`sequence::join`]).
 pub fn select_dive(
     path: &Path,
-    mut dives: Vec<divelog::ImportedDive>,
+    mut dives: Vec<Result<divelog::ImportedDive, InputError>>,
     dive: Option<sequence::DiveSelection>,
 ) -> Result<divelog::ImportedDive, InputError> {
     use sequence::DiveSelection;
@@ -118,10 +118,13 @@ pub fn select_dive(
     if last > n {
         return Err(missing(last));
     }
+    // a dive the reader refused is an error only when chosen
     if first == last {
-        return Ok(dives.swap_remove(first - 1));
+        return dives.swap_remove(first - 1);
     }
-    let chosen: Vec<_> = dives.drain(first - 1..last).collect();
+    let chosen = dives
+        .drain(first - 1..last)
+        .collect::<Result<Vec<_>, _>>()?;
     sequence::join(chosen, first)
         .map_err(|(m, line)| InputError::new(m).in_file(path).at_line(line).field("dive"))
 }
@@ -183,7 +186,7 @@ pub fn load_with_notes(
 ) -> Result<(PressureHistory, Vec<String>), InputError> {
     let h = load(path, opts)?;
     let notes = if is_dive_log(path) {
-        let d = select_dive(path, divelog::read(path)?, opts.dive)?;
+        let d = select_dive(path, divelog::read_each(path)?, opts.dive)?;
         dive_log_history(&d, opts.vapour_pa.unwrap_or(0.0), DIVE_LOG_WATCH_S)
             .map_err(|e| e.in_file(path))?
             .1
@@ -243,7 +246,7 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputErr
             .in_file(path)
             .field(*what));
         }
-        let dive = select_dive(path, divelog::read(path)?, opts.dive)?;
+        let dive = select_dive(path, divelog::read_each(path)?, opts.dive)?;
         let (mut h, _) =
             dive_log_history(&dive, 0.0, DIVE_LOG_WATCH_S).map_err(|e| e.in_file(path))?;
         if let Some(v) = vapour {

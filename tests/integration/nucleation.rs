@@ -680,7 +680,7 @@ fn consecutive_logged_dives_run_as_one_history_with_the_logged_surface_interval(
     use decophantom::profile::sequence::DiveSelection;
     use decophantom::profile::{divelog, select_dive};
     let path = super::common::data("divelogs/repetitive-logged.xml");
-    let pick = |s| select_dive(&path, divelog::read(&path).unwrap(), Some(s));
+    let pick = |s| select_dive(&path, divelog::read_each(&path).unwrap(), Some(s));
     let d1 = pick(DiveSelection::One(1)).unwrap();
     let d2 = pick(DiveSelection::One(2)).unwrap();
     let both = pick(DiveSelection::Range(1, 2)).unwrap();

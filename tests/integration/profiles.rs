@@ -1080,3 +1080,41 @@ fn dive_logs_without_their_descent_or_with_impossible_rates_are_refused() {
         assert_eq!(ds[2].samples[0], (0.0, 2.68));
     }
 }
+
+/// One refused dive in a logbook keeps the others usable: a dive the reader refuses (here
+/// dive 2's glitch, 1200 m/min) is an error only where it is chosen (`--dive 2`, a range or
+/// `all` that holds it), and dive 1 of the same file runs as if dive 2 were sound.
+#[test]
+fn a_refused_dive_fails_only_where_it_is_chosen() {
+    use decophantom::profile::divelog;
+    use decophantom::profile::select_dive;
+    use decophantom::profile::sequence::DiveSelection;
+    let p = Path::new("book.ssrf");
+    let text = "<divelog program='subsurface' version='3'>\n<dives>\n<dive number='1'><divecomputer>\n<sample time='0:00 min' depth='0 m' /><sample time='2:00 min' depth='20 m' /><sample time='20:00 min' depth='0 m' />\n</divecomputer></dive>\n<dive number='2'><divecomputer>\n<sample time='0:00 min' depth='0 m' />\n<sample time='2:00 min' depth='20 m' />\n<sample time='10:00 min' depth='20 m' />\n<sample time='10:01 min' depth='0 m' />\n<sample time='24:00 min' depth='0 m' />\n</divecomputer></dive>\n</dives>\n</divelog>\n";
+    let each = || divelog::parse_each(text, p).unwrap();
+    let dives = each();
+    assert_eq!(dives.len(), 2);
+    assert!(dives[0].is_ok());
+    let e = dives[1].as_ref().unwrap_err();
+    assert!(
+        e.message.starts_with("dive 2: ") && e.message.contains("1200 m/min"),
+        "{e}"
+    );
+    // the whole file read at once is refused, as before
+    assert_eq!(divelog::parse(text, p).unwrap_err().line, Some(10));
+    // dive 1 chosen: the same samples as read from a log without dive 2
+    let one = select_dive(p, each(), Some(DiveSelection::One(1))).unwrap();
+    assert_eq!(one.samples, vec![(0.0, 0.0), (120.0, 20.0), (1200.0, 0.0)]);
+    for sel in [
+        DiveSelection::One(2),
+        DiveSelection::Range(1, 2),
+        DiveSelection::All,
+    ] {
+        let e = select_dive(p, each(), Some(sel)).unwrap_err();
+        assert_eq!(
+            (e.line, e.field.as_deref()),
+            (Some(10), Some("sample.depth")),
+            "{sel:?}: {e}"
+        );
+    }
+}
