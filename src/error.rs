@@ -445,12 +445,42 @@ pub fn num(v: f64) -> String {
     }
 }
 
+/// "`v` `unit` is outside the accepted range `lo` ..= `hi` `unit`" ([`num`]'s numbers; no unit,
+/// no space for it).
+pub fn outside_range(v: f64, lo: f64, hi: f64, unit: &str) -> String {
+    let u = if unit.is_empty() {
+        String::new()
+    } else {
+        format!(" {unit}")
+    };
+    format!(
+        "{}{u} is outside the accepted range {} ..= {}{u}",
+        num(v),
+        num(lo),
+        num(hi)
+    )
+}
+
 /// Result alias.
 pub type Result<T, E = Error> = std::result::Result<T, E>;
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The range message with and without a unit: one space between words either way (the
+    /// unit-less `nucleation.*` ranges printed "1e308  is outside …" before).
+    #[test]
+    fn range_messages_have_one_space_with_or_without_a_unit() {
+        assert_eq!(
+            outside_range(1e308, 1e-3, 1e6, ""),
+            "1e308 is outside the accepted range 0.001 ..= 1000000"
+        );
+        assert_eq!(
+            outside_range(-1.0, 1.0, 2e7, "Pa"),
+            "-1 Pa is outside the accepted range 1 ..= 2e7 Pa"
+        );
+    }
 
     /// Only regular files are read: a folder, a device that never ends (/dev/zero) and a pipe
     /// with no writer (which would block forever) are refused by name, before any read.

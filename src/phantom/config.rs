@@ -156,17 +156,7 @@ fn check_law_ranges(t: &toml::Table, prefix: &str) -> Result<(), (String, String
         let x = v.as_float().or_else(|| v.as_integer().map(|i| i as f64));
         match x {
             Some(x) if x.is_finite() && x >= lo && x <= hi => {}
-            Some(x) => {
-                return Err((
-                    key,
-                    format!(
-                        "{} {unit} is outside the accepted range {} ..= {} {unit}",
-                        num(x),
-                        num(lo),
-                        num(hi)
-                    ),
-                ))
-            }
+            Some(x) => return Err((key, crate::error::outside_range(x, lo, hi, unit))),
             None => return Err((key, format!("must be a number (got {v})"))),
         }
     }
@@ -263,15 +253,7 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
         if v.is_finite() && v >= lo && v <= hi {
             Ok(v)
         } else {
-            Err(err(
-                key,
-                format!(
-                    "{} {unit} is outside the accepted range {} ..= {} {unit}",
-                    num(v),
-                    num(lo),
-                    num(hi)
-                ),
-            ))
+            Err(err(key, crate::error::outside_range(v, lo, hi, unit)))
         }
     };
     let g = &raw.geometry;

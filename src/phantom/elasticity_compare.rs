@@ -61,12 +61,7 @@ pub fn compare(req: &ElasticityRequest) -> Result<Vec<ElasticityRow>, Error> {
             };
             return Err(option(
                 f,
-                format!(
-                    "{} {unit} is outside the accepted range {} ..= {} {unit}{note}",
-                    crate::error::num(v),
-                    crate::error::num(lo),
-                    crate::error::num(hi),
-                ),
+                format!("{}{note}", crate::error::outside_range(v, lo, hi, unit)),
             ));
         }
     }

@@ -34,7 +34,6 @@
 //! ```
 
 use super::{raw, NucleationError, NucleationModel, Nucleus};
-use crate::error::num;
 use crate::phantom::grid::Grid;
 use rand::distributions::Open01;
 use rand::{Rng, SeedableRng};
@@ -188,12 +187,7 @@ pub fn build(t: toml::Table) -> Result<Box<dyn NucleationModel>, NucleationError
         } else {
             Err(NucleationError::new(
                 key,
-                format!(
-                    "{} {unit} is outside the accepted range {} ..= {} {unit}",
-                    num(v),
-                    num(lo),
-                    num(hi)
-                ),
+                crate::error::outside_range(v, lo, hi, unit),
             ))
         }
     };
