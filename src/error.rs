@@ -205,6 +205,14 @@ pub fn toml_field_at(text: &str, offset: usize, message: &str) -> Option<String>
         pos += line.len();
     }
     let named = named_key(message).map(|k| vec![k.to_string()]);
+    // an unknown table (`[bogus]`, `[conventions.extra]`): the error is on its header, which
+    // already ends in the key serde names
+    let line_start = text[..offset].rfind('\n').map_or(0, |i| i + 1);
+    if toml_header(&text[line_start..line_end]).is_some()
+        && named.as_ref().and_then(|k| k.first()) == table.last()
+    {
+        return Some(table.join("."));
+    }
     let key = named.or_else(|| {
         let body = &text[body_start.min(offset)..offset];
         // the nearest `key =` before the value, skipping comments
@@ -237,24 +245,31 @@ fn named_key(message: &str) -> Option<&str> {
 /// span there ([`toml_field_at`]). Without a key (the value is not a table) the message is
 /// serde's alone.
 pub fn table_into<T: serde::de::DeserializeOwned>(table: toml::Value) -> Result<T, String> {
+    table_into_keyed(table).map_err(|(key, msg)| match key {
+        Some(k) => format!("{k}: {msg}"),
+        None => msg,
+    })
+}
+
+/// [`table_into`] with the key apart: (the key dotted within the table, if one can be told;
+/// the message, [`serde_message`]'s words).
+pub fn table_into_keyed<T: serde::de::DeserializeOwned>(
+    table: toml::Value,
+) -> Result<T, (Option<String>, String)> {
     let err = match T::deserialize(table.clone()) {
         Ok(v) => return Ok(v),
         Err(e) => e,
     };
-    let msg = without_type_names(err.message().trim());
-    if let Some(k) = named_key(&msg) {
-        return Err(format!("{k}: {msg}"));
+    if let Some(k) = named_key(err.message()) {
+        return Err((Some(k.to_string()), serde_message(err.message())));
     }
     // the same table as text: the same keys in the same order, hence the same first error
     let located = toml::to_string(&table).ok().and_then(|text| {
         let again = toml::from_str::<T>(&text).err()?;
         let key = toml_field_at(&text, again.span()?.start, again.message())?;
-        Some(format!(
-            "{key}: {}",
-            without_type_names(again.message().trim())
-        ))
+        Some((Some(key), serde_message(again.message())))
     });
-    Err(located.unwrap_or(msg))
+    Err(located.unwrap_or((None, serde_message(err.message()))))
 }
 
 /// The table path of a `[a.b]` or `[[a]]` header line, `None` for any other line.
@@ -282,50 +297,70 @@ fn toml_key_path(k: &str) -> Option<Vec<String>> {
 }
 
 /// 1-based line of the field `path` (dotted: `gases.o2.diffusivity`) in TOML text, for errors
-/// found after parsing: its `key =` line in its own table — in the `nth` table (0-based) of an
-/// array of tables such as `[[bubbles]]`, 0 for a plain table — else the line of the table
-/// `[path]` / `[[path]]` itself. Unlike [`line_of_key`], a key of the same name in another table
-/// (`[gases.n2] diffusivity` for `gases.o2.diffusivity`) or in a multi-line string is not it.
+/// found after parsing: the line of its key in its own table — in the `nth` table (0-based) of
+/// the first array of tables on the path, such as `[[bubbles]]` (0 for a plain table; a number
+/// in the path, `terms.1.shear_modulus`, indexes an array itself) — or of the table's header
+/// when the path names a table. Read with `toml_edit`'s spans, so a key of the same name in
+/// another table (`[gases.n2] diffusivity` for `gases.o2.diffusivity`), in a comment or in a
+/// string is never it. `None` when the text does not parse or the path is not in it.
 pub fn line_of_field(text: &str, path: &str, nth: usize) -> Option<usize> {
-    let want: Vec<&str> = path.split('.').collect();
-    let mut table: Vec<String> = Vec::new();
-    // how many times each table header has been seen: the array index of the current table
-    let mut seen: std::collections::HashMap<Vec<String>, usize> = Default::default();
-    let mut index = 0;
-    let mut table_line = None;
-    let mut in_string = false;
-    for (i, line) in text.lines().enumerate() {
-        let quotes = line.matches("\"\"\"").count() + line.matches("'''").count();
-        if in_string {
-            in_string = quotes % 2 == 0;
-            continue;
-        }
-        in_string = quotes % 2 == 1;
-        if let Some(t) = toml_header(line) {
-            let n = seen.entry(t.clone()).or_insert(0);
-            index = *n;
-            *n += 1;
-            table = t;
-            if table == want && index == nth && table_line.is_none() {
-                table_line = Some(i + 1);
+    use toml_edit::{Item, TableLike, Value};
+    let doc = toml_edit::ImDocument::parse(text).ok()?;
+    let mut table: &dyn TableLike = doc.as_table();
+    let mut nth = Some(nth);
+    let mut segs = path.split('.').peekable();
+    let mut at = None;
+    // an index segment (`.1.`) after an array, else the first array of tables' `nth`
+    let index = |segs: &mut std::iter::Peekable<std::str::Split<'_, char>>,
+                 nth: &mut Option<usize>| {
+        match segs.peek().and_then(|s| s.parse::<usize>().ok()) {
+            Some(k) => {
+                segs.next();
+                k
             }
-            continue;
+            None => nth.take().unwrap_or(0),
         }
-        if index != nth {
-            continue;
-        }
-        let lhs = line.split('#').next().unwrap_or("");
-        let Some((key, _)) = lhs.split_once('=') else {
-            continue;
+    };
+    while let Some(seg) = segs.next() {
+        let key_at = table.key(seg).and_then(|k| k.span()).map(|s| s.start);
+        let next: Option<&dyn TableLike> = match table.get(seg)? {
+            Item::ArrayOfTables(a) => {
+                let t = a.get(index(&mut segs, &mut nth))?;
+                at = t.span().map(|s| s.start).or(key_at);
+                Some(t)
+            }
+            Item::Table(t) => {
+                at = t.span().map(|s| s.start).or(key_at).or(at);
+                Some(t)
+            }
+            Item::Value(Value::InlineTable(t)) => {
+                at = key_at.or(at);
+                Some(t)
+            }
+            Item::Value(Value::Array(a)) if segs.peek().is_some() => {
+                let v = a.get(index(&mut segs, &mut None))?;
+                at = v.span().map(|s| s.start).or(key_at).or(at);
+                v.as_inline_table().map(|t| t as &dyn TableLike)
+            }
+            _ => {
+                at = key_at.or(at);
+                None
+            }
         };
-        let Some(key) = toml_key_path(key.trim()) else {
-            continue;
-        };
-        if table.iter().chain(&key).eq(want.iter().copied()) {
-            return Some(i + 1);
+        match next {
+            Some(t) => table = t,
+            None if segs.peek().is_some() => return None,
+            None => {}
         }
     }
-    table_line
+    let offset = at?.min(text.len());
+    Some(
+        text.as_bytes()[..offset]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count()
+            + 1,
+    )
 }
 
 /// 1-based line of the first occurrence of `key =` in TOML text, for errors found after parsing.
@@ -533,6 +568,18 @@ mod tests {
         let text = "[p]\npoints = [\n  [0, 0], # t = 0\n  [1, 2, 3],\n]\n";
         let off = text.find("[1, 2, 3]").unwrap();
         assert_eq!(toml_field_at(text, off, "x").as_deref(), Some("p.points"));
+        // an unknown table is named once (the session-31 review: `bogus.bogus`)
+        let text = "a = 1\n[bogus]\nb = 2\n[c.extra]\n";
+        let unknown = |needle: &str, k: &str| {
+            toml_field_at(
+                text,
+                text.find(needle).unwrap(),
+                &format!("unknown field `{k}`, expected `a`"),
+            )
+        };
+        assert_eq!(unknown("[bogus]", "bogus").as_deref(), Some("bogus"));
+        assert_eq!(unknown("[c.extra]", "extra").as_deref(), Some("c.extra"));
+        assert_eq!(unknown("b = 2", "b").as_deref(), Some("bogus.b"));
     }
 
     /// A key's line in its own table (the `nth` of an array of tables), not at a key of the
@@ -554,6 +601,34 @@ mod tests {
         // ensure_line: the field's own line, not the first key of that name
         let e = ensure_line(InputError::new("x").field("gases.o2.diffusivity"), text);
         assert_eq!(e.line, Some(7));
+        // triple quotes in a comment and in one-line strings (the session-31 review: a line
+        // scanner counting them lost its place and named n2's line for o2's key), an escaped
+        // quote in a multi-line string, CRLF line ends, an array of tables inside a table and
+        // a list indexed in the path
+        let text = r#"# strings may use """ quotes
+name = "it's '''"
+note = """a \""" b"""
+[gases.n2]
+diffusivity = 2
+[gases.o2]
+diffusivity = 3
+[[m.terms]]
+mu = 1
+[[m.terms]]
+mu = 2
+[g]
+size = [1,
+ 2]
+"#
+        .replace('\n', "\r\n");
+        let at = |path: &str, nth: usize| line_of_field(&text, path, nth);
+        assert_eq!(at("gases.o2.diffusivity", 0), Some(7));
+        assert_eq!(
+            (at("m.terms.1.mu", 0), at("m.terms.mu", 1)),
+            (Some(11), Some(11))
+        );
+        assert_eq!((at("g.size.1", 0), at("g.size", 0)), (Some(14), Some(13)));
+        assert_eq!(at("name.x", 0), None);
     }
 
     /// serde writes the float 1e308 in 309 digits; a reader sees it as written.

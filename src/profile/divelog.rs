@@ -702,6 +702,7 @@ fn normalise(
     };
     let rate_text = crate::algorithm::schedule::rate_text;
     let n = crate::error::num;
+    let mut prepended = false;
     match out.first() {
         None => {
             return Err(cx.err(
@@ -712,7 +713,8 @@ fn normalise(
         }
         Some(&(t, d, off)) if t > 0.0 => {
             let rate = d / (t / 60.0);
-            if rate > MAX_LOGGED_RATE_M_MIN * (1.0 + 1e-9) {
+            // within the start depth the first sample may come at any time, as at time 0
+            if d > FIRST_SAMPLE_DEPTH_M && rate > MAX_LOGGED_RATE_M_MIN * (1.0 + 1e-9) {
                 return Err(refuse(off, format!(
                     "the first sample is at {} m at {} s: reaching it from the surface takes {} m/min, faster than a diver moves (at most {MAX_LOGGED_RATE_M_MIN} m/min are accepted); the log misses the descent: add its samples or choose another dive",
                     n(d), n(t), rate_text(rate)
@@ -727,6 +729,7 @@ fn normalise(
                 format!("first sample at {t} s and {d} m; a surface point (0 s, 0 m) was prepended")
             });
             out.insert(0, (0.0, 0.0, off));
+            prepended = true;
         }
         Some(&(_, d, off)) if d > FIRST_SAMPLE_DEPTH_M => {
             return Err(refuse(off, format!(
@@ -745,7 +748,13 @@ fn normalise(
     let max_travel = crate::algorithm::conventions::MAX_TRAVEL_RATE_M_MIN;
     let mut fast = 0;
     let mut fastest: Option<(f64, usize)> = None;
-    for k in 1..out.len() {
+    // the prepended surface point to a first sample within the start depth is not a rate
+    let from = if prepended && out[1].1 <= FIRST_SAMPLE_DEPTH_M {
+        2
+    } else {
+        1
+    };
+    for k in from..out.len() {
         let ((t0, d0, _), (t1, d1, off)) = (out[k - 1], out[k]);
         let rate = (d1 - d0).abs() / ((t1 - t0) / 60.0);
         if rate > MAX_LOGGED_RATE_M_MIN * (1.0 + 1e-9) {

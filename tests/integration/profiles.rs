@@ -1046,6 +1046,11 @@ fn dive_logs_without_their_descent_or_with_impossible_rates_are_refused() {
         e.message.starts_with("dive 1: ") && e.message.contains("800 m/min"),
         "{e}"
     );
+    // a first waypoint within the 3 m start depth is read whenever it comes, as at time 0
+    // (2.5 m at 0.2 s is 750 m/min from the prepended surface point; the session-31 review)
+    let shallow = "<uddf><profiledata><repetitiongroup><dive><samples>\n<waypoint><depth>2.5</depth><divetime>0.2</divetime></waypoint>\n<waypoint><depth>20</depth><divetime>120</divetime></waypoint>\n<waypoint><depth>0</depth><divetime>1200</divetime></waypoint>\n</samples></dive></repetitiongroup></profiledata></uddf>";
+    let ds = divelog::parse(shallow, Path::new("u.uddf")).unwrap();
+    assert_eq!(ds[0].samples[..2], [(0.0, 0.0), (0.2, 2.5)]);
 
     // through the binary: exit 2, the file, line and field on stderr, nothing run
     let dir = crate::common::tempdir("divelog-rates");

@@ -120,26 +120,15 @@ pub fn build(name: &str, params: toml::Table) -> Result<Box<dyn NucleationModel>
 }
 
 /// Deserialize a model's parameter table into its raw struct (`deny_unknown_fields`); the
-/// error names the field: the table is read as TOML text, whose errors have a place
-/// ([`crate::error::toml_field_at`]: the key of a wrong type, `unknown field `x``, `missing
-/// field `x``), else the whole `nucleation` table.
+/// error names the field ([`crate::error::table_into_keyed`]: the key of a wrong type,
+/// `unknown field `x``, `missing field `x``), else the whole `nucleation` table.
 pub(crate) fn raw<T: serde::de::DeserializeOwned>(t: toml::Table) -> Result<T, NucleationError> {
-    let text = toml::to_string(&t).map_err(|e| NucleationError {
-        field: "nucleation".into(),
-        message: e.to_string(),
-    })?;
-    toml::from_str(&text).map_err(|e: toml::de::Error| {
-        let message = crate::error::serde_message(e.message());
-        // a missing field has no span: its name is in the message
-        let at = e.span().map_or(0, |s| s.start);
-        let key = crate::error::toml_field_at(&text, at, e.message());
-        match key {
-            Some(key) => NucleationError::new(&key, message),
-            None => NucleationError {
-                field: "nucleation".into(),
-                message,
-            },
-        }
+    crate::error::table_into_keyed(toml::Value::Table(t)).map_err(|(key, message)| match key {
+        Some(key) => NucleationError::new(&key, message),
+        None => NucleationError {
+            field: "nucleation".into(),
+            message,
+        },
     })
 }
 
