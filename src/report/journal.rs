@@ -192,9 +192,16 @@ impl Journal {
         &self.dir
     }
 
-    /// Remove the journal (its work is written).
+    /// Remove the journal (its work is written); renamed away first
+    /// ([`crate::report::output::discard_dir`]), so that a kill during the removal leaves no
+    /// journal folder without its journal, which the next run would refuse.
     pub fn finish(self) {
         drop(self.files);
-        let _ = std::fs::remove_dir_all(&self.dir);
+        let name = self
+            .dir
+            .file_name()
+            .map_or("out".into(), |n| n.to_string_lossy().into_owned());
+        let stem = name.strip_suffix(".partial").unwrap_or(&name);
+        crate::report::output::discard_dir(&self.dir, stem);
     }
 }

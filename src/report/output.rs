@@ -353,14 +353,20 @@ pub fn check_target(dir: &Path, inputs: &[&Path]) -> Result<(), Error> {
 /// and `..` resolved in the part of the path that exists; `None` when there is none.
 fn enclosing_output(dir: &Path) -> Option<PathBuf> {
     let abs = std::path::absolute(dir).ok()?;
-    let above = abs
-        .parent()?
-        .ancestors()
-        .find_map(|a| std::fs::canonicalize(a).ok())?;
+    let above = existing_ancestor(abs.parent()?)?;
     above
         .ancestors()
         .find(|a| a.join(MARKER).is_file())
         .map(Path::to_path_buf)
+}
+
+/// The nearest existing folder at or above `path`, with symlinks and `..` resolved (`None` for
+/// an empty path).
+pub(crate) fn existing_ancestor(path: &Path) -> Option<PathBuf> {
+    std::path::absolute(path)
+        .ok()?
+        .ancestors()
+        .find_map(|a| std::fs::canonicalize(a).ok())
 }
 
 /// Whether process `pid` is alive; `None` where it cannot be told (no `/proc`).
@@ -407,6 +413,24 @@ fn clean_debris(parent: &Path, name: &str) {
         } else {
             let _ = std::fs::remove_file(&path);
         }
+    }
+}
+
+/// Remove a folder this tool made and no longer needs (a journal once its work is written):
+/// first renamed beside it to `.<stem>.old-PID-N`, debris that [`check_target`] of output
+/// `stem` removes once this process is gone, so that a kill part-way through the removal
+/// leaves no half-emptied folder in the folder's place; then removed. Best effort.
+pub(crate) fn discard_dir(dir: &Path, stem: &str) {
+    let tag = format!(
+        "{}-{}",
+        std::process::id(),
+        COUNTER.fetch_add(1, Ordering::Relaxed)
+    );
+    let old = dir.with_file_name(format!(".{stem}.old-{tag}"));
+    if std::fs::rename(dir, &old).is_ok() {
+        remove_own_dir(&old);
+    } else {
+        remove_own_dir(dir);
     }
 }
 
@@ -758,6 +782,31 @@ mod tests {
             assert!(!inner.contains("--"), "{line}");
         }
         assert!(!written_unchanged("", "plan"));
+    }
+
+    /// A journal folder is discarded by a rename first: the folder is gone whole, and what a
+    /// kill during the removal would leave, `.out.old-PID-N` of a process that no longer runs,
+    /// is removed by the next `check_target` of `out` (the session-31 review: a half-removed
+    /// `out.partial/` without its journal blocked the next run).
+    #[test]
+    fn discarded_folders_leave_no_half_removed_folder() {
+        let root = std::env::temp_dir().join(format!("decophantom-discard-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&root);
+        let journal = root.join("out.partial");
+        std::fs::create_dir_all(journal.join("runs")).unwrap();
+        std::fs::write(journal.join("runs/1.csv"), "x").unwrap();
+        discard_dir(&journal, "out");
+        assert!(!journal.exists());
+        assert_eq!(std::fs::read_dir(&root).unwrap().count(), 0);
+        // the debris of a killed removal: pid u32::MAX runs no process
+        let debris = root.join(format!(".out.old-{}-0", u32::MAX));
+        std::fs::create_dir_all(debris.join("runs")).unwrap();
+        std::fs::write(debris.join("runs/1.csv"), "x").unwrap();
+        if pid_alive(u32::MAX) == Some(false) {
+            check_target(&root.join("out"), &[]).unwrap();
+            assert!(!debris.exists());
+        }
+        std::fs::remove_dir_all(&root).unwrap();
     }
 
     #[test]

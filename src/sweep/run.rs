@@ -622,8 +622,7 @@ pub fn outputs(res: &Results, shard: Shard, command: &str) -> Result<OutputSet, 
 /// would change an input; [`crate::report::output::check_target`] covers the output being an
 /// input or holding one. The nearest existing ancestor of `out` is resolved (symlinks, `..`).
 fn check_out_not_inside(out: &Path, inputs: &[PathBuf]) -> Result<(), Error> {
-    let abs = std::path::absolute(out).map_err(Error::io_at(out))?;
-    let Some(anc) = abs.ancestors().find_map(|a| std::fs::canonicalize(a).ok()) else {
+    let Some(anc) = crate::report::output::existing_ancestor(out) else {
         return Ok(());
     };
     for d in inputs {
