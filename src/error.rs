@@ -299,8 +299,8 @@ fn toml_key_path(k: &str) -> Option<Vec<String>> {
 /// 1-based line of the field `path` (dotted: `gases.o2.diffusivity`) in TOML text, for errors
 /// found after parsing: the line of its key in its own table — in the `nth` table (0-based) of
 /// the first array of tables on the path, such as `[[bubbles]]` (0 for a plain table; a number
-/// in the path, `terms.1.shear_modulus`, indexes an array itself) — or of the table's header
-/// when the path names a table. Read with `toml_edit`'s spans, so a key of the same name in
+/// in the path, `terms.1.shear_modulus` or `terms[1].shear_modulus`, indexes an array
+/// itself) — or of the table's header when the path names a table. Read with `toml_edit`'s spans, so a key of the same name in
 /// another table (`[gases.n2] diffusivity` for `gases.o2.diffusivity`), in a comment or in a
 /// string is never it. `None` when the text does not parse or the path is not in it.
 pub fn line_of_field(text: &str, path: &str, nth: usize) -> Option<usize> {
@@ -308,6 +308,8 @@ pub fn line_of_field(text: &str, path: &str, nth: usize) -> Option<usize> {
     let doc = toml_edit::ImDocument::parse(text).ok()?;
     let mut table: &dyn TableLike = doc.as_table();
     let mut nth = Some(nth);
+    // `terms[1]` as the messages write an index: `terms.1`
+    let path = path.replace('[', ".").replace(']', "");
     let mut segs = path.split('.').peekable();
     let mut at = None;
     // an index segment (`.1.`) after an array, else the first array of tables' `nth`
@@ -624,8 +626,12 @@ size = [1,
         let at = |path: &str, nth: usize| line_of_field(&text, path, nth);
         assert_eq!(at("gases.o2.diffusivity", 0), Some(7));
         assert_eq!(
-            (at("m.terms.1.mu", 0), at("m.terms.mu", 1)),
-            (Some(11), Some(11))
+            (
+                at("m.terms.1.mu", 0),
+                at("m.terms.mu", 1),
+                at("m.terms[1].mu", 0)
+            ),
+            (Some(11), Some(11), Some(11))
         );
         assert_eq!((at("g.size.1", 0), at("g.size", 0)), (Some(14), Some(13)));
         assert_eq!(at("name.x", 0), None);
