@@ -252,7 +252,7 @@ pub fn table_into<T: serde::de::DeserializeOwned>(table: toml::Value) -> Result<
 }
 
 /// [`table_into`] with the key apart: (the key dotted within the table, if one can be told;
-/// the message, [`serde_message`]'s words).
+/// the message, `serde_message`'s words).
 pub fn table_into_keyed<T: serde::de::DeserializeOwned>(
     table: toml::Value,
 ) -> Result<T, (Option<String>, String)> {

@@ -193,7 +193,7 @@ impl Journal {
     }
 
     /// Remove the journal (its work is written); renamed away first
-    /// ([`crate::report::output::discard_dir`]), so that a kill during the removal leaves no
+    /// (`report::output::discard_dir`), so that a kill during the removal leaves no
     /// journal folder without its journal, which the next run would refuse.
     pub fn finish(self) {
         drop(self.files);

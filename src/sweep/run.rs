@@ -43,7 +43,7 @@ pub struct Study {
 ///   of its own. The swept parameters are overwritten in every run, but their phantom values are
 ///   the base values, part of the design anyway.
 /// - The profile: the pressure history as read and validated, in the text a checkpoint
-///   identifies it by ([`crate::phantom::checkpoint::profile_text`]: breakpoint times, absolute
+///   identifies it by (`phantom::checkpoint::profile_text`: breakpoint times, absolute
 ///   pressures, the gas of each segment, water vapour, saturation, f64 in round-trip notation),
 ///   so the same history in other units or another file format is the same profile; its label
 ///   (the file's name) is left out, as no run reads it.
