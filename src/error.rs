@@ -251,6 +251,17 @@ pub fn table_into<T: serde::de::DeserializeOwned>(table: toml::Value) -> Result<
     })
 }
 
+/// A builder's message that starts with the key it is about, `key: message` ([`table_into`]):
+/// (the key, dotted within its table, with `[i]` indices; the message). `None` for a message
+/// that names no key (its start holds a space or other punctuation).
+pub fn split_keyed(msg: &str) -> Option<(&str, &str)> {
+    let (k, rest) = msg.split_once(": ")?;
+    let key_like = !k.is_empty()
+        && k.chars()
+            .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.' | '[' | ']'));
+    key_like.then_some((k, rest))
+}
+
 /// [`table_into`] with the key apart: (the key dotted within the table, if one can be told;
 /// the message, `serde_message`'s words).
 pub fn table_into_keyed<T: serde::de::DeserializeOwned>(

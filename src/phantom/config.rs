@@ -413,19 +413,23 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
             check_law_ranges(t, key).map_err(|(k, msg)| err(&k, msg))?;
         }
     }
-    let law_of = |t: &Option<toml::Table>, key: &str, default: &str| -> (String, toml::Table) {
+    let law_of = |t: &Option<toml::Table>, default: &str| -> (String, toml::Table) {
         let mut t = t.clone().unwrap_or_default();
         let name = t
             .remove("law")
             .and_then(|v| v.as_str().map(str::to_string))
             .unwrap_or_else(|| default.into());
-        let _ = key;
         (name, t)
     };
-    let (el_name, el_params) = law_of(&m.elasticity, "material.elasticity", "none");
+    let (el_name, el_params) = law_of(&m.elasticity, "none");
+    // a builder's "key: message" names the key under its table
+    let keyed = |table: &str, msg: String| match crate::error::split_keyed(&msg) {
+        Some((k, rest)) => err(&format!("{table}.{k}"), rest.to_string()),
+        None => err(table, msg),
+    };
     let elasticity = elasticity::build(&el_name, toml::Value::Table(el_params))
-        .map_err(|e| err("material.elasticity", e))?;
-    let (sf_name, mut sf_params) = law_of(&m.surface, "material.surface", "equal");
+        .map_err(|e| keyed("material.elasticity", e))?;
+    let (sf_name, mut sf_params) = law_of(&m.surface, "equal");
     let layer = match sf_params.remove("layer_thickness_m") {
         Some(v) => {
             let x = v
@@ -437,7 +441,7 @@ fn parse_phantom_unlined(text: &str, path: &Path) -> Result<LoadedPhantom, Input
         None => super::params::DEFAULT_SURFACE_LAYER,
     };
     let surface = surface::build(&sf_name, toml::Value::Table(sf_params))
-        .map_err(|e| err("material.surface", e))?;
+        .map_err(|e| keyed("material.surface", e))?;
     let mut gases = Vec::new();
     for (name, gp) in &raw.gases {
         let gas = Gas::parse(name).ok_or_else(|| {

@@ -152,7 +152,12 @@ fn parse_sum(v: toml::Value) -> Result<Box<dyn ElasticityLaw>, String> {
         if name == "sum" {
             return Err("a sum cannot contain a sum".into());
         }
-        out.push(build(&name, toml::Value::Table(tt)).map_err(|e| format!("terms[{i}]: {e}"))?);
+        out.push(build(&name, toml::Value::Table(tt)).map_err(
+            |e| match crate::error::split_keyed(&e) {
+                Some((k, rest)) => format!("terms[{i}].{k}: {rest}"),
+                None => format!("terms[{i}]: {e}"),
+            },
+        )?);
     }
     Ok(Box::new(Sum { terms: out }))
 }
@@ -162,9 +167,7 @@ type Build = fn(toml::Value) -> Result<Box<dyn ElasticityLaw>, String>;
 fn parse<T: for<'de> Deserialize<'de> + ElasticityLaw + 'static>(
     v: toml::Value,
 ) -> Result<Box<dyn ElasticityLaw>, String> {
-    T::deserialize(v)
-        .map(|x| Box::new(x) as Box<dyn ElasticityLaw>)
-        .map_err(|e| e.message().to_string())
+    crate::error::table_into::<T>(v).map(|x| Box::new(x) as Box<dyn ElasticityLaw>)
 }
 
 /// The registry: TOML name → constructor from the law's parameter table.
@@ -172,7 +175,7 @@ pub const REGISTRY: &[(&str, Build)] = &[
     ("none", |v| {
         match v.as_table().and_then(|t| t.keys().next()) {
             Some(k) => Err(format!(
-                "unknown field `{k}`: law \"none\" takes no parameters"
+                "{k}: unknown field `{k}`: law \"none\" takes no parameters"
             )),
             None => Ok(Box::new(NoElasticity)),
         }

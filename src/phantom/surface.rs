@@ -118,7 +118,7 @@ fn parse<T: for<'de> Deserialize<'de> + SurfacePermeability + 'static>(
         .and_then(|f| f.as_float().or(f.as_integer().map(|i| i as f64)));
     if let Some(k) = fold {
         if !(k > 0.0) {
-            return Err(format!("fold must be positive (got {k})"));
+            return Err(format!("fold: must be positive (got {k})"));
         }
     }
     let reference = v
@@ -126,12 +126,10 @@ fn parse<T: for<'de> Deserialize<'de> + SurfacePermeability + 'static>(
         .and_then(|f| f.as_float().or(f.as_integer().map(|i| i as f64)));
     if let Some(r) = reference {
         if !(r > 0.0) {
-            return Err(format!("reference_radius_m must be positive (got {r} m)"));
+            return Err(format!("reference_radius_m: must be positive (got {r} m)"));
         }
     }
-    T::deserialize(v)
-        .map(|x| Box::new(x) as Box<dyn SurfacePermeability>)
-        .map_err(|e| e.message().to_string())
+    crate::error::table_into::<T>(v).map(|x| Box::new(x) as Box<dyn SurfacePermeability>)
 }
 
 /// A law without parameters refuses any (a `fold` under `law = "equal"` would otherwise be
@@ -139,7 +137,7 @@ fn parse<T: for<'de> Deserialize<'de> + SurfacePermeability + 'static>(
 fn no_params(law: &str, v: &toml::Value) -> Result<(), String> {
     match v.as_table().and_then(|t| t.keys().next()) {
         Some(k) => Err(format!(
-            "unknown field `{k}`: law \"{law}\" takes no parameters (set law = \"fold\" or \"area\" to use a fold)"
+            "{k}: unknown field `{k}`: law \"{law}\" takes no parameters (set law = \"fold\" or \"area\" to use a fold)"
         )),
         None => Ok(()),
     }

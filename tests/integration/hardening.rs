@@ -1932,6 +1932,46 @@ fn every_phantom_field_is_named_at_its_own_line() {
     let e = parse_phantom(&text, Path::new("p.toml")).unwrap_err();
     assert_eq!(e.field.as_deref(), Some("population.count"), "{e}");
     assert!(e.message.contains("`1e308`"), "{e}");
+    // the laws' parameter tables: an unknown or missing key is named under its table (and a
+    // sum's term by its index) at its own line, or the table's header when it is missing
+    // (before: `material.elasticity` or `material.surface` at the table's header)
+    let hyper = "[material.elasticity]\nlaw = \"hyperelastic\"\n";
+    let term = "[[material.elasticity.terms]]\nlaw = \"hyperelastic\"\nshear_modulus = 40.0\n";
+    for (tables, field, at) in [
+        (
+            format!("{hyper}shear_modulus = 40.0\nbar = 1\n"),
+            "material.elasticity.bar",
+            "bar = 1",
+        ),
+        (
+            hyper.to_string(),
+            "material.elasticity.shear_modulus",
+            "[material.elasticity]",
+        ),
+        (
+            "[material.surface]\nlaw = \"equal\"\nfold = 30\n".to_string(),
+            "material.surface.fold",
+            "fold = 30",
+        ),
+        (
+            format!("[material.elasticity]\nlaw = \"sum\"\n{term}{term}bar = 1\n"),
+            "material.elasticity.terms[1].bar",
+            "bar = 1",
+        ),
+    ] {
+        let text = SWEEP_PHANTOM.replacen(
+            "surface_tension = 0.07\n",
+            &format!("surface_tension = 0.07\n{tables}"),
+            1,
+        );
+        let line = text.lines().position(|l| l == at).unwrap() + 1;
+        let e = parse_phantom(&text, Path::new("p.toml")).unwrap_err();
+        assert_eq!(
+            (e.field.as_deref(), e.line),
+            (Some(field), Some(line)),
+            "{tables}: {e}"
+        );
+    }
 }
 
 /// VPM skins no stronger than the gel's surface tension (γc ≤ γ, Yount 1979) were refused only
