@@ -1243,27 +1243,26 @@ fn wrong_type_variants(text: &str) -> Vec<(usize, String, String)> {
     out
 }
 
-/// A value of the wrong type anywhere in an algorithm file names the key's own line and its
-/// dotted field, for every key of every committed algorithm file (ZH-L16 and VPM-B): the
-/// `[params]` table is read by the algorithm's builder once `kind` is known, and before
-/// session 31 its type errors named the table (`gf.toml:10: field 'params': invalid type:
-/// string "30", expected f64` for `gf_low = "30"` on line 12 of zhl16c-gf30-85.toml; VPM-B:
-/// `field 'params.params'`). Through the binary for that reported case.
-#[test]
-fn algorithm_file_type_errors_name_the_key_and_its_line() {
-    use decophantom::algorithm::config::parse_algorithm;
-    let mut files = 0;
-    let mut cases = 0;
-    for entry in std::fs::read_dir(root().join("algorithms")).unwrap() {
+/// Every TOML file in `folder` with the `toml` extension: it parses with `parse`, and each of
+/// its [`wrong_type_variants`] is refused naming that file, the key's line and field. Returns
+/// (files, variants).
+fn assert_wrong_types_named<T>(
+    folder: &str,
+    parse: impl Fn(&str, &std::path::Path) -> Result<T, decophantom::error::InputError>,
+) -> (usize, usize) {
+    let (mut files, mut cases) = (0, 0);
+    for entry in std::fs::read_dir(root().join(folder)).unwrap() {
         let path = entry.unwrap().path();
         if path.extension().and_then(|e| e.to_str()) != Some("toml") {
             continue;
         }
         let text = std::fs::read_to_string(&path).unwrap();
-        assert!(parse_algorithm(&text, &path).is_ok(), "{}", path.display());
+        assert!(parse(&text, &path).is_ok(), "{}", path.display());
         files += 1;
         for (line, field, bad) in wrong_type_variants(&text) {
-            let e = parse_algorithm(&bad, &path).unwrap_err();
+            let Err(e) = parse(&bad, &path) else {
+                panic!("{}: line {line} accepted", path.display())
+            };
             assert_eq!(
                 (e.line, e.field.as_deref(), e.file.as_deref()),
                 (Some(line), Some(field.as_str()), Some(path.as_path())),
@@ -1273,6 +1272,21 @@ fn algorithm_file_type_errors_name_the_key_and_its_line() {
             cases += 1;
         }
     }
+    (files, cases)
+}
+
+/// A value of the wrong type anywhere in an algorithm file names the key's own line and its
+/// dotted field, for every key of every committed algorithm file (ZH-L16 and VPM-B): the
+/// `[params]` table is read by the algorithm's builder once `kind` is known, and before
+/// session 31 its type errors named the table (`gf.toml:10: field 'params': invalid type:
+/// string "30", expected f64` for `gf_low = "30"` on line 12 of zhl16c-gf30-85.toml; VPM-B:
+/// `field 'params.params'`). Through the binary for that reported case.
+#[test]
+fn algorithm_file_type_errors_name_the_key_and_its_line() {
+    let (files, cases) = assert_wrong_types_named(
+        "algorithms",
+        decophantom::algorithm::config::parse_algorithm,
+    );
     // 15 files; every one has kind, label, preset and two or three [params] keys
     assert_eq!(files, 15);
     assert!(cases >= 15 * 5, "{cases}");
@@ -1305,23 +1319,10 @@ fn algorithm_file_type_errors_name_the_key_and_its_line() {
 /// `criterion.kind` at the entry's `kind` line, and `[protocol]` type errors named no field.
 #[test]
 fn criteria_file_type_errors_name_the_key_and_its_line() {
-    use decophantom::risk::config::parse_criteria;
-    let mut cases = 0;
-    for entry in std::fs::read_dir(root().join("algorithms/criteria")).unwrap() {
-        let path = entry.unwrap().path();
-        let text = std::fs::read_to_string(&path).unwrap();
-        assert!(parse_criteria(&text, &path).is_ok(), "{}", path.display());
-        for (line, field, bad) in wrong_type_variants(&text) {
-            let e = parse_criteria(&bad, &path).unwrap_err();
-            assert_eq!(
-                (e.line, e.field.as_deref(), e.file.as_deref()),
-                (Some(line), Some(field.as_str()), Some(path.as_path())),
-                "{}: {e}",
-                path.display()
-            );
-            cases += 1;
-        }
-    }
+    let (_, cases) = assert_wrong_types_named(
+        "algorithms/criteria",
+        decophantom::risk::config::parse_criteria,
+    );
     // default.toml: description, 5 [protocol] keys, 6 criteria of 3–4 keys each
     assert!(cases >= 25, "{cases}");
 }
