@@ -18,6 +18,12 @@ use super::*;
 /// longer stay in the core's 2 MB L2).
 pub(super) const OUT_OF_PLACE_BYTES: usize = 12 << 20;
 
+/// Largest set of fields (bytes, all gases) whose extrapolated steps run side by side, each
+/// gas's whole step in a copy of its own ([`Simulation::extrapolate_side_by_side`]): 8·G B per
+/// cell while the steps last, against 8 B gas by gas. 256 MiB: 16.7 M cells with two gases;
+/// larger grids go gas by gas and keep one copy.
+pub(super) const SIDE_BY_SIDE_EXTRA_BYTES: usize = 256 << 20;
+
 impl Simulation<'_> {
     /// Phase 4 with its error estimates: the gel's diffusion over [t, t + dt] ([`Self::diffuse`],
     /// counted in the log as explicit or implicit) and the steps the field's and the loading's
@@ -104,7 +110,16 @@ impl Simulation<'_> {
             // the descent's extrapolation is over: give its field-sized buffer back
             self.extra = Vec::new();
         }
-        // (the field's estimate and the extrapolated descent step gas by gas, below)
+        if !estimate && implicit && extrapolate && self.extrapolate_side_by_side() {
+            let mut flow = [0.0; Gas::ALL.len()];
+            self.extrapolated_steps(profile, 0..ng, (t, dt), &mut flow[..ng]);
+            for (g, x) in flow[..ng].iter().enumerate() {
+                self.inflow += x * h3;
+                self.step_flow[g] = x * h3;
+            }
+            return (implicit, 0.0);
+        }
+        // (the field's estimate and the extrapolated steps of one thread, gas by gas, below)
         if !(estimate || implicit && extrapolate) {
             // every gas at once, each the same bits as stepped alone: the explicit step in one
             // parallel pass, the implicit steps side by side; the open faces at their value at
@@ -173,7 +188,9 @@ impl Simulation<'_> {
                 self.scratch.copy_from_slice(&self.fields[g]);
             }
             let inflow = if implicit && extrapolate {
-                self.extrapolated_step(profile, g, t, dt)
+                let mut flow = [0.0];
+                self.extrapolated_steps(profile, g..g + 1, (t, dt), &mut flow);
+                flow[0]
             } else {
                 // the open faces at their end value (both schemes take their term implicitly)
                 let cb = self.ostwald[g] * profile.inspired_partial_pressure_on(gas, seg, t + dt)
@@ -217,6 +234,16 @@ impl Simulation<'_> {
             self.last_dt = dt;
         }
         (implicit, err)
+    }
+
+    /// Whether the extrapolated steps run every gas side by side
+    /// ([`Self::extrapolated_steps`]): with more than one gas and more than one thread, and
+    /// their whole steps' copies (a store per gas) within [`SIDE_BY_SIDE_EXTRA_BYTES`]; else
+    /// gas by gas, with one copy.
+    pub(super) fn extrapolate_side_by_side(&self) -> bool {
+        self.fields.len() > 1
+            && rayon::current_num_threads() > 1
+            && self.fields_bytes() <= SIDE_BY_SIDE_EXTRA_BYTES
     }
 
     /// The bytes of one set of fields (every gas).
@@ -274,62 +301,96 @@ impl Simulation<'_> {
         }
     }
 
-    /// Gas `g`'s implicit step over [t, t + dt] Richardson-extrapolated, 2·u_½ − u_1 from two
-    /// half steps and one whole (second order; conservative, its weights summing to 1), or the
-    /// two half steps where the extrapolation would make a cell negative. Returns the inflow
-    /// through the open faces per cell volume, as [`diffusion::ImplicitSolver::step`].
-    pub(super) fn extrapolated_step(
+    /// The implicit steps of gases `gases` over [t, t + dt], each Richardson-extrapolated,
+    /// 2·u_½ − u_1 from two half steps and one whole (second order; conservative, its weights
+    /// summing to 1), or the two half steps where the extrapolation would make one of its
+    /// cells negative (gas by gas). The gases are stepped side by side
+    /// ([`diffusion::ImplicitSolver::steps`]: each the same bits as stepped alone), the whole
+    /// steps into copies of their stores (`extra`, a store per gas, kept while the steps last).
+    /// Writes each gas's inflow through the open faces per cell volume into `flow[g]`, as
+    /// [`diffusion::ImplicitSolver::step`] returns it.
+    pub(super) fn extrapolated_steps(
         &mut self,
         profile: &PressureHistory,
-        g: usize,
-        t: f64,
-        dt: f64,
-    ) -> f64 {
-        let (gas, d) = (self.gases[g], self.diffusivity[g]);
+        gases: std::ops::Range<usize>,
+        (t, dt): (f64, f64),
+        flow: &mut [f64],
+    ) {
         let seg = profile.step_segment(t, t + dt);
-        let cb =
-            |s: f64| self.ostwald[g] * profile.inspired_partial_pressure_on(gas, seg, s) / self.rt;
-        let (cb_half, cb_end) = (cb(t + 0.5 * dt), cb(t + dt));
+        let n = gases.len();
+        let mut half_dc = [(0.0, 0.0); Gas::ALL.len()];
+        let mut end_dc = [(0.0, 0.0); Gas::ALL.len()];
+        for (m, g) in gases.clone().enumerate() {
+            let cb = |s: f64| {
+                self.ostwald[g] * profile.inspired_partial_pressure_on(self.gases[g], seg, s)
+                    / self.rt
+            };
+            half_dc[m] = (self.diffusivity[g], cb(t + 0.5 * dt));
+            end_dc[m] = (self.diffusivity[g], cb(t + dt));
+        }
         use rayon::prelude::*;
         // the grid-wide passes in parallel chunks (element by element: the same bits)
         const CHUNK: usize = 1 << 14;
-        // the whole step in a copy of the field's whole store (the same layout, so that the
+        // the whole steps in copies of the fields' whole stores (the same layout, so that the
         // stores can be swapped below)
         let mut whole = std::mem::take(&mut self.extra);
-        whole.resize(self.fields.store(g).len(), 0.0);
-        whole
-            .par_chunks_mut(CHUNK)
-            .zip(self.fields.store(g).par_chunks(CHUNK))
-            .for_each(|(w, f)| w.copy_from_slice(f));
+        whole.resize_with(n, Vec::new);
+        for (w, g) in whole.iter_mut().zip(gases.clone()) {
+            w.resize(self.fields.store(g).len(), 0.0);
+            w.par_chunks_mut(CHUNK)
+                .zip(self.fields.store(g).par_chunks(CHUNK))
+                .for_each(|(w, f)| w.copy_from_slice(f));
+        }
         let (a, b) = self.fields.view_range();
-        let f_whole = self
-            .implicit
-            .step(&self.grid, &mut whole[a..b], d, dt, cb_end);
-        let half = &mut self.fields[g];
-        let f_half = self.implicit.step(&self.grid, half, d, 0.5 * dt, cb_half)
-            + self.implicit.step(&self.grid, half, d, 0.5 * dt, cb_end);
-        // the extrapolation into the whole step's buffer, in one pass with the check for a
-        // negative cell; kept (the stores swapped) only if there is none
-        let negative = whole[a..b]
-            .par_chunks_mut(CHUNK)
-            .zip(half.par_chunks(CHUNK))
-            .map(|(w, h)| {
-                let mut negative = false;
-                for (w, h) in w.iter_mut().zip(h) {
-                    *w = 2.0 * h - *w;
-                    negative |= *w < 0.0;
-                }
-                negative
-            })
-            .reduce(|| false, |x, y| x || y);
-        let flow = if negative {
-            f_half
-        } else {
-            self.fields.swap_store(g, &mut whole);
-            2.0 * f_half - f_whole
-        };
+        let mut f_whole = [0.0; Gas::ALL.len()];
+        {
+            let mut views: Vec<&mut [f64]> = whole.iter_mut().map(|w| &mut w[a..b]).collect();
+            self.implicit
+                .steps(&self.grid, &mut views, &end_dc[..n], dt, &mut f_whole[..n]);
+        }
+        let (mut f_first, mut f_second) = ([0.0; Gas::ALL.len()], [0.0; Gas::ALL.len()]);
+        {
+            let mut halves: Vec<&mut [f64]> =
+                self.fields.slices_mut().drain(gases.clone()).collect();
+            self.implicit.steps(
+                &self.grid,
+                &mut halves,
+                &half_dc[..n],
+                0.5 * dt,
+                &mut f_first[..n],
+            );
+            self.implicit.steps(
+                &self.grid,
+                &mut halves,
+                &end_dc[..n],
+                0.5 * dt,
+                &mut f_second[..n],
+            );
+        }
+        for (m, g) in gases.enumerate() {
+            let f_half = f_first[m] + f_second[m];
+            // the extrapolation into the whole step's buffer, in one pass with the check for
+            // a negative cell; kept (the stores swapped) only if there is none
+            let negative = whole[m][a..b]
+                .par_chunks_mut(CHUNK)
+                .zip(self.fields[g].par_chunks(CHUNK))
+                .map(|(w, h)| {
+                    let mut negative = false;
+                    for (w, h) in w.iter_mut().zip(h) {
+                        *w = 2.0 * h - *w;
+                        negative |= *w < 0.0;
+                    }
+                    negative
+                })
+                .reduce(|| false, |x, y| x || y);
+            flow[m] = if negative {
+                f_half
+            } else {
+                self.fields.swap_store(g, &mut whole[m]);
+                2.0 * f_half - f_whole[m]
+            };
+        }
         self.extra = whole;
-        flow
     }
 
     /// Zero the field-error vector (in `scratch`) in every active bubble's near field: the
@@ -524,6 +585,67 @@ mod extrapolated_step_tests {
             "{total1} {total0} {flow}"
         );
         (sim.fields[0].to_vec(), flow, half, whole, total0)
+    }
+
+    /// Two gases (N2 and O2 of different D) on a rising pressure, one extrapolated step from
+    /// a smooth start: side by side on two threads it gives the bits of the same step gas by
+    /// gas on one thread (fields, inflow and each gas's flow), the negative-cell fallback
+    /// included (a spike in the O2 field, as in the test below).
+    #[test]
+    fn side_by_side_extrapolated_steps_are_the_gas_by_gas_bits() {
+        let h = 1e-4;
+        let mut params = PhantomParams::box_phantom([9.0 * h; 3], h);
+        params.gases = vec![
+            GasProperties {
+                gas: Gas::N2,
+                diffusivity: 1e-9,
+                ostwald: 0.014,
+            },
+            GasProperties {
+                gas: Gas::O2,
+                diffusivity: 1.7e-9,
+                ostwald: 0.027,
+            },
+        ];
+        params.open_faces = params.shape.faces().to_vec();
+        let air = GasMix { o2: 0.21, he: 0.0 };
+        let profile =
+            PressureHistory::with_gas("ramp", vec![0.0, 100.0], vec![1e5, 3e5], air, 0.0).unwrap();
+        let centre = 4 + 9 * (4 + 9 * 4);
+        let run = |threads: usize, spike: bool| {
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(threads)
+                .build()
+                .unwrap();
+            pool.install(|| {
+                let mut sim = Simulation::new(&params, &profile).unwrap();
+                for g in 0..2 {
+                    for (i, c) in sim.fields[g].iter_mut().enumerate() {
+                        *c = 0.5 + 0.01 * ((i + 3 * g) % 9) as f64;
+                    }
+                }
+                if spike {
+                    sim.fields[1][centre] = 5e4;
+                }
+                let side_by_side = sim.extrapolate_side_by_side();
+                let (implicit, _) = sim.diffuse(&profile, 0.0, 50.0, f64::INFINITY, true);
+                assert!(implicit);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                (
+                    side_by_side,
+                    [bits(&sim.fields[0]), bits(&sim.fields[1])],
+                    sim.inflow.to_bits(),
+                    sim.step_flow.map(f64::to_bits),
+                )
+            })
+        };
+        for spike in [false, true] {
+            let (two, fields2, inflow2, flow2) = run(2, spike);
+            let (one, fields1, inflow1, flow1) = run(1, spike);
+            assert!(two && !one);
+            assert!(fields2 == fields1, "spike {spike}");
+            assert_eq!((inflow2, flow2), (inflow1, flow1), "spike {spike}");
+        }
     }
 
     /// A smooth start: the step is 2·(two half steps) − (one whole step), cell by cell.

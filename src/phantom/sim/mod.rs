@@ -220,8 +220,9 @@ pub struct Simulation<'a> {
     /// Per gas, its flow into the gel through the open faces in the last step, mol
     /// ([`Self::diffuse`]; the loading estimate reads it, [`Self::loading_step`]).
     step_flow: [f64; Gas::ALL.len()],
-    /// A field-sized buffer for the extrapolated step ([`Self::diffuse`]; empty until used).
-    extra: Vec<f64>,
+    /// The extrapolated steps' whole-step copies, one store per gas stepped at once
+    /// ([`Self::extrapolated_steps`]; empty until used and after the extrapolated steps).
+    extra: Vec<Vec<f64>>,
     /// The cells (an index box, lowest and highest corner) that [`Self::take_from_grid`] has
     /// changed since it was last reset, or `None`: the corrector uses it to know which
     /// bubbles' fluxes, evaluated before the corrections, are still current.
