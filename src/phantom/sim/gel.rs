@@ -544,22 +544,34 @@ mod extrapolated_step_tests {
     use crate::gas::GasMix;
     use crate::phantom::params::GasProperties;
 
-    /// An open 9³ cube of pure N2 on a rising pressure, its field set by `init`, stepped once by
+    /// An open 9³ cube (h = 100 µm) of `gases`, each (gas, D, L), breathing `mix` on a pressure
+    /// rising from 1 to 3 bar over 100 s.
+    fn open_cube_on_a_ramp(
+        gases: &[(Gas, f64, f64)],
+        mix: GasMix,
+    ) -> (PhantomParams, PressureHistory) {
+        let h = 1e-4;
+        let mut params = PhantomParams::box_phantom([9.0 * h; 3], h);
+        params.gases = gases
+            .iter()
+            .map(|&(gas, diffusivity, ostwald)| GasProperties {
+                gas,
+                diffusivity,
+                ostwald,
+            })
+            .collect();
+        params.open_faces = params.shape.faces().to_vec();
+        let profile =
+            PressureHistory::with_gas("ramp", vec![0.0, 100.0], vec![1e5, 3e5], mix, 0.0).unwrap();
+        (params, profile)
+    }
+
+    /// The open cube of pure N2 on its ramp, its field set by `init`, stepped once by
     /// [`Simulation::diffuse`] with the extrapolation, and the same start stepped here with the
     /// solver directly: (the simulation's field, inflow; two half steps; one whole step).
     fn step(init: impl Fn(usize) -> f64, dt: f64) -> (Vec<f64>, f64, Vec<f64>, Vec<f64>, f64) {
-        let h = 1e-4;
-        let mut params = PhantomParams::box_phantom([9.0 * h; 3], h);
-        params.gases = vec![GasProperties {
-            gas: Gas::N2,
-            diffusivity: 1e-9,
-            ostwald: 0.014,
-        }];
-        params.open_faces = params.shape.faces().to_vec();
         let pure_n2 = GasMix { o2: 0.0, he: 0.0 };
-        let profile =
-            PressureHistory::with_gas("ramp", vec![0.0, 100.0], vec![1e5, 3e5], pure_n2, 0.0)
-                .unwrap();
+        let (params, profile) = open_cube_on_a_ramp(&[(Gas::N2, 1e-9, 0.014)], pure_n2);
         let mut sim = Simulation::new(&params, &profile).unwrap();
         for (i, c) in sim.fields[0].iter_mut().enumerate() {
             *c = init(i);
@@ -593,24 +605,9 @@ mod extrapolated_step_tests {
     /// included (a spike in the O2 field, as in the test below).
     #[test]
     fn side_by_side_extrapolated_steps_are_the_gas_by_gas_bits() {
-        let h = 1e-4;
-        let mut params = PhantomParams::box_phantom([9.0 * h; 3], h);
-        params.gases = vec![
-            GasProperties {
-                gas: Gas::N2,
-                diffusivity: 1e-9,
-                ostwald: 0.014,
-            },
-            GasProperties {
-                gas: Gas::O2,
-                diffusivity: 1.7e-9,
-                ostwald: 0.027,
-            },
-        ];
-        params.open_faces = params.shape.faces().to_vec();
         let air = GasMix { o2: 0.21, he: 0.0 };
-        let profile =
-            PressureHistory::with_gas("ramp", vec![0.0, 100.0], vec![1e5, 3e5], air, 0.0).unwrap();
+        let (params, profile) =
+            open_cube_on_a_ramp(&[(Gas::N2, 1e-9, 0.014), (Gas::O2, 1.7e-9, 0.027)], air);
         let centre = 4 + 9 * (4 + 9 * 4);
         let run = |threads: usize, spike: bool| {
             let pool = rayon::ThreadPoolBuilder::new()
