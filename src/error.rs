@@ -116,11 +116,8 @@ pub fn toml_error(path: &Path, text: &str, err: &toml::de::Error) -> InputError 
         .span()
         .map(|s| text[..s.start.min(text.len())].matches('\n').count() + 1);
     let msg = serde_message(err.message());
-    // serde names the offending key as "unknown field `x`"; surface it as the field.
-    let field = msg
-        .strip_prefix("unknown field `")
-        .and_then(|r| r.split_once('`'))
-        .map(|(f, _)| f.to_string());
+    // serde names the offending key of an unknown or missing field; surface it as the field
+    let field = named_key(&msg).map(str::to_string);
     let mut e = InputError::new(msg).in_file(path);
     if let Some(l) = line {
         e = e.at_line(l);
@@ -702,5 +699,37 @@ size = [1,
             without_type_names("expected struct A_1, or expected struct B."),
             "expected a table, or expected a table."
         );
+    }
+
+    /// serde names the key of an unknown field and of a missing one; both become the error's
+    /// field, at the line of the table that lacks it or holds it.
+    #[test]
+    fn unknown_and_missing_fields_are_named() {
+        #[derive(Debug, serde::Deserialize)]
+        #[serde(deny_unknown_fields)]
+        #[allow(dead_code)]
+        struct RawEntry {
+            name: String,
+            phantom: String,
+        }
+        #[derive(Debug, serde::Deserialize)]
+        #[allow(dead_code)]
+        struct RawList {
+            entry: Vec<RawEntry>,
+        }
+        for (text, want) in [
+            (
+                "[[entry]]\nname = \"a\"\nphantom = \"p\"\n\n[[entry]]\nname = \"b\"\n",
+                "f.toml:5: field 'phantom': missing field `phantom`",
+            ),
+            (
+                "[[entry]]\nname = \"a\"\nphantom = \"p\"\nphantm = \"q\"\n",
+                "f.toml:4: field 'phantm': unknown field `phantm`, expected `name` or `phantom`",
+            ),
+        ] {
+            let err = toml::from_str::<RawList>(text).unwrap_err();
+            let e = toml_error(Path::new("f.toml"), text, &err).to_string();
+            assert_eq!(e, want);
+        }
     }
 }
