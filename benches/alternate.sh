@@ -7,7 +7,8 @@
 #   e.g. git worktree add /tmp/base REV && (cd /tmp/base && cargo build --release)
 #        benches/alternate.sh 3 /tmp/base/target/release/decophantom target/release/decophantom
 #
-# For each run (the Fig. 5 dive, the oscillation, the small cube as fits run it) and binary,
+# For each run (the Fig. 5 dive, the oscillation, the small cube as fits run it, the demo's GF 30/85
+# dive with its stops on two threads) and binary,
 # prints the wall times of the rounds and, from each run's timing.toml, the time loop's phases
 # of the last round (gel = diffusion; events; frames). Run from the repository's top folder.
 set -euo pipefail
@@ -26,6 +27,7 @@ runs=(
   "fig5|--profile profiles/fig5-dive.toml --phantom profiles/phantoms/hydrogel.toml"
   "oscillation|--profile profiles/oscillation-30s.toml --phantom profiles/phantoms/oscillation.toml"
   "small-cube|--profile benches/small-cube/profile.toml --phantom $work/small.toml"
+  "gf30-85-dive|--profile benches/gf30-85-dive/schedule.toml --phantom profiles/phantoms/hydrogel-dive.toml"
 )
 field() { sed -n "s/^$1 = //p" "$2"; }
 for run in "${runs[@]}"; do
