@@ -19,7 +19,7 @@
 //! free = ["gases.n2.diffusivity"]   # baseline parameters fitted in every model (default none)
 //! ```
 
-use crate::error::{line_of_key, toml_error, Error, InputError};
+use crate::error::{line_of_key, toml_error, toml_error_with_path, Error, InputError};
 use crate::phantom::config::parse_phantom;
 use crate::phantom::params::{BubblePlacement, PhantomParams};
 use crate::profile::{legacy, LoadOptions, PressureHistory};
@@ -609,7 +609,8 @@ pub fn bubble_count(p: &PhantomParams) -> usize {
 /// Read `experiments.toml` and everything it names.
 pub fn read_experiments(path: &Path) -> Result<Experiments, Error> {
     let text = crate::error::read_text(path, "the experiments file")?;
-    let raw: RawExperiments = toml::from_str(&text).map_err(|e| toml_error(path, &text, &e))?;
+    let raw: RawExperiments =
+        toml::from_str(&text).map_err(|e| toml_error_with_path(path, &text, &e))?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let err = |key: &str, m: String| {
         let mut e = InputError::new(m).in_file(path).field(key.to_string());
