@@ -10,7 +10,9 @@
 # For each run (the Fig. 5 dive, the oscillation, the small cube as fits run it, the demo's GF 30/85
 # dive with its stops on two threads) and binary,
 # prints the wall times of the rounds and, from each run's timing.toml, the time loop's phases
-# of the last round (gel = diffusion; events; frames). Run from the repository's top folder.
+# of the last round (gel = diffusion; events; frames), and the share of the CPU time the host
+# took from this machine while that binary ran (steal, from /proc/stat, over all its rounds; a
+# slow hour with no steal is not the host's). Run from the repository's top folder.
 set -euo pipefail
 rounds=${1:?usage: $0 ROUNDS BINARY...}
 shift
@@ -30,17 +32,29 @@ runs=(
   "gf30-85-dive|--profile benches/gf30-85-dive/schedule.toml --phantom profiles/phantoms/hydrogel-dive.toml"
 )
 field() { sed -n "s/^$1 = //p" "$2"; }
+# "steal total" ticks of all CPUs since boot (0 0 where /proc/stat is missing)
+ticks() {
+  if [ -r /proc/stat ]; then
+    awk '/^cpu /{ print $9, $2+$3+$4+$5+$6+$7+$8+$9 }' /proc/stat
+  else
+    echo 0 0
+  fi
+}
 for run in "${runs[@]}"; do
   name=${run%%|*}
   args=${run#*|}
-  declare -A walls=()
+  declare -A walls=() steal=() total=()
   for _ in $(seq "$rounds"); do
     for b in "$@"; do
       out="$work/$name-$(echo "$b" | md5sum | cut -c1-8)"
+      read -r s0 t0 < <(ticks)
       # shellcheck disable=SC2086
       "$b" simulate $args --out "$out" --quiet --force > /dev/null 2>&1 ||
         "$b" simulate ${args//profiles\/phantoms\/hydrogel.toml/$work/hydrogel-pre26.toml} \
           --out "$out" --quiet --force > /dev/null
+      read -r s1 t1 < <(ticks)
+      steal[$b]=$(( ${steal[$b]:-0} + s1 - s0 ))
+      total[$b]=$(( ${total[$b]:-0} + t1 - t0 ))
       walls[$b]="${walls[$b]:-} $(printf '%.3f' "$(field wall_seconds "$out/timing.toml")")"
     done
   done
@@ -50,7 +64,11 @@ for run in "${runs[@]}"; do
     if grep -q '^gel_s' "$t"; then
       phases=" | gel $(field gel_s "$t") events $(field events_s "$t") frames $(field frames_s "$t")"
     fi
-    echo "$name $b: wall${walls[$b]} s$phases"
+    stolen=""
+    if [ "${total[$b]}" -gt 0 ]; then
+      stolen=" | steal $(awk -v s="${steal[$b]}" -v t="${total[$b]}" 'BEGIN { printf "%.1f", 100 * s / t }') %"
+    fi
+    echo "$name $b: wall${walls[$b]} s$phases$stolen"
   done
-  unset walls
+  unset walls steal total
 done
