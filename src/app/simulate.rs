@@ -16,7 +16,8 @@ use std::sync::atomic::AtomicBool;
 /// What `simulate` needs.
 #[derive(Debug, Clone)]
 pub struct SimulateRequest {
-    /// Pressure profile (TOML, legacy two-column text with units, or a dive log).
+    /// Pressure profile (TOML, legacy two-column text with units, a dive log, or a `plan --out`
+    /// schedule as TOML or waypoint CSV: [`load_profile_or_schedule`]).
     pub profile: PathBuf,
     /// Units etc. for legacy files.
     pub load: LoadOptions,

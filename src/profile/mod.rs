@@ -256,23 +256,11 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputErr
         return Ok(h);
     }
     if ext == "toml" {
-        let given = [
-            (
-                opts.time_unit.is_some() || opts.pressure_unit.is_some(),
-                "--units",
-            ),
-            (opts.surface_pa.is_some(), "surface pressure"),
-            (opts.gas.is_some(), "gas"),
-            (opts.vapour_pa.is_some(), "water vapour"),
-            (opts.dive.is_some(), "dive"),
-        ];
-        if let Some((_, what)) = given.iter().find(|(g, _)| *g) {
-            return Err(InputError::new(format!(
-                "a TOML profile states its own units, surface pressure, gas and water vapour; leave out the {what} option (or edit the file)"
-            ))
-            .in_file(path)
-            .field(*what));
-        }
+        refuse_load_options(
+            path,
+            opts,
+            "a TOML profile states its own units, surface pressure, gas and water vapour",
+        )?;
         return toml::read(path).map(|p| p.history);
     }
     let (Some(time), Some(pressure)) = (opts.time_unit, opts.pressure_unit) else {
@@ -301,6 +289,34 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputErr
         h.vapour_pa = v;
     }
     Ok(h)
+}
+
+/// Refuse every option of `opts` for a file that states what they set itself (`states`, the
+/// first half of the message: "a TOML profile states its own units, …"), naming the first
+/// option given; the file's own values would otherwise silently win over the command line.
+pub fn refuse_load_options(
+    path: &Path,
+    opts: &LoadOptions,
+    states: &str,
+) -> Result<(), InputError> {
+    let given = [
+        (
+            opts.time_unit.is_some() || opts.pressure_unit.is_some(),
+            "--units",
+        ),
+        (opts.surface_pa.is_some(), "surface pressure"),
+        (opts.gas.is_some(), "gas"),
+        (opts.vapour_pa.is_some(), "water vapour"),
+        (opts.dive.is_some(), "dive"),
+    ];
+    match given.iter().find(|(g, _)| *g) {
+        None => Ok(()),
+        Some((_, what)) => Err(InputError::new(format!(
+            "{states}; leave out the {what} option (or edit the file)"
+        ))
+        .in_file(path)
+        .field(*what)),
+    }
 }
 
 /// The water-vapour option (`--vapour-pa`), checked: 0 ≤ value < 100 000 Pa. It comes from

@@ -650,13 +650,13 @@ pub fn check_new_file(path: &Path, inputs: &[&Path], flag: &str, tool: &str) -> 
         .and_then(|b| String::from_utf8(b).ok());
     match text {
         Some(t) if written_unchanged(&t, tool) => Ok(()),
+        // the marker on any line: lines appended after it are an edit too
         Some(t)
             if t.lines()
-                .last()
-                .is_some_and(|l| l.contains(&format!("written by decophantom {tool};"))) =>
+                .any(|l| l.contains(&format!("written by decophantom {tool};"))) =>
         {
             Err(err(format!(
-                "exists and was written by {tool} but changed since (its last line's hash no longer matches); it is never replaced: give another file name, or remove it first"
+                "exists and was written by {tool} but changed since (its marker line's hash no longer matches the lines above it, or lines follow it); it is never replaced: give another file name, or remove it first"
             )))
         }
         _ => Err(err(format!(

@@ -293,8 +293,12 @@ pub fn params_for<'p>(
     Ok(std::borrow::Cow::Owned(p))
 }
 
-/// Load a pressure profile; a schedule TOML written by `plan --out` (it has `legs`) is accepted
-/// too and becomes its pressure history (ambient at the gel, breathed gas with the schedule's
+/// Load a pressure profile; a schedule written by `plan --out` is accepted too: a TOML with
+/// `legs` (in its own conventions), or a CSV of waypoints `time_min,depth_m[,gas]` (in
+/// DecoTengu's conventions, starting on air, as `check` and `evaluate` read it; a CSV without
+/// those columns goes to the legacy reader). Options that a schedule states itself (`--units`,
+/// gas, surface pressure, water vapour, dive) are refused for it. A schedule becomes its
+/// pressure history (ambient at the gel, breathed gas with the schedule's
 /// water vapour at the open faces, the phantom saturated with surface air at the start, and
 /// every bubble holding that vapour unless the phantom sets more:
 /// [`PhantomParams::bubble_fixed_gases_for`]).
@@ -302,20 +306,75 @@ pub fn load_profile_or_schedule(
     path: &std::path::Path,
     opts: &LoadOptions,
 ) -> Result<PressureHistory, Error> {
-    let is_schedule = path
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("toml"))
-        && crate::error::read_text(path, "the profile")
-            .ok()
+    let has_extension = |ext: &str| {
+        path.extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case(ext))
+    };
+    let text = || crate::error::read_text(path, "the profile").ok();
+    let toml_schedule = has_extension("toml")
+        && text()
             .and_then(|t| t.parse::<toml::Table>().ok())
             .is_some_and(|t| t.contains_key("legs"));
-    if is_schedule {
-        let schedule = crate::algorithm::Schedule::read(path)?;
-        return schedule
-            .to_pressure_history()
-            .map_err(|m| Error::Input(crate::error::InputError::new(m).in_file(path)));
+    let csv_schedule = has_extension("csv") && text().is_some_and(|t| is_waypoint_csv(&t));
+    if !(toml_schedule || csv_schedule) {
+        return Ok(load(path, opts)?);
     }
-    Ok(load(path, opts)?)
+    crate::profile::refuse_load_options(
+        path,
+        opts,
+        "a schedule states its own depths, gases, surface pressure and water vapour",
+    )?;
+    let schedule = if toml_schedule {
+        crate::algorithm::Schedule::read(path)?
+    } else {
+        // as `check` and `evaluate` read it
+        crate::algorithm::waypoints::read_waypoints_csv(
+            path,
+            &crate::algorithm::conventions::DECOTENGU,
+            crate::gas::GasMix::AIR,
+        )?
+    };
+    schedule
+        .to_pressure_history()
+        .map_err(|m| Error::Input(crate::error::InputError::new(m).in_file(path)))
+}
+
+/// Whether a CSV file's header (its first line that is neither blank nor a `#` comment) names
+/// a `time_min` and a `depth_m` column: a waypoint schedule (`time_min,depth_m[,gas]`, as
+/// `plan --out` writes it).
+fn is_waypoint_csv(text: &str) -> bool {
+    let Some(header) = text
+        .lines()
+        .map(|l| l.trim_start_matches('\u{feff}').trim())
+        .find(|l| !l.is_empty() && !l.starts_with('#'))
+    else {
+        return false;
+    };
+    let has = |name: &str| {
+        header
+            .split(',')
+            .any(|c| c.trim().eq_ignore_ascii_case(name))
+    };
+    has("time_min") && has("depth_m")
+}
+
+#[cfg(test)]
+mod waypoint_csv_tests {
+    use super::is_waypoint_csv;
+
+    /// The header `plan --out x.csv` writes, in any column order, after comments, blank lines
+    /// or a byte-order mark; not a legacy two-column profile or another CSV.
+    #[test]
+    fn a_waypoint_header_is_recognised_and_nothing_else() {
+        assert!(is_waypoint_csv("time_min,depth_m,gas\n0,0,air\n"));
+        assert!(is_waypoint_csv(
+            "\u{feff}# from plan\n\n Depth_M , TIME_MIN\n0,0\n"
+        ));
+        assert!(!is_waypoint_csv("0 0\n1 130\n"));
+        assert!(!is_waypoint_csv("time_s,pressure_pa\n0,101325\n"));
+        assert!(!is_waypoint_csv("time_min\n0\n"));
+        assert!(!is_waypoint_csv("# only a comment\n"));
+    }
 }
 
 #[cfg(test)]

@@ -334,7 +334,7 @@ fn elasticity_command_prints_every_form() {
 }
 
 #[test]
-fn simulate_takes_a_schedule_written_by_plan() {
+fn simulate_takes_a_schedule_written_by_plan_as_toml_or_csv() {
     let d = tempdir("plan-then-simulate");
     let ph = write(&d, "phantom.toml", SMALL_PHANTOM);
     let sched = d.join("schedule.toml");
@@ -361,6 +361,60 @@ fn simulate_takes_a_schedule_written_by_plan() {
         .map(|l| l["duration_s"].as_float().unwrap())
         .sum();
     assert!((summary["end_time_s"].as_float().unwrap() - runtime).abs() < 1e-6);
+
+    // the same plan as a CSV of waypoints (`plan --out x.csv`, what `check` reads) runs the
+    // same dive: the reference is the TOML run above (the same legs, read by the other reader;
+    // the CSV's times are printed in minutes, so the two agree to rounding, not bit for bit)
+    let csv = d.join("schedule.csv");
+    let o = Command::new(bin())
+        .args(["plan", "--algorithm"])
+        .arg(root().join("algorithms/zhl16c-gf30-85.toml"))
+        .args(["--depth", "30", "--time", "20", "--out"])
+        .arg(&csv)
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let out_csv = d.join("out-csv");
+    let o = simulate(&csv, &ph, &out_csv);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let from_csv: toml::Table = std::fs::read_to_string(out_csv.join("summary.toml"))
+        .unwrap()
+        .parse()
+        .unwrap();
+    let rel = |key: &str| {
+        let (a, b) = (
+            from_csv[key].as_float().unwrap(),
+            summary[key].as_float().unwrap(),
+        );
+        (a - b).abs() / b.abs()
+    };
+    assert!(rel("end_time_s") < 1e-9, "end time {}", rel("end_time_s"));
+    assert!(rel("max_radius_m") < 1e-9, "R_max {}", rel("max_radius_m"));
+    assert!(
+        rel("peak_total_volume_m3") < 1e-9,
+        "peak volume {}",
+        rel("peak_total_volume_m3")
+    );
+
+    // a schedule states its own units, gas and vapour: options that would set them are
+    // refused (before, a TOML schedule ignored them silently), naming the option, no output
+    for (schedule, option) in [
+        (&sched, ["--units", "min,msw"]),
+        (&csv, ["--units", "min,msw"]),
+        (&csv, ["--gas", "air"]),
+        (&sched, ["--vapour-pa", "6270"]),
+    ] {
+        let refused = d.join("refused");
+        let o = simulate_with(schedule, &ph, &refused, &option);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{option:?}: {err}");
+        assert!(err.contains("a schedule states its own"), "{err}");
+        assert!(
+            err.contains(schedule.file_name().unwrap().to_str().unwrap()),
+            "{err}"
+        );
+        assert!(!refused.exists());
+    }
 }
 
 /// Ctrl-C during a long run: the run stops at its next step, writes everything simulated up to

@@ -1092,6 +1092,14 @@ fn plan_outputs_are_checked_first_and_a_users_file_is_kept() {
     std::fs::write(dir.join("s.toml"), &edited).unwrap();
     refused(dive(&["--out", &s]), &["field '--out'", "changed since"]);
     assert_eq!(std::fs::read_to_string(dir.join("s.toml")).unwrap(), edited);
+    // a line appended after the marker is an edit too (it was called "not written by plan")
+    let appended = format!("{edited}# my note\n");
+    std::fs::write(dir.join("s.toml"), &appended).unwrap();
+    refused(dive(&["--out", &s]), &["field '--out'", "changed since"]);
+    assert_eq!(
+        std::fs::read_to_string(dir.join("s.toml")).unwrap(),
+        appended
+    );
     // the CSV, with its marker line, reads back as the same schedule
     let c = p("s.csv");
     assert_eq!(dive(&["--out", &c]).0, 0);
