@@ -42,12 +42,17 @@ for log in sorted(p for p in folder.iterdir() if p.suffix.lower() in (".xml", ".
         elif "does not exist" in r.stderr:
             break  # past the last dive of this log
         else:
-            rows.append((log.name, dive, None, None, None, r.stderr.strip().splitlines()[-1][:60], None, "refused"))
+            rows.append((log.name, dive, None, None, None, r.stderr.strip().splitlines()[-1], None, "refused"))
         dive += 1
 
 print(f"{'file':<26} {'dive':>4} {'max m':>6} {'min':>6} {'peak R µm':>9}  {'worst criterion':<28} {'v/limit':>7}  result")
+refusals = []
 for f, d, depth, runtime, radius, worst, ratio, result in rows:
     if depth is None:
-        print(f"{f:<26} {d:>4} {'':>6} {'':>6} {'':>9}  {worst:<28} {'':>7}  {result}")
+        refusals.append(worst)
+        print(f"{f:<26} {d:>4} {'':>6} {'':>6} {'':>9}  {'(refused: note ' + str(len(refusals)) + ')':<28} {'':>7}  {result}")
     else:
         print(f"{f:<26} {d:>4} {depth:>6.1f} {runtime:>6.1f} {radius:>9.1f}  {worst:<28} {ratio:>7.3f}  {result}")
+# the refusals whole, after the table (a message names the file, line and field)
+for i, message in enumerate(refusals, 1):
+    print(f"note {i}: {message}")

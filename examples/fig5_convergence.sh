@@ -1,16 +1,26 @@
 #!/bin/sh
 # Grid + time-step convergence study on the paper's full Fig. 5 dive (profiles/fig5-dive.toml through
 # profiles/phantoms/hydrogel.toml): h = 346, 173, 86.5 µm with every step limit (max_step_s,
-# max_pressure_change, max_content_change, bubble_tolerance) × 1, ½, ¼. Prints the peak radius and
+# max_pressure_change, max_content_change, bubble_tolerance, loading_tolerance: the preset's values and
+# the model's defaults, src/phantom/params.rs) × 1, ½, ¼. Prints the peak radius and
 # peak total volume of each level, the observed order p = log2(|f1 − f2| / |f2 − f3|) and the Richardson
 # extrapolation f3 + (f3 − f2)/(2^p − 1). Usage: sh examples/fig5_convergence.sh [decophantom binary]
 set -e
 bin=${1:-target/release/decophantom}
 dir=$(mktemp -d)
+trap 'rm -rf "$dir"' EXIT
+preset=profiles/phantoms/hydrogel.toml
+# the preset's step cap (its [numerics] max_step_s); the other limits are the model's defaults
+cap=$(sed -n 's/^max_step_s = //p' "$preset")
+[ -n "$cap" ] || { echo "$preset: no max_step_s line to scale" >&2; exit 2; }
 level() { # $1 grid step (m), $2 step scale
-    num=$(awk -v s="$2" 'BEGIN { printf "max_step_s = %g\\nmax_pressure_change = %g\\nmax_content_change = %g\\nbubble_tolerance = %g", 30 * s, 0.01 * s, 0.03 * s, 0.004 * s }')
-    sed -e "s/^max_step_s = 30.0/$num/" -e "s/^grid_step_m = 86.5e-6/grid_step_m = $1/" \
-        profiles/phantoms/hydrogel.toml > "$dir/p.toml"
+    num=$(awk -v s="$2" -v cap="$cap" 'BEGIN { printf "max_step_s = %g\\nmax_pressure_change = %g\\nmax_content_change = %g\\nbubble_tolerance = %g\\nloading_tolerance = %g", cap * s, 0.02 * s, 0.03 * s, 0.004 * s, 1e-3 * s }')
+    sed -e "s/^max_step_s = .*/$num/" -e "s/^grid_step_m = .*/grid_step_m = $1/" \
+        "$preset" > "$dir/p.toml"
+    # every limit in place, or the study would silently run the default steps
+    for key in max_step_s max_pressure_change max_content_change bubble_tolerance loading_tolerance grid_step_m; do
+        [ "$(grep -c "^$key = " "$dir/p.toml")" = 1 ] || { echo "$key not set once in the scaled phantom" >&2; exit 2; }
+    done
     "$bin" simulate --profile profiles/fig5-dive.toml --phantom "$dir/p.toml" \
         --out "$dir/out-$1" --quiet > /dev/null
     r=$(grep '^max_radius_m' "$dir/out-$1/summary.toml" | cut -d= -f2)
@@ -35,4 +45,3 @@ END {
         printf "%s: observed order %.2f, Richardson %.5g, finest off by %+.3f %%\n", name, p, x * s, 100 * (c / x - 1)
     }
 }' "$dir/levels"
-rm -rf "$dir"
