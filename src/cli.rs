@@ -163,7 +163,7 @@ pub struct FitArgs {
     /// experiments.toml: [[experiment]] name, profile, phantom; optional [fit] free.
     #[arg(long)]
     pub experiments: std::path::PathBuf,
-    /// Parameter to fit: a numeric phantom TOML path, optionally with bounds NAME=LO..HI; repeatable; added to the experiments file's [fit] free (a path in both is refused).
+    /// Parameter to fit: a numeric phantom TOML path (gases.n2.diffusivity), or scale:PATTERN for one factor on every number a `*` pattern matches (scale:gases.*.ostwald); optionally with bounds NAME=LO..HI; repeatable; added to the experiments file's [fit] free (a path in both is refused).
     #[arg(long = "param")]
     pub params: Vec<String>,
     /// Output folder (replaced whole); finished simulations are kept in OUT.partial/ until then, and a restart of the same fit reads them back.
