@@ -337,22 +337,27 @@ fn elasticity_command_prints_every_form() {
 fn simulate_takes_a_schedule_written_by_plan_as_toml_or_csv() {
     let d = tempdir("plan-then-simulate");
     let ph = write(&d, "phantom.toml", SMALL_PHANTOM);
-    let sched = d.join("schedule.toml");
-    let o = Command::new(bin())
-        .args(["plan", "--algorithm"])
-        .arg(root().join("algorithms/zhl16c-gf30-85.toml"))
-        .args(["--depth", "30", "--time", "20", "--out"])
-        .arg(&sched)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let out = d.join("out");
-    let o = simulate(&sched, &ph, &out);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let summary: toml::Table = std::fs::read_to_string(out.join("summary.toml"))
-        .unwrap()
-        .parse()
-        .unwrap();
+    // `plan --out NAME` of one dive, then `simulate` of it into out-NAME: its summary
+    let plan_and_simulate = |name: &str| {
+        let schedule = d.join(name);
+        let o = Command::new(bin())
+            .args(["plan", "--algorithm"])
+            .arg(root().join("algorithms/zhl16c-gf30-85.toml"))
+            .args(["--depth", "30", "--time", "20", "--out"])
+            .arg(&schedule)
+            .output()
+            .unwrap();
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let out = d.join(format!("out-{name}"));
+        let o = simulate(&schedule, &ph, &out);
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+        let summary: toml::Table = std::fs::read_to_string(out.join("summary.toml"))
+            .unwrap()
+            .parse()
+            .unwrap();
+        (schedule, summary)
+    };
+    let (sched, summary) = plan_and_simulate("schedule.toml");
     // the schedule's runtime (plan prints it; here: the profile ends when the schedule does)
     let schedule: toml::Table = std::fs::read_to_string(&sched).unwrap().parse().unwrap();
     let legs = schedule["legs"].as_array().unwrap();
@@ -365,22 +370,7 @@ fn simulate_takes_a_schedule_written_by_plan_as_toml_or_csv() {
     // the same plan as a CSV of waypoints (`plan --out x.csv`, what `check` reads) runs the
     // same dive: the reference is the TOML run above (the same legs, read by the other reader;
     // the CSV's times are printed in minutes, so the two agree to rounding, not bit for bit)
-    let csv = d.join("schedule.csv");
-    let o = Command::new(bin())
-        .args(["plan", "--algorithm"])
-        .arg(root().join("algorithms/zhl16c-gf30-85.toml"))
-        .args(["--depth", "30", "--time", "20", "--out"])
-        .arg(&csv)
-        .output()
-        .unwrap();
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let out_csv = d.join("out-csv");
-    let o = simulate(&csv, &ph, &out_csv);
-    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
-    let from_csv: toml::Table = std::fs::read_to_string(out_csv.join("summary.toml"))
-        .unwrap()
-        .parse()
-        .unwrap();
+    let (csv, from_csv) = plan_and_simulate("schedule.csv");
     let rel = |key: &str| {
         let (a, b) = (
             from_csv[key].as_float().unwrap(),
