@@ -347,7 +347,7 @@ pub struct EvaluateArgs {
 /// Arguments of `simulate`.
 #[derive(clap::Args, Debug)]
 pub struct SimulateArgs {
-    /// Pressure profile: TOML (profiles/*.toml), a legacy two-column text file (needs --units), a dive log, or a schedule written by plan --out (.toml, or .csv of time_min,depth_m[,gas] in DecoTengu conventions from air, as check reads it).
+    /// Pressure profile: TOML (profiles/*.toml), a legacy two-column text file (needs --units), a dive log, or a schedule written by plan --out (.toml, or .csv of time_min,depth_m[,gas] in the conventions of its "# conventions:" line, else DecoTengu's, from air, as check reads it).
     #[arg(long)]
     pub profile: std::path::PathBuf,
     /// Phantom TOML (profiles/phantoms/*.toml).

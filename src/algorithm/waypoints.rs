@@ -1,5 +1,7 @@
 //! Schedules from other tools: a CSV of waypoints `time_min,depth_m[,gas]` (header required,
-//! linear between waypoints). The gas on a row is breathed from that waypoint to the next;
+//! linear between waypoints; a `# conventions:` comment line above the header, as `plan --out`
+//! writes it, sets the surface pressure, pressure per metre and water vapour, else the caller's
+//! conventions apply). The gas on a row is breathed from that waypoint to the next;
 //! rows without a `gas` column (or with an empty cell) keep the previous gas, starting from
 //! `default_gas`. Constant-depth segments after the deepest point become stops. The first
 //! waypoint is at the surface (0 min, 0 m), and no segment moves faster than
@@ -148,6 +150,113 @@ pub fn read_legacy_schedule(
     })
 }
 
+/// The comment line `plan --out x.csv` writes above the header ([`CONVENTIONS_COMMENT`]):
+/// the schedule's surface pressure, pressure per metre and water vapour, so that a schedule
+/// planned at altitude, in fresh water or with another planner's vapour reads back as planned.
+pub const CONVENTIONS_COMMENT: &str = "# conventions:";
+
+/// `base` with the surface pressure, pressure per metre and water vapour of the file's
+/// [`CONVENTIONS_COMMENT`] line, if it has one before its header (`key = value` pairs separated
+/// by commas, anything from a `(` on a note): a CSV without one is read in `base`. Each value is
+/// checked (positive, the vapour below the surface pressure), naming the line and the key.
+fn file_conventions(
+    text: &str,
+    path: &Path,
+    base: &Conventions,
+) -> Result<Conventions, InputError> {
+    let mut out = base.clone();
+    let mut seen: Option<usize> = None;
+    for (i, line) in text.lines().enumerate() {
+        let l = line.trim_start_matches('\u{feff}').trim();
+        if l.is_empty() {
+            continue;
+        }
+        if !l.starts_with('#') {
+            break; // the header: comments below it are not the file's conventions
+        }
+        let Some(rest) = l.strip_prefix(CONVENTIONS_COMMENT) else {
+            continue;
+        };
+        let line_no = i + 1;
+        let err = |m: String, field: &str| {
+            InputError::new(m)
+                .in_file(path)
+                .at_line(line_no)
+                .field(field.to_string())
+        };
+        if let Some(first) = seen {
+            return Err(err(
+                format!("a second conventions line (the first is line {first}); keep one"),
+                "conventions",
+            ));
+        }
+        seen = Some(line_no);
+        let pairs = rest.split('(').next().unwrap_or("");
+        let (mut surface, mut per_m, mut vapour) = (None, None, None);
+        for pair in pairs.split(',').map(str::trim).filter(|p| !p.is_empty()) {
+            let Some((key, value)) = pair.split_once('=').map(|(k, v)| (k.trim(), v.trim())) else {
+                return Err(err(format!("'{pair}' is not `key = value`"), "conventions"));
+            };
+            let slot = match key {
+                "surface_pressure_pa" => &mut surface,
+                "pa_per_m" => &mut per_m,
+                "water_vapour_pa" => &mut vapour,
+                _ => {
+                    return Err(err(
+                        format!(
+                            "unknown key '{key}' (the keys: surface_pressure_pa, pa_per_m, water_vapour_pa)"
+                        ),
+                        key,
+                    ))
+                }
+            };
+            if slot.is_some() {
+                return Err(err(format!("'{key}' is given twice"), key));
+            }
+            let v = value
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| err(format!("'{value}' is not a number"), key))?;
+            *slot = Some(v);
+        }
+        let surface = surface.unwrap_or(base.surface_pressure_pa);
+        let per_m = per_m.unwrap_or(base.pa_per_m);
+        let vapour = vapour.unwrap_or(base.water_vapour_pa);
+        if !(crate::profile::MIN_AMBIENT_PA..=crate::profile::MAX_AMBIENT_PA).contains(&surface) {
+            return Err(err(
+                format!(
+                    "surface pressure {} Pa is outside {}..{} Pa",
+                    crate::error::num(surface),
+                    crate::error::num(crate::profile::MIN_AMBIENT_PA),
+                    crate::error::num(crate::profile::MAX_AMBIENT_PA)
+                ),
+                "surface_pressure_pa",
+            ));
+        }
+        if !(per_m > 0.0) {
+            return Err(err(
+                format!("{} Pa/m must be positive", crate::error::num(per_m)),
+                "pa_per_m",
+            ));
+        }
+        if !(0.0..surface).contains(&vapour) {
+            return Err(err(
+                format!(
+                    "water vapour {} Pa must be at least 0 and below the surface pressure {} Pa",
+                    crate::error::num(vapour),
+                    crate::error::num(surface)
+                ),
+                "water_vapour_pa",
+            ));
+        }
+        out.surface_pressure_pa = surface;
+        out.pa_per_m = per_m;
+        out.water_vapour_pa = vapour;
+    }
+    Ok(out)
+}
+
 /// Read a waypoint CSV file into a schedule in the given conventions (surface pressure,
 /// pressure per metre and water vapour are taken from them).
 pub fn read_waypoints_csv(
@@ -166,6 +275,8 @@ pub fn parse_waypoints_csv(
     conventions: &Conventions,
     default_gas: GasMix,
 ) -> Result<Schedule, InputError> {
+    let own = file_conventions(text, path, conventions)?;
+    let conventions = &own;
     let mut rdr = csv::ReaderBuilder::new()
         .trim(csv::Trim::All)
         .comment(Some(b'#'))
@@ -393,6 +504,90 @@ fn schedule_from_points(
 mod tests {
     use super::*;
     use crate::algorithm::conventions::DECOTENGU;
+
+    const DIVE: &str = "time_min,depth_m\n0,0\n2,20\n22,20\n26,0\n";
+
+    fn read(text: &str) -> Result<Schedule, InputError> {
+        parse_waypoints_csv(text, Path::new("w.csv"), &DECOTENGU, GasMix::AIR)
+    }
+
+    /// The `# conventions:` line above the header sets the schedule's surface pressure,
+    /// pressure per metre and water vapour (a note after `(` ignored); without one, or below
+    /// the header, the reader's conventions (here DecoTengu's) stand. The ambient pressure at
+    /// 20 m is then p_surf + 20·ρg by hand.
+    #[test]
+    fn the_conventions_line_sets_the_schedules_pressures() {
+        let s = read(&format!(
+            "# from a planner\n{CONVENTIONS_COMMENT} surface_pressure_pa = 79500, pa_per_m = 9800.5, water_vapour_pa = 5670 (note)\n{DIVE}"
+        ))
+        .unwrap();
+        assert_eq!(
+            (s.surface_pressure_pa, s.pa_per_m, s.water_vapour_pa),
+            (79500.0, 9800.5, 5670.0)
+        );
+        let plain = read(DIVE).unwrap();
+        assert_eq!(
+            (
+                plain.surface_pressure_pa,
+                plain.pa_per_m,
+                plain.water_vapour_pa
+            ),
+            (
+                DECOTENGU.surface_pressure_pa,
+                DECOTENGU.pa_per_m,
+                DECOTENGU.water_vapour_pa
+            )
+        );
+        let below = read(&format!(
+            "{DIVE}{CONVENTIONS_COMMENT} surface_pressure_pa = 79500\n"
+        ))
+        .unwrap();
+        assert_eq!(below.surface_pressure_pa, DECOTENGU.surface_pressure_pa);
+        // one key alone keeps the others
+        let one = read(&format!("{CONVENTIONS_COMMENT} pa_per_m = 10000\n{DIVE}")).unwrap();
+        assert_eq!(
+            (one.surface_pressure_pa, one.pa_per_m),
+            (DECOTENGU.surface_pressure_pa, 10000.0)
+        );
+    }
+
+    /// A bad conventions line is refused naming its line and key, never read as defaults.
+    #[test]
+    fn a_bad_conventions_line_names_its_line_and_key() {
+        let cases = [
+            ("altitude_m = 2000", "altitude_m", "unknown key"),
+            (
+                "surface_pressure_pa = high",
+                "surface_pressure_pa",
+                "not a number",
+            ),
+            (
+                "surface_pressure_pa = 500",
+                "surface_pressure_pa",
+                "outside",
+            ),
+            ("pa_per_m = 0", "pa_per_m", "positive"),
+            (
+                "water_vapour_pa = 2e5",
+                "water_vapour_pa",
+                "below the surface",
+            ),
+            ("pa_per_m = 1, pa_per_m = 2", "pa_per_m", "twice"),
+            ("pa_per_m 10000", "conventions", "key = value"),
+        ];
+        for (pairs, field, says) in cases {
+            let e = read(&format!("#\n{CONVENTIONS_COMMENT} {pairs}\n{DIVE}")).unwrap_err();
+            assert_eq!(e.line, Some(2), "{pairs}: {e}");
+            assert_eq!(e.field.as_deref(), Some(field), "{pairs}: {e}");
+            assert!(e.message.contains(says), "{pairs}: {e}");
+        }
+        let twice = format!(
+            "{CONVENTIONS_COMMENT} pa_per_m = 1\n{CONVENTIONS_COMMENT} pa_per_m = 2\n{DIVE}"
+        );
+        let e = read(&twice).unwrap_err();
+        assert_eq!(e.line, Some(2), "{e}");
+        assert!(e.message.contains("second conventions line"), "{e}");
+    }
 
     #[test]
     fn reads_waypoints_with_gas_column() {

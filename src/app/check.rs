@@ -1,7 +1,8 @@
 //! `decophantom check`: run one candidate schedule through the phantom and score it against
 //! a criteria file. The schedule comes from `plan --out` (TOML), a CSV of waypoints
-//! `time_min,depth_m[,gas]` (DecoTengu conventions: 1.01325 bar at the surface, 9 985 Pa/m,
-//! alveolar water vapour 6 270 Pa; air unless a gas column says otherwise), the paper's
+//! `time_min,depth_m[,gas]` (in the conventions of its `# conventions:` line, which `plan`
+//! writes, else DecoTengu's: 1.01325 bar at the surface, 9 985 Pa/m, alveolar water vapour
+//! 6 270 Pa; air unless a gas column says otherwise), the paper's
 //! two-column `.txt`, a dive of a Subsurface or UDDF log (its own surface pressure and water
 //! density; import notes printed and reported), or is written by hand. Every schedule is
 //! watched at the surface after it for the criteria protocol's time.

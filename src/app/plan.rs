@@ -4,6 +4,7 @@ use crate::algorithm::config::{load_algorithm_with, Overrides};
 use crate::algorithm::oxygen::{self, OxygenExposure};
 use crate::algorithm::plan_dive;
 use crate::algorithm::schedule::{gas_text, ScheduleSummary};
+use crate::algorithm::waypoints::CONVENTIONS_COMMENT;
 use crate::algorithm::{DivePlan, LoadedAlgorithm, Schedule};
 use crate::error::InputError;
 use crate::gas::GasMix;
@@ -485,10 +486,15 @@ fn same_place(a: &std::path::Path, b: &std::path::Path) -> bool {
 /// The schedule as the waypoint CSV `check` reads: `time_min,depth_m,gas`, one row per leg
 /// boundary from (0, 0) to the surface; the gas on a row is breathed from that waypoint to the
 /// next (the last row's cell is empty). Full precision, so reading it back gives the same legs.
-/// The CSV carries no conventions: `check` reads it in DecoTengu's (1.01325 bar, 9 985 Pa/m,
-/// 6 270 Pa water vapour); the TOML form keeps the algorithm's own.
+/// Above the header, a comment line ([`CONVENTIONS_COMMENT`]) carries the schedule's surface
+/// pressure, pressure per metre and water vapour, which the readers take from it (a CSV
+/// without one is read in DecoTengu's: 1.01325 bar, 9 985 Pa/m, 6 270 Pa water vapour).
 pub fn waypoints_csv(s: &Schedule) -> String {
-    let mut out = String::from("time_min,depth_m,gas\n");
+    let mut out = format!(
+        "{CONVENTIONS_COMMENT} surface_pressure_pa = {}, pa_per_m = {}, water_vapour_pa = {} (the schedule's; decophantom reads them from here)\n",
+        s.surface_pressure_pa, s.pa_per_m, s.water_vapour_pa
+    );
+    out.push_str("time_min,depth_m,gas\n");
     let legs: Vec<_> = s.legs.iter().filter(|l| l.duration_s > 0.0).collect();
     let mut t_s = 0.0;
     let start = legs.first().map_or(0.0, |l| l.start_depth_m);

@@ -293,29 +293,44 @@ pub fn load(path: &Path, opts: &LoadOptions) -> Result<PressureHistory, InputErr
 
 /// Refuse every option of `opts` for a file that states what they set itself (`states`, the
 /// first half of the message: "a TOML profile states its own units, …"), naming the first
-/// option given; the file's own values would otherwise silently win over the command line.
+/// option given by its flag (and its key in a `fit` experiments file); the file's own values
+/// would otherwise silently win over the command line. A dive number is refused as it is for
+/// any file that is not a dive log.
 pub fn refuse_load_options(
     path: &Path,
     opts: &LoadOptions,
     states: &str,
 ) -> Result<(), InputError> {
+    if opts.dive.is_some() {
+        return Err(InputError::new(
+            "a dive number applies only to dive logs (.xml, .ssrf, .uddf); leave out --dive",
+        )
+        .in_file(path)
+        .field("--dive"));
+    }
+    // (given, flag, what a fit experiments file calls it)
     let given = [
         (
             opts.time_unit.is_some() || opts.pressure_unit.is_some(),
             "--units",
+            Some("units"),
         ),
-        (opts.surface_pa.is_some(), "surface pressure"),
-        (opts.gas.is_some(), "gas"),
-        (opts.vapour_pa.is_some(), "water vapour"),
-        (opts.dive.is_some(), "dive"),
+        (opts.gas.is_some(), "--gas", Some("gas")),
+        (opts.vapour_pa.is_some(), "--vapour-pa", Some("vapour_pa")),
+        (opts.surface_pa.is_some(), "surface pressure", None),
     ];
-    match given.iter().find(|(g, _)| *g) {
+    match given.iter().find(|(g, _, _)| *g) {
         None => Ok(()),
-        Some((_, what)) => Err(InputError::new(format!(
-            "{states}; leave out the {what} option (or edit the file)"
-        ))
-        .in_file(path)
-        .field(*what)),
+        Some((_, flag, key)) => {
+            let key = key.map_or(String::new(), |k| {
+                format!(" (`{k}` in a fit experiments file)")
+            });
+            Err(InputError::new(format!(
+                "{states}; leave out the {flag} option{key}, or edit the file"
+            ))
+            .in_file(path)
+            .field(*flag))
+        }
     }
 }
 

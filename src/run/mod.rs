@@ -295,9 +295,10 @@ pub fn params_for<'p>(
 
 /// Load a pressure profile; a schedule written by `plan --out` is accepted too: a TOML with
 /// `legs` (in its own conventions), or a CSV of waypoints `time_min,depth_m[,gas]` (in
-/// DecoTengu's conventions, starting on air, as `check` and `evaluate` read it; a CSV without
-/// those columns goes to the legacy reader). Options that a schedule states itself (`--units`,
-/// gas, surface pressure, water vapour, dive) are refused for it. A schedule becomes its
+/// the conventions of its `# conventions:` line, which `plan` writes, else DecoTengu's, starting
+/// on air, as `check` and `evaluate` read it; a .csv goes to the legacy reader only with
+/// `--units` and a header without those columns). Options that a schedule states itself
+/// (`--units`, gas, surface pressure, water vapour, dive) are refused for it. A schedule becomes its
 /// pressure history (ambient at the gel, breathed gas with the schedule's
 /// water vapour at the open faces, the phantom saturated with surface air at the start, and
 /// every bubble holding that vapour unless the phantom sets more:
@@ -315,14 +316,18 @@ pub fn load_profile_or_schedule(
         && text()
             .and_then(|t| t.parse::<toml::Table>().ok())
             .is_some_and(|t| t.contains_key("legs"));
-    let csv_schedule = has_extension("csv") && text().is_some_and(|t| is_waypoint_csv(&t));
+    // a .csv is a waypoint schedule unless --units asks for the legacy reader and its header
+    // is not a waypoint header: so a .csv that is neither gets the waypoint reader's error
+    let units_given = opts.time_unit.is_some() || opts.pressure_unit.is_some();
+    let csv_schedule =
+        has_extension("csv") && (!units_given || text().is_some_and(|t| is_waypoint_csv(&t)));
     if !(toml_schedule || csv_schedule) {
         return Ok(load(path, opts)?);
     }
     crate::profile::refuse_load_options(
         path,
         opts,
-        "a schedule states its own depths, gases, surface pressure and water vapour",
+        "a schedule states its own depths, gases, surface pressure and water vapour (a .csv in its `# conventions:` line, DecoTengu's without one)",
     )?;
     let schedule = if toml_schedule {
         crate::algorithm::Schedule::read(path)?
@@ -353,7 +358,7 @@ fn is_waypoint_csv(text: &str) -> bool {
     let has = |name: &str| {
         header
             .split(',')
-            .any(|c| c.trim().eq_ignore_ascii_case(name))
+            .any(|c| c.trim().trim_matches('"').trim().eq_ignore_ascii_case(name))
     };
     has("time_min") && has("depth_m")
 }
@@ -362,14 +367,15 @@ fn is_waypoint_csv(text: &str) -> bool {
 mod waypoint_csv_tests {
     use super::is_waypoint_csv;
 
-    /// The header `plan --out x.csv` writes, in any column order, after comments, blank lines
-    /// or a byte-order mark; not a legacy two-column profile or another CSV.
+    /// The header `plan --out x.csv` writes, in any column order, quoted or not, after comments,
+    /// blank lines or a byte-order mark; not a legacy two-column profile or another CSV.
     #[test]
     fn a_waypoint_header_is_recognised_and_nothing_else() {
         assert!(is_waypoint_csv("time_min,depth_m,gas\n0,0,air\n"));
         assert!(is_waypoint_csv(
             "\u{feff}# from plan\n\n Depth_M , TIME_MIN\n0,0\n"
         ));
+        assert!(is_waypoint_csv("\"time_min\",\"depth_m\"\n0,0\n"));
         assert!(!is_waypoint_csv("0 0\n1 130\n"));
         assert!(!is_waypoint_csv("time_s,pressure_pa\n0,101325\n"));
         assert!(!is_waypoint_csv("time_min\n0\n"));

@@ -445,8 +445,8 @@ fn legacy_two_column_dive_file_reads_as_a_schedule() {
 }
 
 /// `plan --format csv --out s.csv` writes the waypoint CSV that `check` reads
-/// (`time_min,depth_m,gas`), and reading it back gives the planned schedule leg for leg (the
-/// algorithm file uses DecoTengu's conventions, which the CSV reader assumes); a `--format`
+/// (`time_min,depth_m,gas` below a `# conventions:` line), and reading it back gives the planned
+/// schedule leg for leg; a `--format`
 /// that contradicts the extension, or an `--out` naming the algorithm file, is refused with
 /// exit 2 and nothing written.
 #[test]
@@ -476,10 +476,15 @@ fn plan_out_follows_format_and_round_trips_through_the_csv_check_reads() {
     let o = plan_cmd(&[&dive[..], &["--out", toml.to_str().unwrap()]].concat());
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = std::fs::read_to_string(&csv).unwrap();
+    // the schedule's conventions above the header (DecoTengu's here: 101 325 Pa, 9 985 Pa/m,
+    // 6 270 Pa), then the waypoints
     assert!(
-        text.starts_with("time_min,depth_m,gas\n0,0,air\n"),
+        text.starts_with(
+            "# conventions: surface_pressure_pa = 101325, pa_per_m = 9985, water_vapour_pa = 6270 "
+        ),
         "{text}"
     );
+    assert!(text.contains("\ntime_min,depth_m,gas\n0,0,air\n"), "{text}");
     let planned = Schedule::read(&toml).unwrap();
     let back =
         decophantom::algorithm::waypoints::read_schedule(&csv, &DECOTENGU, GasMix::AIR).unwrap();
@@ -568,13 +573,25 @@ fn every_shipped_algorithms_plans_pass_the_schedule_readers_checks() {
                 .unwrap_or_else(|e| panic!("{at}: {e}"));
             assert_eq!(back, s, "{at}");
             let csv = decophantom::app::plan::waypoints_csv(&s);
-            parse_waypoints_csv(
+            // read in DecoTengu's conventions, the CSV keeps the algorithm's own (its
+            // `# conventions:` line): the reference is the planned schedule itself
+            let back = parse_waypoints_csv(
                 &csv,
                 std::path::Path::new("w.csv"),
-                &alg.conventions,
+                &decophantom::algorithm::conventions::DECOTENGU,
                 GasMix::AIR,
             )
             .unwrap_or_else(|e| panic!("{at}: {e}"));
+            assert_eq!(
+                (
+                    back.surface_pressure_pa,
+                    back.pa_per_m,
+                    back.water_vapour_pa
+                ),
+                (s.surface_pressure_pa, s.pa_per_m, s.water_vapour_pa),
+                "{at}"
+            );
+            assert!((back.runtime_min() - s.runtime_min()).abs() < 1e-9, "{at}");
         }
     }
     assert!(

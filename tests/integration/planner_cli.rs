@@ -1092,12 +1092,18 @@ fn plan_outputs_are_checked_first_and_a_users_file_is_kept() {
     std::fs::write(dir.join("s.toml"), &edited).unwrap();
     refused(dive(&["--out", &s]), &["field '--out'", "changed since"]);
     assert_eq!(std::fs::read_to_string(dir.join("s.toml")).unwrap(), edited);
-    // a line appended after the marker is an edit too (it was called "not written by plan")
-    let appended = format!("{edited}# my note\n");
-    std::fs::write(dir.join("s.toml"), &appended).unwrap();
-    refused(dive(&["--out", &s]), &["field '--out'", "changed since"]);
+    // a line appended after the marker of a file plan wrote is an edit too (it was called
+    // "not written by plan")
+    let a = p("a.toml");
+    assert_eq!(dive(&["--out", &a]).0, 0);
+    let appended = format!(
+        "{}# my note\n",
+        std::fs::read_to_string(dir.join("a.toml")).unwrap()
+    );
+    std::fs::write(dir.join("a.toml"), &appended).unwrap();
+    refused(dive(&["--out", &a]), &["field '--out'", "changed since"]);
     assert_eq!(
-        std::fs::read_to_string(dir.join("s.toml")).unwrap(),
+        std::fs::read_to_string(dir.join("a.toml")).unwrap(),
         appended
     );
     // the CSV, with its marker line, reads back as the same schedule
@@ -1118,7 +1124,7 @@ fn plan_outputs_are_checked_first_and_a_users_file_is_kept() {
     names.sort();
     assert_eq!(
         names,
-        ["afile", "mine.csv", "mine.svg", "s.csv", "s.svg", "s.toml"]
+        ["a.toml", "afile", "mine.csv", "mine.svg", "s.csv", "s.svg", "s.toml"]
     );
 }
 
