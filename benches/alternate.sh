@@ -10,9 +10,11 @@
 # For each run (the Fig. 5 dive, the oscillation, the small cube as fits run it, the demo's GF 30/85
 # dive with its stops on two threads) and binary,
 # prints the wall times of the rounds and, from each run's timing.toml, the time loop's phases
-# of the last round (gel = diffusion; events; frames), and the share of the CPU time the host
-# took from this machine while that binary ran (steal, from /proc/stat, over all its rounds; a
-# slow hour with no steal is not the host's). Run from the repository's top folder.
+# of the last round (gel = diffusion; events; frames), and the CPU time the hypervisor took from
+# this machine while that binary ran (steal, from /proc/stat, over all its rounds, in ticks of
+# 1/100 s per CPU: a short run's one tick is a percent or more). Steal shows only time taken
+# away; co-tenants' use of the shared caches and memory bandwidth, or the host's clock, do not
+# show in it. Run from the repository's top folder.
 set -euo pipefail
 rounds=${1:?usage: $0 ROUNDS BINARY...}
 shift
@@ -66,7 +68,7 @@ for run in "${runs[@]}"; do
     fi
     stolen=""
     if [ "${total[$b]}" -gt 0 ]; then
-      stolen=" | steal $(awk -v s="${steal[$b]}" -v t="${total[$b]}" 'BEGIN { printf "%.1f", 100 * s / t }') %"
+      stolen=" | steal ${steal[$b]} of ${total[$b]} ticks"
     fi
     echo "$name $b: wall${walls[$b]} s$phases$stolen"
   done
