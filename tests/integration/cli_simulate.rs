@@ -418,6 +418,24 @@ fn simulate_takes_a_schedule_written_by_plan_as_toml_or_csv() {
         );
         assert!(!refused.exists());
     }
+
+    // a .csv that is no waypoint schedule gets the waypoint reader's error (not the legacy
+    // reader's "give --units"), and a quoted header is a waypoint header, as `check` reads it
+    let other = write(&d, "other.csv", "time_s;depth\n0;0\n");
+    let o = simulate(&other, &ph, &d.join("other-out"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("other.csv:1") && err.contains("the header needs a 'time_min' column"),
+        "{err}"
+    );
+    let quoted = write(
+        &d,
+        "quoted.csv",
+        "\"time_min\",\"depth_m\"\n0,0\n2,20\n12,20\n16,0\n",
+    );
+    let o = simulate(&quoted, &ph, &d.join("quoted-out"));
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
 }
 
 /// Ctrl-C during a long run: the run stops at its next step, writes everything simulated up to
