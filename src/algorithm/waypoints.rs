@@ -513,8 +513,8 @@ mod tests {
 
     /// The `# conventions:` line above the header sets the schedule's surface pressure,
     /// pressure per metre and water vapour (a note after `(` ignored); without one, or below
-    /// the header, the reader's conventions (here DecoTengu's) stand. The ambient pressure at
-    /// 20 m is then p_surf + 20·ρg by hand.
+    /// the header, the reader's conventions (here DecoTengu's) stand. The history's ambient pressure
+    /// at 20 m is p_surf + 20·(Pa per m), by hand, and its faces' vapour the line's.
     #[test]
     fn the_conventions_line_sets_the_schedules_pressures() {
         let s = read(&format!(
@@ -525,6 +525,13 @@ mod tests {
             (s.surface_pressure_pa, s.pa_per_m, s.water_vapour_pa),
             (79500.0, 9800.5, 5670.0)
         );
+        let h = s.to_pressure_history().unwrap();
+        let at_20_m = h.ambient_pa[h.times_s.iter().position(|&t| t == 120.0).unwrap()];
+        assert!(
+            (at_20_m - (79500.0 + 20.0 * 9800.5)).abs() < 1e-6,
+            "{at_20_m}"
+        );
+        assert_eq!(h.vapour_pa, 5670.0);
         let plain = read(DIVE).unwrap();
         assert_eq!(
             (
