@@ -84,3 +84,38 @@ fn grid_and_step_convergence_on_a_reduced_fig5_dive() {
         100.0 * (r[2] / extrapolated - 1.0)
     );
 }
+
+/// `examples/fig5_convergence.sh` (README item 5b) writes every step limit into the phantom
+/// scaled by ×1, ½, ¼: the preset's `max_step_s`, and for the others the model's defaults,
+/// which the script states as numbers. Its `sed` pattern once stopped matching the preset, and
+/// every level silently ran the default steps; this keeps the script's numbers and the preset's
+/// line in step with the code (the reference: `Numerics::default()`, src/phantom/params.rs).
+#[test]
+fn the_fig5_convergence_script_scales_the_models_own_limits() {
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let script = std::fs::read_to_string(root.join("examples/fig5_convergence.sh")).unwrap();
+    let d = decophantom::phantom::params::Numerics::default();
+    let args = script
+        .lines()
+        .find(|l| l.contains("printf \"max_step_s = %g"))
+        .and_then(|l| l.split("}'").next())
+        .and_then(|l| l.rsplit_once("\","))
+        .map(|(_, a)| a.trim().trim_end_matches('}').trim().to_string())
+        .expect("the script's printf of the scaled limits");
+    let scaled: Vec<&str> = args.split(',').map(str::trim).collect();
+    let number = |a: &str| -> f64 { a.trim_end_matches("* s").trim().parse().unwrap() };
+    assert_eq!(scaled.len(), 5, "{args}");
+    assert_eq!(scaled[0], "cap * s", "{args}");
+    assert_eq!(number(scaled[1]), d.max_pressure_change, "{args}");
+    assert_eq!(number(scaled[2]), d.max_content_change, "{args}");
+    assert_eq!(number(scaled[3]), d.bubble_tolerance, "{args}");
+    assert_eq!(number(scaled[4]), d.loading_tolerance, "{args}");
+    let preset = std::fs::read_to_string(root.join("profiles/phantoms/hydrogel.toml")).unwrap();
+    for key in ["max_step_s = ", "grid_step_m = "] {
+        assert_eq!(
+            preset.lines().filter(|l| l.starts_with(key)).count(),
+            1,
+            "{key}"
+        );
+    }
+}
